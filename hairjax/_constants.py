@@ -1,0 +1,24 @@
+"""Numerical constants of the hair model, each with its reason.
+
+One definition for the JAX renderer, the GLSL shaders (issue 3 injects these) and the tests.
+"""
+
+# Antialiasing: a pixel is a unit box aligned with the ribbon; coverage across the ribbon
+# is the overlap of [d - 0.5, d + 0.5] with [-w/2, w/2] (kim-2003 §2, docs/model.md §6).
+PIXEL_HALF_EXTENT = 0.5
+
+# Opacity maps are sampled with a (2r + 1)² box filter around the texel of the point
+# (kim-2003 §4.1 uses 3 × 3).
+SHADOW_FILTER_RADIUS = 1
+
+# Below this base the Kajiya-Kay specular power is exactly 0 (value and gradients), so
+# pow(0, p) and log(0) never appear. 1e-12^p is < 1e-6 already for p ≥ 0.5, the smallest
+# shininess we support, so the cut is below float32 resolution of any visible highlight.
+SPECULAR_BASE_EPS = 1e-12
+
+# Vectors shorter than this are treated as zero by safe normalisation (zero-length
+# segments, repeated points, a point light at a strand point).
+SAFE_NORM_EPS = 1e-30
+
+# Default near distance of the camera, as a fraction of |target - eye|.
+NEAR_FRACTION = 1e-3

@@ -1,0 +1,16 @@
+"""Errors raised for bad input: one class per kind of input, each naming what is wrong."""
+
+from __future__ import annotations
+
+
+class HairFormatError(ValueError):
+    """A hair file (``.hair``, ``.tfx``, ``.ply``) is malformed; the message names the file."""
+
+    def __init__(self, path, problem: str):
+        self.path = str(path)
+        self.problem = problem
+        super().__init__(f"{self.path}: {problem}")
+
+
+class SceneError(ValueError):
+    """A scene (TOML file or Python values) is invalid; the message names the key."""

@@ -1,0 +1,195 @@
+"""The scene: what to render, as plain immutable values.
+
+A `Scene` is configuration, not a pytree: the geometry stage reads it with NumPy, and the
+shading stage takes its differentiable parameters from `Scene.params` (a `ShadingParams`).
+Construction validates every value, so a `Scene` that exists can be rendered.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Literal
+
+import numpy as np
+
+from ._errors import SceneError
+from ._shading import SHADING_MODELS, ShadingParams
+from ._strands import Strands
+
+__all__ = ["Camera", "Light", "Shadows", "Ordering", "Occluder", "Scene"]
+
+
+def _vec3(name: str, value, *, nonzero: bool = False) -> tuple[float, float, float]:
+    arr = np.asarray(value, dtype=np.float64)
+    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
+        raise SceneError(f"{name} must be 3 finite numbers, got {value!r}")
+    if nonzero and not np.linalg.norm(arr) > 0:
+        raise SceneError(f"{name} must not have length 0")
+    return tuple(float(x) for x in arr)
+
+
+def _rgb(name: str, value) -> tuple[float, float, float]:
+    arr = np.broadcast_to(np.asarray(value, dtype=np.float64), (3,))
+    if not np.all(np.isfinite(arr)) or np.any(arr < 0):
+        raise SceneError(f"{name} must be a non-negative number or 3 of them, got {value!r}")
+    return tuple(float(x) for x in arr)
+
+
+@dataclasses.dataclass(frozen=True)
+class Camera:
+    """Pinhole look-at camera. `fov` is the vertical field of view in degrees.
+
+    Images are `[height, width, 4]`, row 0 at the top; pixel (i, j) has its centre at
+    (i + 0.5, j + 0.5); `target` projects to (width/2, height/2); world `up` is up.
+    `near` (world units) defaults to 1e-3 × |target − eye|; segments with an endpoint
+    nearer than it are not drawn.
+    """
+
+    eye: tuple[float, float, float] = (0.0, 0.0, 4.0)
+    target: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    up: tuple[float, float, float] = (0.0, 1.0, 0.0)
+    fov: float = 40.0
+    width: int = 512
+    height: int = 512
+    near: float | None = None
+
+    def __post_init__(self):
+        eye = _vec3("camera.eye", self.eye)
+        target = _vec3("camera.target", self.target)
+        up = _vec3("camera.up", self.up, nonzero=True)
+        d = np.subtract(target, eye)
+        if not np.linalg.norm(d) > 0:
+            raise SceneError("camera.eye and camera.target must differ")
+        if not np.linalg.norm(np.cross(d, up)) > 1e-12 * np.linalg.norm(d) * np.linalg.norm(up):
+            raise SceneError("camera.up must not be parallel to the view direction")
+        if not (0 < float(self.fov) < 180):
+            raise SceneError(f"camera.fov must be in (0, 180) degrees, got {self.fov!r}")
+        for key in ("width", "height"):
+            v = getattr(self, key)
+            if isinstance(v, bool) or int(v) != v or not (1 <= int(v) <= 16384):
+                raise SceneError(f"camera.{key} must be an integer in [1, 16384], got {v!r}")
+        near = self.near
+        if near is None:
+            near = 1e-3 * float(np.linalg.norm(d))
+        if not (np.isfinite(near) and near > 0):
+            raise SceneError(f"camera.near must be positive, got {self.near!r}")
+        for key, v in (("eye", eye), ("target", target), ("up", up), ("fov", float(self.fov)),
+                       ("width", int(self.width)), ("height", int(self.height)),
+                       ("near", float(near))):
+            object.__setattr__(self, key, v)
+
+
+@dataclasses.dataclass(frozen=True)
+class Light:
+    """A directional light (`direction`: the way light travels) or a point light (`position`)."""
+
+    kind: Literal["directional", "point"] = "directional"
+    direction: tuple[float, float, float] | None = (-1.0, -1.0, -1.0)
+    position: tuple[float, float, float] | None = None
+    color: tuple[float, float, float] = (1.0, 1.0, 1.0)
+
+    def __post_init__(self):
+        if self.kind == "directional":
+            if self.direction is None:
+                raise SceneError("light.direction is required for a directional light")
+            object.__setattr__(self, "direction",
+                               _vec3("light.direction", self.direction, nonzero=True))
+            object.__setattr__(self, "position", None)
+        elif self.kind == "point":
+            if self.position is None:
+                raise SceneError("light.position is required for a point light")
+            object.__setattr__(self, "position", _vec3("light.position", self.position))
+            object.__setattr__(self, "direction", None)
+        else:
+            raise SceneError(f"light.kind must be 'directional' or 'point', got {self.kind!r}")
+        object.__setattr__(self, "color", _rgb("light.color", self.color))
+
+
+SHADOW_METHODS = ("none", "opacity-maps", "exact")
+ORDERING_METHODS = ("bins", "exact", "none")
+
+
+@dataclasses.dataclass(frozen=True)
+class Shadows:
+    """Self-shadowing: `none`, `opacity-maps` (N maps of R × R), or `exact` (N → ∞)."""
+
+    method: Literal["none", "opacity-maps", "exact"] = "opacity-maps"
+    maps: int = 64
+    resolution: int = 256
+
+    def __post_init__(self):
+        if self.method not in SHADOW_METHODS:
+            raise SceneError(f"shadows.method must be one of {SHADOW_METHODS}, got {self.method!r}")
+        if isinstance(self.maps, bool) or int(self.maps) != self.maps or not 1 <= self.maps <= 65536:
+            raise SceneError(f"shadows.maps must be an integer in [1, 65536], got {self.maps!r}")
+        r = self.resolution
+        if isinstance(r, bool) or int(r) != r or not 4 <= r <= 16384:
+            raise SceneError(f"shadows.resolution must be an integer in [4, 16384], got {r!r}")
+        object.__setattr__(self, "maps", int(self.maps))
+        object.__setattr__(self, "resolution", int(r))
+
+
+@dataclasses.dataclass(frozen=True)
+class Ordering:
+    """Visibility order: depth `bins` (kim-2003 §3), `exact` depth sort, or `none` (index order)."""
+
+    method: Literal["bins", "exact", "none"] = "bins"
+    bins: int = 256
+
+    def __post_init__(self):
+        if self.method not in ORDERING_METHODS:
+            raise SceneError(
+                f"ordering.method must be one of {ORDERING_METHODS}, got {self.method!r}")
+        if isinstance(self.bins, bool) or int(self.bins) != self.bins or not 1 <= self.bins <= 2**24:
+            raise SceneError(f"ordering.bins must be an integer in [1, 2^24], got {self.bins!r}")
+        object.__setattr__(self, "bins", int(self.bins))
+
+
+@dataclasses.dataclass(frozen=True)
+class Occluder:
+    """An opaque Lambertian sphere, drawn before the hair; hair behind it is hidden."""
+
+    kind: Literal["sphere"] = "sphere"
+    center: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    radius: float = 1.0
+    color: tuple[float, float, float] = (0.5, 0.5, 0.5)
+
+    def __post_init__(self):
+        if self.kind != "sphere":
+            raise SceneError(f"occluder.kind must be 'sphere', got {self.kind!r}")
+        object.__setattr__(self, "center", _vec3("occluder.center", self.center))
+        if not (np.isfinite(self.radius) and self.radius > 0):
+            raise SceneError(f"occluder.radius must be positive, got {self.radius!r}")
+        object.__setattr__(self, "radius", float(self.radius))
+        object.__setattr__(self, "color", _rgb("occluder.color", self.color))
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Scene:
+    """Everything needed to render one image.
+
+    `params` holds the differentiable shading parameters; `shading_model` picks the
+    Kajiya-Kay convention (`"kajiya-kay"` or `"kajiya-kay-mirror"`, see docs/model.md).
+    """
+
+    strands: Strands
+    camera: Camera = Camera()
+    light: Light = Light()
+    params: ShadingParams = dataclasses.field(default_factory=ShadingParams)
+    shading_model: str = "kajiya-kay"
+    shadows: Shadows = Shadows()
+    ordering: Ordering = Ordering()
+    occluder: Occluder | None = None
+    background: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    name: str = "scene"
+
+    def __post_init__(self):
+        if not isinstance(self.strands, Strands):
+            raise SceneError("scene.strands must be a Strands")
+        if self.shading_model not in SHADING_MODELS:
+            raise SceneError(
+                f"shading.model must be one of {SHADING_MODELS}, got {self.shading_model!r}")
+        object.__setattr__(self, "background", _rgb("background.color", self.background))
+
+    def replace(self, **changes) -> Scene:
+        return dataclasses.replace(self, **changes)

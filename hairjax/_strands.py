@@ -1,0 +1,103 @@
+"""Hair strands: ragged polylines stored flat, with per-strand opacity and width.
+
+Strands are geometry, so they live in NumPy (float64) and are validated once, here.
+The renderer casts to its working dtype; JAX sees only what the geometry stage derives.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+
+import numpy as np
+
+__all__ = ["Strands"]
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Strands:
+    """A set of hair strands (polylines of possibly different point counts).
+
+    **Fields:**
+
+    - `points`: `float64[P, 3]`, all points, strand after strand.
+    - `offsets`: `int64[S + 1]`; strand `s` is `points[offsets[s]:offsets[s + 1]]`.
+      Every strand has at least one point.
+    - `alpha`: `float64[S]`, opacity a ∈ (0, 1] per strand.
+    - `width`: `float64[S]`, ribbon width in pixels per strand (> 0).
+    - `color`: optional `float64[P, 3]` per-point colour (multiplies the diffuse term).
+    - `attributes`: other arrays a file carried, by name (e.g. `"thickness"`,
+      `"transparency"`, `"strand_uv"`); kept for `hairjax info`, not used for shading.
+    """
+
+    points: np.ndarray
+    offsets: np.ndarray
+    alpha: np.ndarray
+    width: np.ndarray
+    color: np.ndarray | None = None
+    attributes: Mapping[str, np.ndarray] = dataclasses.field(default_factory=dict)
+
+    def __post_init__(self):
+        points = np.asarray(self.points, dtype=np.float64)
+        offsets = np.asarray(self.offsets, dtype=np.int64)
+        if points.ndim != 2 or points.shape[1] != 3:
+            raise ValueError(f"points must have shape [P, 3], got {points.shape}")
+        if not np.all(np.isfinite(points)):
+            raise ValueError("points contain NaN or infinite coordinates")
+        if offsets.ndim != 1 or offsets.size < 1 or offsets[0] != 0 or offsets[-1] != len(points):
+            raise ValueError("offsets must be [0, ..., P] with one entry per strand plus one")
+        if np.any(np.diff(offsets) < 1):
+            raise ValueError("every strand needs at least one point")
+        n = offsets.size - 1
+        alpha = np.broadcast_to(np.asarray(self.alpha, dtype=np.float64), (n,)).copy()
+        width = np.broadcast_to(np.asarray(self.width, dtype=np.float64), (n,)).copy()
+        if not np.all((alpha > 0) & (alpha <= 1)):
+            raise ValueError("alpha must lie in (0, 1]")
+        if not np.all((width > 0) & np.isfinite(width)):
+            raise ValueError("width must be positive and finite")
+        color = self.color
+        if color is not None:
+            color = np.broadcast_to(np.asarray(color, dtype=np.float64), points.shape).copy()
+            if not np.all(np.isfinite(color)):
+                raise ValueError("color contains NaN or infinite values")
+        for name, value in (("points", points), ("offsets", offsets), ("alpha", alpha),
+                            ("width", width), ("color", color)):
+            if value is not None:
+                value.setflags(write=False)
+            object.__setattr__(self, name, value)
+        object.__setattr__(self, "attributes", dict(self.attributes))
+
+    @classmethod
+    def from_list(cls, strands, alpha=1.0, width=1.0, color=None) -> Strands:
+        """Build from a list of `[n_i, 3]` arrays."""
+        strands = [np.asarray(s, dtype=np.float64).reshape(-1, 3) for s in strands]
+        offsets = np.concatenate([[0], np.cumsum([len(s) for s in strands])])
+        points = np.concatenate(strands) if strands else np.zeros((0, 3))
+        return cls(points, offsets, alpha, width, color)
+
+    @property
+    def num_strands(self) -> int:
+        return self.offsets.size - 1
+
+    @property
+    def num_points(self) -> int:
+        return self.points.shape[0]
+
+    @property
+    def strand_of_point(self) -> np.ndarray:
+        """`int64[P]`: the strand each point belongs to."""
+        return np.repeat(np.arange(self.num_strands), np.diff(self.offsets))
+
+    def segments(self) -> np.ndarray:
+        """`int64[E, 2]`: point indices of every segment (consecutive points of a strand)."""
+        is_last = np.zeros(self.num_points, dtype=bool)
+        is_last[self.offsets[1:] - 1] = True
+        first = np.flatnonzero(~is_last)
+        return np.stack([first, first + 1], axis=1)
+
+    def replace(self, **changes) -> Strands:
+        return dataclasses.replace(self, **changes)
+
+    def transformed(self, scale: float = 1.0, translate=(0.0, 0.0, 0.0)) -> Strands:
+        """Points scaled about the origin, then translated."""
+        return self.replace(points=self.points * scale + np.asarray(translate, dtype=np.float64))
