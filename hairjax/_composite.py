@@ -1,0 +1,46 @@
+"""Back-to-front "over" compositing as per-fragment weights (docs/model.md §9).
+
+Drawing fragments far to near with over gives, per pixel,
+
+    C = Σ_k α_k c_k T_k + T · C_background,   T_k = Π_{j nearer than k} (1 − α_j),
+    T = Π_all (1 − α_j),   alpha channel = 1 − T.
+
+The weights w_k = α_k T_k and T depend on opacity only (geometry stage); the colours c_k on
+the shading parameters (shading stage), so C is a weighted sum the shading stage evaluates
+without re-compositing.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array, Bool, Float
+
+__all__ = ["segmented_scan", "over_weights"]
+
+
+def segmented_scan(values: Float[Array, " n"], first: Bool[Array, " n"], op) -> Float[Array, " n"]:
+    """Inclusive scan of `op` restarting wherever `first` is set."""
+
+    def combine(a, b):
+        va, fa = a
+        vb, fb = b
+        return jnp.where(fb, vb, op(va, vb)), fa | fb
+
+    return jax.lax.associative_scan(combine, (values, first))[0]
+
+
+def over_weights(
+    alpha: Float[Array, " f"], first: Bool[Array, " f"], last: Bool[Array, " f"]
+) -> tuple[Float[Array, " f"], Float[Array, " f"]]:
+    """Weights w_k = α_k T_k, and each pixel's total transmittance at its last fragment.
+
+    **Arguments:** fragment `alpha`, sorted by pixel and front to back within a pixel;
+    `first`/`last` mark each pixel's first and last fragment.
+
+    **Returns:** `(weights, t_total)`; `t_total` is meaningful where `last` is set.
+    A product scan, not exp(Σ log(1 − α)): α = 1 stays exact and its gradient finite.
+    """
+    inclusive = segmented_scan(1.0 - alpha, first, jnp.multiply)
+    exclusive = jnp.where(first, 1.0, jnp.roll(inclusive, 1))
+    return alpha * exclusive, inclusive

@@ -1,0 +1,167 @@
+"""AMD TressFX hair (``.tfx``), versions 3.x and 4.x, little-endian.
+
+The f32 at byte 0 is the version; both versions store S strands of the same vertex count V
+and locate their arrays by absolute byte offsets in the header (0 = array absent).
+
+TressFX 3.x, 296-byte header::
+
+    0    f32  version (3.x)
+    4    u32  strand count S
+    8    u32  vertices per strand V
+    12   u32  follow hairs per guide       (simulation only; ignored)
+    16   u32  both-ends-immovable flag     (simulation only; ignored)
+    20   124  reserved
+    144  6 x u32 offsets: vertices, strand thickness, strand texcoords,
+                          vertex colours, guide strands, vertex texcoords
+    168  128  reserved
+
+TressFX 4.x, 160-byte header::
+
+    0    f32  version (4.x)
+    4    u32  strand count S
+    8    u32  vertices per strand V
+    12   5 x u32 offsets: positions, strand UVs, vertex UVs, strand thickness, vertex colours
+    32   128  reserved
+
+Array element sizes. TressFX 4 (from its header comments): positions 4 x f32 per vertex
+(xyz, and w = 0 for an immovable vertex), strand UVs 2 x f32 per strand, vertex UVs
+2 x f32 per vertex, strand thickness f32 per strand, vertex colours 4 x f32 (RGBA) per vertex.
+TressFX 3 positions are 3 x f32 per vertex. Its loader reads only positions and strand
+texcoords (2 x f32 per strand); for its other optional arrays we assume the TressFX 4 sizes
+(thickness f32 per strand, colours 4 x f32 and texcoords 2 x f32 per vertex) and one u32
+per strand for the guide-strand index. No file at hand carries them.
+
+Optional arrays go to `attributes`: "strand_thickness", "strand_uv", "vertex_uv",
+"vertex_color" (RGBA, as stored), "guide_strand" (3.x) and "immovable" (4.x, bool per point).
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+
+import numpy as np
+
+from .._errors import HairFormatError
+
+__all__ = ["parse_tfx"]
+
+HEADER_SIZE_V3 = 296
+HEADER_SIZE_V4 = 160
+
+# (attribute name, dtype, components, per "strand" or "vertex"), in header offset order.
+_ARRAYS_V3 = [
+    ("positions", "<f4", 3, "vertex"),
+    ("strand_thickness", "<f4", 1, "strand"),
+    ("strand_uv", "<f4", 2, "strand"),
+    ("vertex_color", "<f4", 4, "vertex"),
+    ("guide_strand", "<u4", 1, "strand"),
+    ("vertex_uv", "<f4", 2, "vertex"),
+]
+_ARRAYS_V4 = [
+    ("positions", "<f4", 4, "vertex"),
+    ("strand_uv", "<f4", 2, "strand"),
+    ("vertex_uv", "<f4", 2, "vertex"),
+    ("strand_thickness", "<f4", 1, "strand"),
+    ("vertex_color", "<f4", 4, "vertex"),
+]
+
+
+def parse_tfx(data: bytes, path) -> dict:
+    """Parse the bytes of a TressFX 3.x or 4.x file.
+
+    Returns a dict with `points` (float64 [P, 3]), `offsets` (int64 [S + 1]), `color` (None:
+    TressFX colours are kept as the "vertex_color" attribute) and `attributes`.
+    Raises `HairFormatError` naming the problem for any malformed input.
+    """
+    # Casting float32 to float64 raises the 'invalid' flag for signalling NaNs, which numpy
+    # reports as a RuntimeWarning; finiteness is checked explicitly where it matters.
+    with np.errstate(invalid="ignore"):
+        return _parse_tfx(data, path)
+
+
+def _parse_tfx(data: bytes, path) -> dict:
+    def fail(problem: str):
+        raise HairFormatError(path, problem)
+
+    size = len(data)
+    if size < 12:
+        fail(f"file is {size} bytes, too short for a TressFX header")
+    (version,) = struct.unpack_from("<f", data, 0)
+    if math.isfinite(version) and 3.0 <= version < 4.0:
+        header_size, arrays, offsets_at = HEADER_SIZE_V3, _ARRAYS_V3, 144
+    elif math.isfinite(version) and 4.0 <= version < 5.0:
+        header_size, arrays, offsets_at = HEADER_SIZE_V4, _ARRAYS_V4, 12
+    else:
+        fail(f"unsupported TressFX version {version!r} at byte 0 (expected 3.x or 4.x)")
+    if size < header_size:
+        fail(f"file is {size} bytes, shorter than the {header_size}-byte TressFX {int(version)} header")
+
+    n_strands, per_strand = struct.unpack_from("<II", data, 4)
+    if n_strands == 0:
+        fail("the header declares zero strands")
+    if per_strand == 0:
+        fail("the header declares zero vertices per strand")
+    n_points = n_strands * per_strand  # Python int: no overflow for absurd counts
+    position_bytes = n_points * arrays[0][2] * 4
+    if position_bytes > size:
+        # Counts no offset could make fit: say so plainly (a file merely cut short is reported
+        # by the per-array checks below, which name the array).
+        fail(
+            f"the header declares {n_strands} strands x {per_strand} vertices, whose positions "
+            f"alone need {position_bytes} bytes, more than the {size}-byte file holds"
+        )
+
+    # Locate every array and check it lies inside the file, after the header and apart from
+    # the others, before reading anything: absurd counts and stray offsets fail here.
+    array_offsets = struct.unpack_from(f"<{len(arrays)}I", data, offsets_at)
+    spans = {}  # name -> (start, end)
+    for (name, dtype, components, per), start in zip(arrays, array_offsets, strict=True):
+        if start == 0:
+            continue
+        count = n_points if per == "vertex" else n_strands
+        end = start + count * components * 4
+        if start < header_size:
+            fail(f"{name} offset {start} points into the {header_size}-byte header")
+        if start >= size:
+            fail(f"{name} offset {start} points outside the file ({size} bytes)")
+        if end > size:
+            fail(
+                f"truncated {name} array: {count} {per}s need bytes {start}..{end}, "
+                f"but the file has {size}"
+            )
+        spans[name] = (start, end)
+    if "positions" not in spans:
+        fail("the positions array is missing (its offset is 0)")
+    ordered = sorted(spans.items(), key=lambda item: item[1])
+    for (name_a, (_, end_a)), (name_b, (start_b, _)) in zip(ordered, ordered[1:]):
+        if start_b < end_a:
+            fail(f"arrays {name_a} and {name_b} overlap")
+
+    def read(name):
+        _, dtype, components, per = next(a for a in arrays if a[0] == name)
+        count = n_points if per == "vertex" else n_strands
+        flat = np.frombuffer(data, dtype, count * components, spans[name][0])
+        return flat.reshape(count, components) if components > 1 else flat
+
+    positions = read("positions")
+    xyz = positions[:, :3]
+    if not np.all(np.isfinite(xyz)):
+        bad = int(np.flatnonzero(~np.all(np.isfinite(xyz), axis=1))[0])
+        fail(f"vertex {bad} has a NaN or infinite coordinate")
+
+    attributes = {}
+    if positions.shape[1] == 4:
+        # TressFX 4 stores the inverse-mass flag in w: 0 pins the vertex (roots).
+        attributes["immovable"] = positions[:, 3] == 0
+    for name in spans:
+        if name != "positions":
+            values = read(name)
+            attributes[name] = values.astype(np.int64 if values.dtype.kind == "u" else np.float64)
+
+    return {
+        "points": xyz.astype(np.float64),
+        "offsets": np.arange(n_strands + 1, dtype=np.int64) * per_strand,
+        "color": None,
+        "attributes": attributes,
+    }

@@ -1,0 +1,133 @@
+"""Views: how 3-D points map to a raster (the camera, or the light for opacity maps).
+
+Geometry only, so NumPy float64. A `View` maps a point p to pixel coordinates (x, y)
+(x right, y down, pixel (i, j) centred at (i + 0.5, j + 0.5)) and a depth D along the view
+axis: D = (p − origin)·forward (kim-2003 §3's distance to the image plane).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ._constants import NEAR_FRACTION
+
+__all__ = ["View", "camera_view", "light_view"]
+
+
+@dataclasses.dataclass(frozen=True)
+class View:
+    """A perspective (camera, point light) or orthographic (directional light) raster view.
+
+    `focal` is in pixels per unit of (lateral offset / depth) for perspective views and
+    pixels per world unit for orthographic ones; (cx, cy) is where the axis lands.
+    """
+
+    origin: np.ndarray
+    forward: np.ndarray
+    right: np.ndarray
+    up: np.ndarray
+    width: int
+    height: int
+    focal: float
+    cx: float
+    cy: float
+    perspective: bool
+    near: float
+
+    def project(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """`float64[P, 3]` → (`float64[P, 2]` pixel coordinates, `float64[P]` depth)."""
+        rel = np.asarray(points, dtype=np.float64) - self.origin
+        depth = rel @ self.forward
+        lateral = np.stack([rel @ self.right, rel @ self.up], axis=1)
+        if self.perspective:
+            # Fires for points at or behind the eye: their segments are culled by `near`
+            # (see visible_segments), the guard only keeps the division finite.
+            lateral = lateral / np.where(depth > self.near, depth, self.near)[:, None]
+        xy = np.empty_like(lateral)
+        xy[:, 0] = self.cx + self.focal * lateral[:, 0]
+        xy[:, 1] = self.cy - self.focal * lateral[:, 1]
+        return xy, depth
+
+    def pixel_rays(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per pixel centre: (ray origin `[H*W, 3]`, unit ray direction `[H*W, 3]`), row-major."""
+        j, i = np.mgrid[0:self.height, 0:self.width]
+        x = (i.ravel() + 0.5 - self.cx) / self.focal
+        y = -(j.ravel() + 0.5 - self.cy) / self.focal
+        if self.perspective:
+            d = self.forward + x[:, None] * self.right + y[:, None] * self.up
+            d /= np.linalg.norm(d, axis=1, keepdims=True)
+            o = np.broadcast_to(self.origin, d.shape)
+        else:
+            o = self.origin + x[:, None] * self.right + y[:, None] * self.up
+            d = np.broadcast_to(self.forward, o.shape)
+        return o, d
+
+
+def _basis(forward: np.ndarray, up_hint: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    right = np.cross(forward, up_hint)
+    if np.linalg.norm(right) < 1e-9:
+        # Fires when the up hint is parallel to forward (a light straight along y):
+        # any perpendicular works for a light's map, so take another axis.
+        right = np.cross(forward, np.array([1.0, 0.0, 0.0]))
+        if np.linalg.norm(right) < 1e-9:
+            right = np.cross(forward, np.array([0.0, 0.0, 1.0]))
+    right /= np.linalg.norm(right)
+    return right, np.cross(right, forward)
+
+
+def camera_view(camera) -> View:
+    """The camera's view: `target` lands at (W/2, H/2); world up is up in the image."""
+    eye = np.asarray(camera.eye, dtype=np.float64)
+    forward = np.asarray(camera.target, dtype=np.float64) - eye
+    forward /= np.linalg.norm(forward)
+    right, up = _basis(forward, np.asarray(camera.up, dtype=np.float64))
+    focal = 0.5 * camera.height / np.tan(np.radians(camera.fov) / 2)
+    return View(eye, forward, right, up, camera.width, camera.height, float(focal),
+                camera.width / 2, camera.height / 2, True, camera.near)
+
+
+def light_view(light, points: np.ndarray, resolution: int, margin: int) -> View:
+    """The light's view of `points` for R × R opacity maps.
+
+    Directional light: orthographic along the light's direction, framing the points'
+    bounding square with `margin` texels on each side. Point light: perspective from the
+    light towards the points' bounding-box centre, the field of view fitted to the points
+    in front of it (at most ±80° off axis; points beyond fall outside the maps).
+    """
+    points = np.asarray(points, dtype=np.float64)
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    centre = 0.5 * (lo + hi)
+    usable = resolution - 2 * margin
+    if light.kind == "directional":
+        forward = np.asarray(light.direction, dtype=np.float64)
+        forward /= np.linalg.norm(forward)
+        right, up = _basis(forward, np.array([0.0, 1.0, 0.0]))
+        rel = points - centre
+        extent = 2 * max(np.abs(rel @ right).max(), np.abs(rel @ up).max())
+        # Fires when all points coincide seen from the light: any scale frames one point.
+        focal = usable / extent if extent > 0 else 1.0
+        return View(centre, forward, right, up, resolution, resolution, float(focal),
+                    resolution / 2, resolution / 2, False, -np.inf)
+    origin = np.asarray(light.position, dtype=np.float64)
+    axis = centre - origin
+    scale = np.linalg.norm(hi - lo) + np.linalg.norm(axis)
+    if np.linalg.norm(axis) <= 1e-9 * max(scale, 1e-300):
+        # Fires when the light sits at the centre of the hair: look down −y by convention.
+        axis = np.array([0.0, -1.0, 0.0])
+    forward = axis / np.linalg.norm(axis)
+    right, up = _basis(forward, np.array([0.0, 1.0, 0.0]))
+    near = NEAR_FRACTION * max(np.linalg.norm(centre - origin), 1e-300)
+    rel = points - origin
+    depth = rel @ forward
+    front = depth > near
+    tan_max = np.tan(np.radians(80.0))
+    if front.any():
+        lateral = np.maximum(np.abs(rel[front] @ right), np.abs(rel[front] @ up)) / depth[front]
+        tan_half = min(max(lateral.max(), 1e-6), tan_max)
+    else:
+        tan_half = tan_max
+    focal = (usable / 2) / tan_half
+    return View(origin, forward, right, up, resolution, resolution, float(focal),
+                resolution / 2, resolution / 2, True, float(near))

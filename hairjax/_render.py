@@ -1,0 +1,337 @@
+"""The staged renderer: scene → geometry stage → shading stage → image (docs/model.md).
+
+- `prepare(scene)`: NumPy set-up that depends on geometry, camera and light only:
+  projection, visibility order, fragments, occluder test, the opacity-map gather plan.
+  Cached per `Scene` object.
+- `geometry_stage(scene, alpha)`: the opacity-dependent JAX part: compositing weights
+  and Ω. Differentiable in the per-strand `alpha`.
+- `shading_stage(geometry, params)`: Kajiya-Kay at the points, τ = exp(−κΩ), and the
+  weighted sum that is the composite. Differentiable in `ShadingParams`.
+
+A scene without shadows builds no shadow work; a scene without occluder runs no occluder
+test. Re-rendering with new parameters reuses both earlier stages.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+import weakref
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, Float
+
+from ._composite import over_weights
+from ._ordering import draw_order, segment_depth, stable_argsort_uint32
+from ._projection import View, camera_view
+from ._raster import rasterize
+from ._scene import Scene
+from ._shading import ShadingParams, kajiya_kay
+from ._shadows import ShadowSetup, exact_opacity, opacity_maps, point_opacity, shadow_setup
+
+__all__ = ["Setup", "Geometry", "prepare", "geometry_stage", "shading_stage", "render",
+           "render_profiled", "tangents"]
+
+
+def tangents(points: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """Unit tangents: central differences, one-sided at strand ends (`float64[P, 3]`).
+
+    Zero where the difference is zero (repeated points, one-point strands): such a point
+    reflects ambient light only.
+    """
+    prev = np.arange(len(points)) - 1
+    nxt = np.arange(len(points)) + 1
+    starts, ends = offsets[:-1], offsets[1:] - 1
+    prev[starts] = starts
+    nxt[ends] = ends
+    diff = points[nxt] - points[prev]
+    norm = np.linalg.norm(diff, axis=1, keepdims=True)
+    # Fires for repeated points and one-point strands: the tangent does not exist.
+    return np.where(norm > 0, diff / np.where(norm > 0, norm, 1.0), 0.0)
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    norm = np.linalg.norm(v, axis=-1, keepdims=True)
+    # Fires for a point light at a strand point or the eye at one: no direction, no light.
+    return np.where(norm > 0, v / np.where(norm > 0, norm, 1.0), 0.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class Setup:
+    """Geometry set-up: everything that depends on neither opacity nor shading parameters."""
+
+    view: View
+    tangent: np.ndarray          # [P, 3]
+    to_light: np.ndarray         # [P, 3]
+    to_eye: np.ndarray           # [P, 3]
+    base_color: np.ndarray       # [P, 3] per-point colour (ones when the hair has none)
+    light_rgb: np.ndarray        # [3]
+    # Camera fragments, sorted by pixel, front to back within a pixel:
+    frag_pixel: np.ndarray       # [F]
+    frag_i0: np.ndarray          # [F] first point of the fragment's segment
+    frag_i1: np.ndarray          # [F] second point
+    frag_t: np.ndarray           # [F] screen-space position along the segment
+    frag_strand: np.ndarray      # [F]
+    frag_coverage: np.ndarray    # [F]
+    frag_first: np.ndarray       # [F] first fragment of its pixel
+    frag_last: np.ndarray        # [F] last fragment of its pixel
+    backdrop: np.ndarray         # [H*W, 3] what lies behind the hair: background or occluder
+    opaque: np.ndarray           # [H*W] the occluder covers the pixel centre
+    shadow: ShadowSetup | None
+    order: np.ndarray            # [E] draw order of segments
+    timings: dict
+
+
+class Geometry(eqx.Module):
+    """Output of the geometry stage: what the shading stage needs, as JAX arrays."""
+
+    tangent: Float[Array, "P 3"]
+    to_light: Float[Array, "P 3"]
+    to_eye: Float[Array, "P 3"]
+    base_color: Float[Array, "P 3"]
+    light_rgb: Float[Array, "3"]
+    omega: Float[Array, " P"] | None
+    frag_pixel: Array
+    frag_i0: Array
+    frag_i1: Array
+    frag_t: Float[Array, " F"]
+    frag_weight: Float[Array, " F"]
+    transmittance: Float[Array, " HW"]
+    backdrop: Float[Array, "HW 3"]
+    alpha_channel: Float[Array, " HW"]
+    height: int = eqx.field(static=True)
+    width: int = eqx.field(static=True)
+    model: str = eqx.field(static=True)
+
+
+_SETUP_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def prepare(scene: Scene) -> Setup:
+    """The NumPy geometry set-up of `scene`, cached per scene object."""
+    cached = _SETUP_CACHE.get(scene)
+    if cached is None:
+        cached = _prepare(scene)
+        _SETUP_CACHE[scene] = cached
+    return cached
+
+
+def _prepare(scene: Scene) -> Setup:
+    timings = {}
+    clock = time.perf_counter()
+
+    def lap(name):
+        nonlocal clock
+        now = time.perf_counter()
+        timings[name] = now - clock
+        clock = now
+
+    strands, cam = scene.strands, scene.camera
+    points = strands.points
+    view = camera_view(cam)
+    xy, depth = view.project(points)
+    segments = strands.segments()
+    seg_strand = strands.strand_of_point[segments[:, 0]]
+    # Segments with an end nearer than the near plane (or behind the eye) are not drawn.
+    drawable = np.flatnonzero((depth[segments[:, 0]] > cam.near) & (depth[segments[:, 1]] > cam.near))
+    order = drawable[draw_order(segment_depth(depth, segments[drawable]),
+                                scene.ordering.method, scene.ordering.bins)]
+    lap("project+order")
+
+    # Rasterise nearest-first, then a stable sort by pixel gives front-to-back per pixel.
+    near_first = order[::-1]
+    s0, s1 = segments[near_first, 0], segments[near_first, 1]
+    frags = rasterize(xy[s0], xy[s1], depth[s0], depth[s1], strands.width[seg_strand[near_first]],
+                      cam.width, cam.height, True)
+    lap("rasterize")
+
+    hw = cam.width * cam.height
+    light = scene.light
+    light_rgb = np.asarray(light.color, dtype=np.float64)
+    backdrop = np.broadcast_to(np.asarray(scene.background, np.float64), (hw, 3)).copy()
+    opaque = np.zeros(hw, bool)
+    if scene.occluder is not None:
+        hit_depth, normal, hit_point = _sphere_hits(view, scene.occluder)
+        opaque = np.isfinite(hit_depth)
+        to_l = _to_light(light, hit_point[opaque])
+        lambert = np.clip(np.sum(normal[opaque] * to_l, axis=1), 0.0, None)
+        backdrop[opaque] = np.asarray(scene.occluder.color) * light_rgb * lambert[:, None]
+        # kim-2003 §3: depth test on, hair does not write depth.
+        frags = frags.take(np.flatnonzero(frags.depth < hit_depth[frags.pixel]))
+        lap("occluder")
+
+    sort = stable_argsort_uint32(frags.pixel)
+    frags = frags.take(sort)
+    seg = near_first[frags.segment]
+    first = np.ones(frags.size, bool)
+    first[1:] = frags.pixel[1:] != frags.pixel[:-1]
+    last = np.ones(frags.size, bool)
+    last[:-1] = first[1:]
+    lap("sort fragments")
+
+    shadow = None
+    if scene.shadows.method != "none":
+        shadow = shadow_setup(points, segments, seg_strand, strands.width, light,
+                              scene.shadows.method, scene.shadows.maps, scene.shadows.resolution)
+        lap("shadow set-up")
+
+    base_color = strands.color if strands.color is not None else np.ones_like(points)
+    return Setup(
+        view=view, tangent=tangents(points, strands.offsets), to_light=_to_light(light, points),
+        to_eye=_unit(view.origin - points), base_color=base_color, light_rgb=light_rgb,
+        frag_pixel=frags.pixel, frag_i0=segments[seg, 0], frag_i1=segments[seg, 1],
+        frag_t=frags.t, frag_strand=seg_strand[seg], frag_coverage=frags.coverage,
+        frag_first=first, frag_last=last, backdrop=backdrop, opaque=opaque, shadow=shadow,
+        order=order, timings=timings,
+    )
+
+
+def _to_light(light, points: np.ndarray) -> np.ndarray:
+    if light.kind == "directional":
+        d = -np.asarray(light.direction, dtype=np.float64)
+        return np.broadcast_to(d / np.linalg.norm(d), points.shape)
+    return _unit(np.asarray(light.position, dtype=np.float64) - points)
+
+
+def _sphere_hits(view: View, occluder):
+    """Per pixel centre: view depth of the first hit on the sphere (inf if none), normal, point."""
+    origin, direction = view.pixel_rays()
+    centre = np.asarray(occluder.center, dtype=np.float64)
+    oc = origin - centre
+    b = np.sum(oc * direction, axis=1)
+    c = np.sum(oc * oc, axis=1) - occluder.radius**2
+    disc = b * b - c
+    root = np.sqrt(np.where(disc >= 0, disc, 0.0))
+    # The nearer intersection in front of the eye; the farther one when the eye is inside.
+    t = np.where(-b - root > 0, -b - root, -b + root)
+    hit = (disc >= 0) & (t > 0)
+    point = origin + t[:, None] * direction
+    depth = np.where(hit, (point - view.origin) @ view.forward, np.inf)
+    normal = _unit(point - centre)
+    return depth, normal, point
+
+
+@eqx.filter_jit
+def _composite_weights(alpha, frag_strand, frag_coverage, frag_first, frag_last, last_pixel,
+                       opaque):
+    weights, inclusive = over_weights(alpha[frag_strand] * frag_coverage, frag_first, frag_last)
+    # Pixels without fragments keep T = 1; each covered pixel's last fragment sets its T
+    # (`last_pixel` points every other fragment past the end, where it is dropped).
+    transmittance = jnp.ones(opaque.shape[0], weights.dtype).at[last_pixel].set(
+        inclusive, mode="drop")
+    alpha_channel = 1.0 - transmittance * (1.0 - opaque)
+    return weights, transmittance, alpha_channel
+
+
+@eqx.filter_jit
+def _map_opacity(alpha, frag_strand, frag_coverage, frag_cell, plane, f, texel, maps, resolution):
+    omega = opacity_maps(alpha[frag_strand] * frag_coverage, frag_cell, maps, resolution)
+    return point_opacity(omega, plane, f, texel)
+
+
+@eqx.filter_jit
+def _exact_opacity(alpha, frag_strand, frag_coverage, frag_first, index, weight):
+    return exact_opacity(alpha[frag_strand] * frag_coverage, frag_first, index, weight)
+
+
+def _omega(scene: Scene, shadow: ShadowSetup, alpha, dtype):
+    segments = scene.strands.segments()
+    frag_strand = scene.strands.strand_of_point[segments[shadow.frag_segment, 0]]
+    coverage = jnp.asarray(shadow.frag_coverage, dtype)
+    if shadow.method == "opacity-maps":
+        return _map_opacity(alpha, frag_strand, coverage, shadow.frag_cell, shadow.plane,
+                            jnp.asarray(shadow.f, dtype), shadow.texel, scene.shadows.maps,
+                            scene.shadows.resolution)
+    return _exact_opacity(alpha, frag_strand, coverage, shadow.frag_first, shadow.index,
+                          jnp.asarray(shadow.weight, dtype))
+
+
+def geometry_stage(scene: Scene, alpha: Float[Array, " S"] | None = None) -> Geometry:
+    """Compositing weights and Ω for `scene`, differentiable in the per-strand `alpha`.
+
+    **Arguments:** `scene`; `alpha` (`[S]`, default the scene's strand opacities) — may be
+    a traced JAX array, e.g. under `jax.grad`.
+    """
+    setup = prepare(scene)
+    dtype = jnp.result_type(float)
+    alpha = jnp.asarray(scene.strands.alpha if alpha is None else alpha, dtype=dtype)
+    hw = scene.camera.width * scene.camera.height
+    last_pixel = np.where(setup.frag_last, setup.frag_pixel, hw)
+    weights, transmittance, alpha_channel = _composite_weights(
+        alpha, setup.frag_strand, jnp.asarray(setup.frag_coverage, dtype), setup.frag_first,
+        setup.frag_last, last_pixel, jnp.asarray(setup.opaque, dtype))
+    omega = None if setup.shadow is None else _omega(scene, setup.shadow, alpha, dtype)
+    return Geometry(
+        tangent=jnp.asarray(setup.tangent, dtype), to_light=jnp.asarray(setup.to_light, dtype),
+        to_eye=jnp.asarray(setup.to_eye, dtype), base_color=jnp.asarray(setup.base_color, dtype),
+        light_rgb=jnp.asarray(setup.light_rgb, dtype), omega=omega,
+        frag_pixel=jnp.asarray(setup.frag_pixel, jnp.int32),
+        frag_i0=jnp.asarray(setup.frag_i0, jnp.int32), frag_i1=jnp.asarray(setup.frag_i1, jnp.int32),
+        frag_t=jnp.asarray(setup.frag_t, dtype), frag_weight=weights,
+        transmittance=transmittance, backdrop=jnp.asarray(setup.backdrop, dtype),
+        alpha_channel=alpha_channel, height=scene.camera.height, width=scene.camera.width,
+        model=scene.shading_model,
+    )
+
+
+def point_colors(geometry: Geometry, params: ShadingParams) -> Float[Array, "P 3"]:
+    """Shaded colour at every strand point (Gouraud, kim-2003 §5):
+    ambient·c + τ · light · (Kd·sin(T, L)·c + Ks·spec), with c the per-point colour."""
+    diffuse, specular = jax.vmap(kajiya_kay, in_axes=(0, 0, 0, None, None))(
+        geometry.tangent, geometry.to_light, geometry.to_eye, params, geometry.model)
+    lit = geometry.light_rgb * (diffuse * geometry.base_color + specular)
+    if geometry.omega is not None:
+        lit = lit * jnp.exp(-params.kappa * geometry.omega)[:, None]
+    return params.ambient * geometry.base_color + lit
+
+
+@eqx.filter_jit
+def shading_stage(geometry: Geometry, params: ShadingParams) -> Float[Array, "H W 4"]:
+    """The image from the geometry stage and the shading parameters (`[H, W, 4]`)."""
+    colors = point_colors(geometry, params)
+    t = geometry.frag_t[:, None]
+    frag_color = (1 - t) * colors[geometry.frag_i0] + t * colors[geometry.frag_i1]
+    hw = geometry.height * geometry.width
+    rgb = jax.ops.segment_sum(geometry.frag_weight[:, None] * frag_color, geometry.frag_pixel,
+                              num_segments=hw, indices_are_sorted=True)
+    rgb = rgb + geometry.transmittance[:, None] * geometry.backdrop
+    image = jnp.concatenate([rgb, geometry.alpha_channel[:, None]], axis=1)
+    return image.reshape(geometry.height, geometry.width, 4)
+
+
+def render(scene: Scene, params: ShadingParams | None = None,
+           alpha: Float[Array, " S"] | None = None) -> Float[Array, "H W 4"]:
+    """Render `scene` to linear RGBA `[H, W, 4]`.
+
+    Differentiable in `params` (default `scene.params`) and in the per-strand `alpha`
+    (default the scene's); jit-able with the scene closed over:
+    `jax.jit(lambda p: render(scene, p))`.
+    """
+    params = scene.params if params is None else params
+    return shading_stage(geometry_stage(scene, alpha), params)
+
+
+def render_profiled(scene: Scene, params: ShadingParams | None = None):
+    """Render and time each stage (block-until-ready between stages).
+
+    Returns `(image, timings)`; timings are seconds by stage name, set-up sub-steps
+    prefixed with `geometry/`. Includes compilation on a first call.
+    """
+    params = scene.params if params is None else params
+    _SETUP_CACHE.pop(scene, None)
+    t0 = time.perf_counter()
+    setup = prepare(scene)
+    t1 = time.perf_counter()
+    geometry = jax.block_until_ready(geometry_stage(scene))
+    t2 = time.perf_counter()
+    image = jax.block_until_ready(shading_stage(geometry, params))
+    t3 = time.perf_counter()
+    timings = {f"geometry/{k}": v for k, v in setup.timings.items()}
+    timings["geometry set-up (NumPy)"] = t1 - t0
+    timings["geometry opacity (JAX)"] = t2 - t1
+    timings["shading"] = t3 - t2
+    timings["total"] = t3 - t0
+    return image, timings

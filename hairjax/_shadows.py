@@ -1,0 +1,171 @@
+"""Opacity shadow maps (kim-2003 §4, Routine 2) and their N → ∞ limit (docs/model.md §7).
+
+Ω(D, texel) is the summed fragment alpha, in the light's raster, of everything nearer the
+light than depth D. Maps sit on the planes D_i = D_0 + iΔ, i = 0..N, Δ = (D_N − D_0)/N,
+between the nearest (D_0) and farthest (D_N) strand point; a point at depth z with
+D_i ≤ z ≤ D_{i+1} gets
+
+    Ω = (1 − f) Ω̄(D_i) + f Ω̄(D_{i+1}),   f = (z − D_i)/Δ,
+
+with Ω̄ the 3 × 3 box average around the point's texel (texels outside the map count 0).
+`exact` uses Ω̄(z) itself, the limit N → ∞.
+
+Set-up (NumPy, geometry only) rasterises the strands from the light and plans the
+gathers; evaluation (JAX) is linear in fragment alpha, so Ω is differentiable in opacity.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, Float, Int
+
+from ._composite import segmented_scan
+from ._constants import PIXEL_HALF_EXTENT, SHADOW_FILTER_RADIUS
+from ._projection import View, light_view
+from ._raster import rasterize
+
+__all__ = ["ShadowSetup", "shadow_setup", "opacity_maps", "point_opacity", "MAX_MAP_CELLS"]
+
+# (N + 1) · R² map cells at most: 1 GiB in float32.
+MAX_MAP_CELLS = 1 << 28
+
+
+@dataclasses.dataclass(frozen=True)
+class ShadowSetup:
+    """What Ω needs that does not depend on opacity.
+
+    `frag_segment[F]`, `frag_coverage[F]`: light-space fragments. For `opacity-maps`:
+    `frag_cell[F]` = slice · R² + texel (slice N: beyond the last plane, dropped) and per
+    point the plane index `plane[P]`, its weight `f[P]` and texel `texel[P]` (−1 outside).
+    For `exact`: fragments sorted by (texel, depth) with `frag_first[F]`, and per point
+    `index[P, 9]`, `weight[P, 9]` into the per-texel prefix sums.
+    """
+
+    method: str
+    view: View
+    planes: np.ndarray | None
+    frag_segment: np.ndarray
+    frag_coverage: np.ndarray
+    frag_cell: np.ndarray | None = None
+    plane: np.ndarray | None = None
+    f: np.ndarray | None = None
+    texel: np.ndarray | None = None
+    frag_first: np.ndarray | None = None
+    index: np.ndarray | None = None
+    weight: np.ndarray | None = None
+
+
+def map_margin(width: np.ndarray) -> int:
+    """Texels kept free at the map border: the widest ribbon's reach plus the filter."""
+    return int(np.ceil(0.5 * float(np.max(width, initial=1.0)) + PIXEL_HALF_EXTENT)) + SHADOW_FILTER_RADIUS
+
+
+def shadow_setup(points, segments, seg_strand, width, light, method: str, maps: int,
+                 resolution: int) -> ShadowSetup:
+    """Rasterise the strands from the light (same ribbons as the camera pass; width in
+    texels = the strand's width in pixels) and plan Ω at every point."""
+    if method == "opacity-maps" and (maps + 1) * resolution**2 > MAX_MAP_CELLS:
+        raise ValueError(f"{maps} maps of {resolution}² exceed {MAX_MAP_CELLS} cells; "
+                         "use fewer maps or a lower resolution")
+    view = light_view(light, points, resolution, map_margin(width))
+    xy, depth = view.project(points)
+    drawable = np.ones(len(segments), bool)
+    seen = np.ones(len(points), bool)
+    if view.perspective:
+        # Point light: points behind its near plane get no shadow and cast none.
+        seen = depth > view.near
+        drawable = seen[segments[:, 0]] & seen[segments[:, 1]]
+    seg_ids = np.flatnonzero(drawable)
+    s0, s1 = segments[seg_ids, 0], segments[seg_ids, 1]
+    frags = rasterize(xy[s0], xy[s1], depth[s0], depth[s1], width[seg_strand[seg_ids]],
+                      resolution, resolution, view.perspective)
+    zmin = float(depth[seen].min()) if seen.any() else 0.0
+    zmax = float(depth[seen].max()) if seen.any() else 0.0
+    span = zmax - zmin
+    # Fires when every point is at one depth from the light: nothing is strictly nearer
+    # than any plane, and any positive spacing gives that Ω = 0.
+    span = span if span > 0 else 1.0
+
+    tx = np.floor(xy[:, 0]).astype(np.int64)
+    ty = np.floor(xy[:, 1]).astype(np.int64)
+    inside = seen & (tx >= 0) & (tx < resolution) & (ty >= 0) & (ty < resolution)
+    common = dict(view=view, frag_segment=seg_ids[frags.segment], frag_coverage=frags.coverage)
+
+    if method == "opacity-maps":
+        delta = span / maps
+        # Fragment in [D_j, D_{j+1}) counts towards planes j + 1 … N (strictly nearer).
+        j = np.clip(np.floor((frags.depth - zmin) / delta), 0, maps).astype(np.int64)
+        plane = np.clip(np.floor((depth - zmin) / delta), 0, maps - 1).astype(np.int64)
+        f = np.clip((depth - (zmin + plane * delta)) / delta, 0.0, 1.0)
+        return ShadowSetup(method=method, planes=zmin + delta * np.arange(maps + 1),
+                           frag_cell=j * resolution**2 + frags.pixel, plane=plane, f=f,
+                           texel=np.where(inside, ty * resolution + tx, -1), **common)
+
+    # exact: fragments sorted by one float key, texel + depth fraction / 2.
+    def key(texel, z):
+        return texel + 0.5 * np.clip((z - zmin) / span, 0.0, 1.0)
+
+    frag_key = key(frags.pixel.astype(np.float64), frags.depth)
+    order = np.argsort(frag_key)
+    frag_key = frag_key[order]
+    first = np.ones(frags.size, bool)
+    first[1:] = frags.pixel[order][1:] != frags.pixel[order][:-1]
+    r = SHADOW_FILTER_RADIUS
+    offs = np.arange(-r, r + 1)
+    nx = (tx[:, None, None] + offs[None, None, :]).reshape(len(points), -1)
+    ny = (ty[:, None, None] + offs[None, :, None]).reshape(len(points), -1)
+    valid = (nx >= 0) & (nx < resolution) & (ny >= 0) & (ny < resolution) & seen[:, None]
+    texel = np.where(valid, ny * resolution + nx, 0).astype(np.float64)
+    start = np.searchsorted(frag_key, texel, side="left")
+    stop = np.searchsorted(frag_key, key(texel, depth[:, None]), side="left")
+    # [start, stop): the texel's fragments strictly nearer the light than the point; the
+    # per-texel inclusive prefix at stop − 1 sums them.
+    has_any = valid & (stop > start)
+    common["frag_segment"] = common["frag_segment"][order]
+    common["frag_coverage"] = common["frag_coverage"][order]
+    return ShadowSetup(method=method, planes=None, frag_first=first,
+                       index=np.where(has_any, stop - 1, 0),
+                       weight=np.where(has_any, 1.0 / (2 * r + 1) ** 2, 0.0), **common)
+
+
+def box_filter(maps: Float[Array, "n r r"]) -> Float[Array, "n r r"]:
+    """(2r + 1)² box average over texels, zero outside the map."""
+    r = SHADOW_FILTER_RADIUS
+    k = 2 * r + 1
+    padded = jnp.pad(maps, ((0, 0), (r, r), (r, r)))
+    rows = sum(padded[:, i:i + maps.shape[1], :] for i in range(k))
+    return sum(rows[:, :, i:i + maps.shape[2]] for i in range(k)) / (k * k)
+
+
+def opacity_maps(frag_alpha: Float[Array, " f"], frag_cell: Int[Array, " f"], maps: int,
+                 resolution: int) -> Float[Array, "n1 r r"]:
+    """Box-filtered Ω̄ on the N + 1 planes (plane 0 is empty): kim-2003 Routine 2's
+    accumulation, with each slice added to the ones behind it (GL_ONE, GL_ONE)."""
+    cells = resolution * resolution
+    slices = jax.ops.segment_sum(frag_alpha, frag_cell, num_segments=(maps + 1) * cells)
+    slices = slices.reshape(maps + 1, resolution, resolution)[:maps]
+    omega = jnp.concatenate([jnp.zeros_like(slices[:1]), jnp.cumsum(slices, axis=0)])
+    return box_filter(omega)
+
+
+def point_opacity(maps: Float[Array, "n1 r r"], plane: Int[Array, " p"], f: Float[Array, " p"],
+                  texel: Int[Array, " p"]) -> Float[Array, " p"]:
+    """Ω at points: linear interpolation between the two planes around each point."""
+    flat = maps.reshape(maps.shape[0], -1)
+    safe = jnp.maximum(texel, 0)
+    omega = (1 - f) * flat[plane, safe] + f * flat[plane + 1, safe]
+    # Fires for points outside the light's map (behind a point light): no shadow.
+    return jnp.where(texel >= 0, omega, 0.0)
+
+
+def exact_opacity(frag_alpha: Float[Array, " f"], frag_first, index: Int[Array, "p k"],
+                  weight: Float[Array, "p k"]) -> Float[Array, " p"]:
+    """Ω̄(z) at each point's own depth from per-texel prefix sums (N → ∞)."""
+    if frag_alpha.shape[0] == 0:
+        return jnp.zeros(index.shape[0], frag_alpha.dtype)
+    prefix = segmented_scan(frag_alpha, frag_first, jnp.add)
+    return jnp.sum(weight * prefix[index], axis=1)

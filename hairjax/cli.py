@@ -1,0 +1,98 @@
+"""The `hairjax` command line: render, info, bench."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+__all__ = ["main"]
+
+
+def _render(args) -> int:
+    import numpy as np
+
+    from ._image import write_image
+    from ._render import render, render_profiled
+    from ._scene_file import default_scene_path, load_scene
+
+    if args.backend != "jax":
+        raise SystemExit(f"hairjax: backend {args.backend!r} is not available yet (only 'jax')")
+    scene = load_scene(args.scene or default_scene_path())
+    if args.profile:
+        image, timings = render_profiled(scene)
+        # A second run shows the steady state, with compilation out of the way.
+        _, warm = render_profiled(scene)
+        width = max(len(k) for k in timings)
+        print(f"{'stage':<{width}}  first run  second run")
+        for key in timings:
+            print(f"{key:<{width}}  {timings[key]:8.3f} s  {warm[key]:8.3f} s")
+    else:
+        image = render(scene)
+    image = np.asarray(image)
+    if not np.all(np.isfinite(image)):
+        print("hairjax: warning: the image has non-finite pixels", file=sys.stderr)
+    write_image(args.output, image)
+    print(f"wrote {args.output}")
+    if args.png:
+        write_image(args.png, image)
+        print(f"wrote {args.png}")
+    return 0
+
+
+def _info(args) -> int:
+    from ._io import format_info, hair_info, load_hair
+
+    strands = load_hair(args.file)
+    print(format_info(args.file, hair_info(strands)))
+    return 0
+
+
+def _bench(args) -> int:
+    from ._bench import main as bench_main
+
+    return bench_main(args)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="hairjax", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("render", help="render a scene (default: the built-in fur ball)")
+    p.add_argument("scene", nargs="?", type=Path, help="scene TOML file (docs/scenes.md)")
+    p.add_argument("-o", "--output", type=Path, default=Path("out/render.exr"),
+                   help="output image, .exr (float) or .png (default: out/render.exr)")
+    p.add_argument("--png", type=Path, help="also write an 8-bit sRGB PNG here")
+    p.add_argument("--profile", action="store_true", help="print the time of each stage")
+    p.add_argument("--backend", choices=["jax", "gl"], default="jax")
+    p.set_defaults(func=_render)
+
+    p = sub.add_parser("info", help="summarise a hair file (.hair, .tfx, .ply)")
+    p.add_argument("file", type=Path)
+    p.set_defaults(func=_info)
+
+    p = sub.add_parser("bench", help="time the stages on fur balls (BENCHMARKS.md)")
+    p.add_argument("--quick", action="store_true", help="small sizes only, for a smoke test")
+    p.add_argument("--repeats", type=int, default=5)
+    p.add_argument("--json", type=Path, help="also write the figures as JSON")
+    p.set_defaults(func=_bench)
+    return parser
+
+
+def main(argv=None) -> int:
+    from ._errors import HairFormatError, SceneError
+    from ._image import ImageError
+
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except (SceneError, HairFormatError, ImageError, ValueError) as err:
+        print(f"hairjax: error: {err}", file=sys.stderr)
+        return 2
+    except FileNotFoundError as err:
+        print(f"hairjax: error: {err}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
