@@ -99,7 +99,9 @@ def _parse_hair(data: bytes, path) -> dict:
         )
     if offset < size:
         # The arrays are back to back with no padding; extra bytes mean the counts are wrong.
-        fail(f"{size - offset} unexpected bytes after the last array (counts do not match the data)")
+        fail(
+            f"{size - offset} unexpected bytes after the last array (counts do not match the data)"
+        )
 
     if flags & _SEGMENTS:
         segments = np.frombuffer(data, "<u2", n_strands, layout["segments"]).astype(np.int64)

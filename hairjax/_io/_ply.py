@@ -112,6 +112,8 @@ def _parse_header(data: bytes, fail):
         elif words[0] == "element":
             if len(words) != 3 or not words[2].isdigit():
                 fail(f"header line {number}: bad element line {line!r}")
+            if len(words[2]) > 15:  # 10**15 rows fit in no file; also keeps int() cheap
+                fail(f"header line {number}: absurd row count for element {words[1]!r}")
             if any(name == words[1] for name, _, _ in elements):
                 fail(f"header line {number}: element {words[1]!r} declared twice")
             elements.append((words[1], int(words[2]), []))
@@ -166,8 +168,10 @@ def _read_ascii(data: bytes, start: int, elements, fail) -> dict:
     n_values = sum(count * len(props) for _, count, props in elements)
     needed = max(2 * n_values - 1, 0)
     if needed > len(data) - start:
-        fail(f"truncated: the header's element counts need at least {needed} bytes of ASCII data, "
-             f"but only {len(data) - start} follow the header")
+        fail(
+            f"truncated: the header's element counts need at least {needed} bytes of ASCII data, "
+            f"but only {len(data) - start} follow the header"
+        )
     try:
         text = data[start:].decode("ascii")
     except UnicodeDecodeError:
@@ -195,7 +199,9 @@ def _read_ascii(data: bytes, start: int, elements, fail) -> dict:
                 ok = np.isfinite(column) & (column == np.round(column))
                 ok &= (column >= info.min) & (column <= info.max)
                 if not np.all(ok):
-                    fail(f"element {name!r} property {prop!r}: values must be {dtype.name} integers")
+                    fail(
+                        f"element {name!r} property {prop!r}: values must be {dtype.name} integers"
+                    )
                 column = column.astype(np.int64)
             columns[prop] = column
         values[name] = columns
@@ -213,7 +219,8 @@ def _strands_from(values: dict, elements, fail) -> dict:
     vertex, vprops = values["vertex"], props_of["vertex"]
     missing = [axis for axis in "xyz" if axis not in vprops]
     if missing:
-        fail(f"the vertex element lacks propert{'y' if len(missing) == 1 else 'ies'} {', '.join(missing)}")
+        noun = "property" if len(missing) == 1 else "properties"
+        fail(f"the vertex element lacks {noun} {', '.join(missing)}")
     n_points = len(vertex["x"])
     points = np.stack([np.asarray(vertex[axis], dtype=np.float64) for axis in "xyz"], axis=1)
     if not np.all(np.isfinite(points)):

@@ -95,7 +95,7 @@ def _parse_tfx(data: bytes, path) -> dict:
     else:
         fail(f"unsupported TressFX version {version!r} at byte 0 (expected 3.x or 4.x)")
     if size < header_size:
-        fail(f"file is {size} bytes, shorter than the {header_size}-byte TressFX {int(version)} header")
+        fail(f"file is {size} bytes, shorter than the {header_size}-byte TressFX header")
 
     n_strands, per_strand = struct.unpack_from("<II", data, 4)
     if n_strands == 0:
