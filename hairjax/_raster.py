@@ -152,7 +152,7 @@ def _candidates(seg_data, columns, n_cols, rows, image_width, image_height, pers
     # Fires only on padding columns (length 0); a drawn segment has |da| ≥ L/√2 > 0.
     da_safe = jnp.where(da != 0, da, 1.0)
     b_line = jnp.where(xm, y0, x0) + (k + 0.5 - jnp.where(xm, x0, y0)) * (db / da_safe)
-    m = jnp.floor(b_line - reach * length / jnp.abs(da_safe) - 0.5) + 1 + jnp.arange(rows)
+    m = jnp.floor(b_line - reach * length / jnp.abs(da_safe) - 0.5) + 1 + jnp.arange(rows)[None, :]
     px = jnp.where(xm, k, m)
     py = jnp.where(xm, m, k)
     # Fires only on padding (length 0): real segments have length > 0.
@@ -172,8 +172,12 @@ def _candidates(seg_data, columns, n_cols, rows, image_width, image_height, pers
         # Fires only on padding (depth 0); drawn segments lie beyond the near plane.
         inv = (1 - t) / jnp.where(za != 0, za, 1.0) + t / jnp.where(zb != 0, zb, 1.0)
         depth = 1.0 / jnp.where(inv != 0, inv, 1.0)
+        # Fires for segments at constant depth: keep z exactly (no self-shadowing by a
+        # rounding error in 1/(1/z)).
+        depth = jnp.where(za == zb, za, depth)
     else:
-        depth = (1 - t) * za + t * zb
+        # z₀ + t(z₁ − z₀) is exactly z₀ for segments at constant depth.
+        depth = za + t * (zb - za)
     pixel = py.astype(jnp.int32) * image_width + px.astype(jnp.int32)
     seg = jnp.broadcast_to(seg[:, None], cov.shape)
     return tuple(x.ravel() for x in (pixel, seg, cov, t, depth))

@@ -97,10 +97,13 @@ def shadow_setup(points, segments, seg_strand, width, light, method: str, maps: 
 
     if method == "opacity-maps":
         delta = span / maps
-        # Fragment in [D_j, D_{j+1}) counts towards planes j + 1 … N (strictly nearer).
-        j = np.clip(np.floor((frags.depth - zmin) / delta), 0, maps).astype(np.int64)
-        plane = np.clip(np.floor((depth - zmin) / delta), 0, maps - 1).astype(np.int64)
-        f = np.clip((depth - (zmin + plane * delta)) / delta, 0.0, 1.0)
+        # Slice coordinate (z − D₀)·N/span: exactly N at z = D_N, so the farthest points'
+        # own fragments never count as nearer than the last plane.
+        j = np.clip(np.floor((frags.depth - zmin) * maps / span), 0, maps).astype(np.int64)
+        # A fragment in [D_j, D_{j+1}) counts towards planes j + 1 … N (strictly nearer).
+        u = (depth - zmin) * maps / span
+        plane = np.clip(np.floor(u), 0, maps - 1).astype(np.int64)
+        f = np.clip(u - plane, 0.0, 1.0)
         return ShadowSetup(method=method, planes=zmin + delta * np.arange(maps + 1),
                            frag_cell=j * resolution**2 + frags.pixel, plane=plane, f=f,
                            texel=np.where(inside, ty * resolution + tx, -1), **common)

@@ -1,0 +1,110 @@
+"""Kajiya-Kay (docs/model.md §8) against hand-computed values."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from hairjax import ShadingParams, kajiya_kay
+from hairjax._shading import specular_power
+
+PARAMS = ShadingParams(kd=(0.5, 0.25, 1.0), ks=2.0, shininess=3.0)
+
+
+def unit(*v):
+    v = np.asarray(v, dtype=np.float64)
+    return jnp.asarray(v / np.linalg.norm(v))
+
+
+def test_known_vectors_both_conventions():
+    # T = x; L at 60° from T, V at 30° from T, both in the xy plane, same side.
+    T = unit(1, 0, 0)
+    L = unit(np.cos(np.pi / 3), np.sin(np.pi / 3), 0)
+    V = unit(np.cos(np.pi / 6), np.sin(np.pi / 6), 0)
+    d, s = kajiya_kay(T, L, V, PARAMS, "kajiya-kay")
+    # diffuse = Kd sin 60°; seed's base = cos(60° − 30°) = cos 30°.
+    np.testing.assert_allclose(d, np.array([0.5, 0.25, 1.0]) * np.sqrt(3) / 2, rtol=1e-14)
+    np.testing.assert_allclose(s, 2.0 * (np.sqrt(3) / 2) ** 3, rtol=1e-13)
+    d, s = kajiya_kay(T, L, V, PARAMS, "kajiya-kay-mirror")
+    # mirror base = −cos(60° + 30°) = 0: no highlight.
+    np.testing.assert_allclose(s, 0.0, atol=1e-14)
+    # V at 120° from T (the mirror direction of L at 60°): mirror base = −cos 180° = 1.
+    V2 = unit(np.cos(2 * np.pi / 3), np.sin(2 * np.pi / 3), 0)
+    _, s = kajiya_kay(T, L, V2, PARAMS, "kajiya-kay-mirror")
+    np.testing.assert_allclose(s, 2.0, rtol=1e-13)
+    _, s = kajiya_kay(T, L, V2, PARAMS, "kajiya-kay")
+    # seed's base = cos(60° − 120°) = ½.
+    np.testing.assert_allclose(s, 2.0 * 0.5**3, rtol=1e-13)
+
+
+@pytest.mark.parametrize("model, peak_offset", [("kajiya-kay", 0.0), ("kajiya-kay-mirror", None)])
+def test_where_each_model_peaks(model, peak_offset):
+    """Sweep V's angle to T: the seed's model peaks at θ_V = θ_L (retro-reflection cone),
+    the mirror model at θ_V = π − θ_L (specular cone)."""
+    theta_l = 0.7
+    T = unit(1, 0, 0)
+    L = unit(np.cos(theta_l), np.sin(theta_l), 0)
+    thetas = np.linspace(0.01, np.pi - 0.01, 2001)
+    V = jnp.stack([jnp.cos(thetas), jnp.sin(thetas), jnp.zeros_like(thetas)], axis=1)
+    p = ShadingParams(kd=0.0, ks=1.0, shininess=50.0)
+    spec = jax.vmap(lambda v: kajiya_kay(T, L, v, p, model)[1][0])(V)
+    expected = theta_l if model == "kajiya-kay" else np.pi - theta_l
+    # The sweep's step is π/2000 ≈ 1.6e-3 rad.
+    assert abs(thetas[int(jnp.argmax(spec))] - expected) < 2e-3
+    assert float(spec.max()) == pytest.approx(1.0, abs=1e-5)
+
+
+def test_sine_is_exact_near_zero():
+    # T almost parallel to L: sin = 1e-9 exactly representable via the cross product,
+    # while sqrt(1 − cos²) would return 0 in float64.
+    T = unit(1, 0, 0)
+    L = jnp.asarray([1.0, 1e-9, 0.0]) / np.sqrt(1 + 1e-18)
+    d, _ = kajiya_kay(T, L, T, ShadingParams(kd=1.0, ks=0.0), "kajiya-kay")
+    np.testing.assert_allclose(d, 1e-9, rtol=1e-6)
+
+
+def test_power_finite_at_zero_base_and_large_exponent():
+    for base in (0.0, 1e-300, 0.5, 1.0):
+        for p in (0.5, 1.0, 1e4):
+            val, grads = jax.value_and_grad(specular_power, argnums=(0, 1))(
+                jnp.asarray(base), jnp.asarray(p))
+            assert np.isfinite(val) and all(np.isfinite(g) for g in grads)
+    assert specular_power(jnp.asarray(0.0), jnp.asarray(3.0)) == 0.0
+    assert specular_power(jnp.asarray(-0.3), jnp.asarray(3.0)) == 0.0
+    np.testing.assert_allclose(specular_power(jnp.asarray(0.5), jnp.asarray(3.0)), 0.125)
+
+
+def test_gradients_finite_for_tangent_parallel_to_light_and_view():
+    T = unit(0, 1, 0)
+
+    def f(p, t):
+        d, s = kajiya_kay(t, T, T, p, "kajiya-kay")
+        return jnp.sum(d + s)
+
+    params = ShadingParams(kd=0.3, ks=0.7, shininess=1e4)
+    gp, gt = jax.grad(f, argnums=(0, 1))(params, T)
+    for leaf in jax.tree_util.tree_leaves((gp, gt)):
+        assert np.all(np.isfinite(leaf))
+
+
+def test_specular_power_gradient_matches_finite_differences():
+    b, p = 0.73, 17.0
+    g_b, g_p = jax.grad(specular_power, argnums=(0, 1))(jnp.asarray(b), jnp.asarray(p))
+    eps = 1e-7  # ≈ √eps_float64 · scale
+    fd_b = (specular_power(b + eps, p) - specular_power(b - eps, p)) / (2 * eps)
+    fd_p = (specular_power(b, p + eps) - specular_power(b, p - eps)) / (2 * eps)
+    # Central differences: truncation O(eps²), roundoff O(1e-16/eps) = 1e-9 relative.
+    np.testing.assert_allclose(g_b, fd_b, rtol=1e-7)
+    np.testing.assert_allclose(g_p, fd_p, rtol=1e-7)
+    np.testing.assert_allclose(g_b, p * b ** (p - 1), rtol=1e-12)
+
+
+def test_scalar_parameters_broadcast_to_rgb():
+    p = ShadingParams(kd=0.2, ks=0.3, ambient=0.1)
+    assert p.kd.shape == (3,) and p.ks.shape == (3,) and p.ambient.shape == (3,)
+    np.testing.assert_array_equal(p.kd, [0.2, 0.2, 0.2])
+
+
+def test_unknown_model_raises():
+    with pytest.raises(ValueError, match="unknown shading model"):
+        kajiya_kay(unit(1, 0, 0), unit(0, 1, 0), unit(0, 1, 0), PARAMS, "phong")
