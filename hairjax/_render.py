@@ -114,7 +114,10 @@ def prepare(scene: Scene) -> Setup:
     """The NumPy geometry set-up of `scene`, cached per scene object."""
     cached = _SETUP_CACHE.get(scene)
     if cached is None:
-        cached = _prepare(scene)
+        # The set-up depends on concrete geometry only: evaluate it eagerly even when
+        # `render` is being traced (e.g. under jax.jit or jax.grad).
+        with jax.ensure_compile_time_eval():
+            cached = _prepare(scene)
         _SETUP_CACHE[scene] = cached
     return cached
 
@@ -282,10 +285,10 @@ def point_colors(geometry: Geometry, params: ShadingParams) -> Float[Array, "P 3
     ambient·c + τ · light · (Kd·sin(T, L)·c + Ks·spec), with c the per-point colour."""
     diffuse, specular = jax.vmap(kajiya_kay, in_axes=(0, 0, 0, None, None))(
         geometry.tangent, geometry.to_light, geometry.to_eye, params, geometry.model)
-    lit = geometry.light_rgb * (diffuse * geometry.base_color + specular)
+    lit = geometry.light_rgb[None, :] * (diffuse * geometry.base_color + specular)
     if geometry.omega is not None:
         lit = lit * jnp.exp(-params.kappa * geometry.omega)[:, None]
-    return params.ambient * geometry.base_color + lit
+    return params.ambient[None, :] * geometry.base_color + lit
 
 
 @eqx.filter_jit

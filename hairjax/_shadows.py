@@ -119,8 +119,9 @@ def shadow_setup(points, segments, seg_strand, width, light, method: str, maps: 
     first[1:] = frags.pixel[order][1:] != frags.pixel[order][:-1]
     r = SHADOW_FILTER_RADIUS
     offs = np.arange(-r, r + 1)
-    nx = (tx[:, None, None] + offs[None, None, :]).reshape(len(points), -1)
-    ny = (ty[:, None, None] + offs[None, :, None]).reshape(len(points), -1)
+    ox, oy = np.meshgrid(offs, offs)  # all (2r + 1)² offsets
+    nx = tx[:, None] + ox.ravel()[None, :]
+    ny = ty[:, None] + oy.ravel()[None, :]
     valid = (nx >= 0) & (nx < resolution) & (ny >= 0) & (ny < resolution) & seen[:, None]
     texel = np.where(valid, ny * resolution + nx, 0).astype(np.float64)
     start = np.searchsorted(frag_key, texel, side="left")
