@@ -1,6 +1,6 @@
 # Two commands for a new user (README): `make run` and `make test`.
 # Both create .venv when missing and install the package into it; both are idempotent.
-PY      ?= python3.11
+PY      ?= $(shell command -v python3.11 || command -v python3)
 VENV    := .venv
 BIN     := $(VENV)/bin
 STAMP   := $(VENV)/.installed
@@ -8,7 +8,8 @@ STAMP   := $(VENV)/.installed
 .PHONY: run test bench clean
 
 $(BIN)/python:
-	@command -v $(PY) >/dev/null 2>&1 || { echo "hairjax needs Python 3.11 ($(PY) not found)"; exit 1; }
+	@$(PY) -c 'import sys; assert sys.version_info >= (3, 11), sys.version' 2>/dev/null \
+		|| { echo "hairjax needs Python >= 3.11 (found: $(PY))"; exit 1; }
 	$(PY) -m venv $(VENV)
 
 # Reinstall only when the package metadata changes.

@@ -1,0 +1,77 @@
+"""The command line: render, info, errors, atomic output."""
+
+import os
+
+import numpy as np
+import pytest
+
+import hairjax as hj
+from hairjax.cli import main
+from helpers import DATA
+
+SMALL_SCENE = """
+[hair]
+source = "furball"
+strands = 60
+points = 5
+[camera]
+width = 40
+height = 30
+[shadows]
+maps = 4
+resolution = 32
+"""
+
+
+@pytest.fixture
+def scene_file(tmp_path):
+    path = tmp_path / "small.toml"
+    path.write_text(SMALL_SCENE)
+    return path
+
+
+def test_render_writes_exr_and_png(scene_file, tmp_path, capsys):
+    exr, png = tmp_path / "out" / "a.exr", tmp_path / "out" / "a.png"
+    assert main(["render", str(scene_file), "-o", str(exr), "--png", str(png), "--profile"]) == 0
+    out = capsys.readouterr().out
+    assert "shading" in out and "geometry" in out
+    img = hj.read_image(exr)
+    assert img.shape == (30, 40, 4)
+    expected = np.asarray(hj.render(hj.load_scene(scene_file)), dtype=np.float32)
+    np.testing.assert_allclose(img, expected, atol=1e-6)  # float32 EXR of a float64 render
+    view = hj.read_image(png)
+    assert view.shape == (30, 40, 3)
+    # 8-bit sRGB rounding is ≤ ½ step; in linear that is at most the steepest slope of the
+    # sRGB decode (2.4/1.055 at 1.0) times 0.5/255.
+    np.testing.assert_allclose(view, np.clip(expected[..., :3], 0, 1), atol=2.4 / 1.055 * 0.5 / 255)
+    assert sorted(os.listdir(exr.parent)) == ["a.exr", "a.png"]  # no temporary files left
+
+
+def test_failed_write_leaves_no_file(scene_file, tmp_path, capsys):
+    bad = tmp_path / "image.bmpx"
+    assert main(["render", str(scene_file), "-o", str(bad)]) == 2
+    assert "unsupported image type" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == [scene_file]
+
+
+def test_bad_scene_is_a_clear_error(tmp_path, capsys):
+    path = tmp_path / "bad.toml"
+    path.write_text('[hair]\nsource = "furball"\nwidth = -1\n')
+    assert main(["render", str(path), "-o", str(tmp_path / "x.exr")]) == 2
+    err = capsys.readouterr().err
+    assert "hair.width" in err and "bad.toml" in err
+    assert not (tmp_path / "x.exr").exists()
+
+
+@pytest.mark.skipif(not DATA.is_dir(), reason="shared/data is not beside the checkout")
+def test_info_prints_counts(capsys):
+    assert main(["info", str(DATA / "tressfx" / "ponytail_tail.tfx")]) == 0
+    out = capsys.readouterr().out
+    assert "255" in out and "4080" in out.replace(",", "")
+
+
+def test_info_on_malformed_file(tmp_path, capsys):
+    bad = tmp_path / "bad.hair"
+    bad.write_bytes(b"NOPE" + bytes(200))
+    assert main(["info", str(bad)]) == 2
+    assert "bad.hair" in capsys.readouterr().err
