@@ -109,8 +109,11 @@ def rasterize(xy0: np.ndarray, xy1: np.ndarray, z0: np.ndarray, z1: np.ndarray,
         n_cols = int(cols.sum())
         if n_cols == 0:
             continue
-        out = _candidates(_pad(seg_data[s_lo:s_hi]), _pad(cols), _bucket(n_cols), rows,
-                          image_width, image_height, perspective)
+        # Segment and first column of every column (within the chunk).
+        seg_of_col = np.repeat(np.arange(s_hi - s_lo, dtype=np.int32), cols)
+        col_start = (np.cumsum(cols) - cols).astype(np.int32)
+        out = _candidates(_pad(seg_data[s_lo:s_hi]), _pad(seg_of_col), _pad(col_start),
+                          np.int32(n_cols), rows, image_width, image_height, perspective)
         pixel, seg, cov, t, depth = (np.asarray(o)[: n_cols * rows] for o in out)
         keep = np.flatnonzero(cov > 0)
         parts.append((pixel[keep].astype(np.int64), seg[keep].astype(np.int64) + s_lo,
@@ -131,22 +134,20 @@ def _pad(x: np.ndarray) -> np.ndarray:
     return np.pad(x, [(0, _bucket(x.shape[0]) - x.shape[0])] + [(0, 0)] * (x.ndim - 1))
 
 
-@functools.partial(jax.jit, static_argnums=(2, 3, 4, 5, 6))
-def _candidates(seg_data, columns, n_cols, rows, image_width, image_height, perspective):
-    """Candidate pixels `[n_cols · rows]`: (pixel, segment, coverage, t, depth).
+@functools.partial(jax.jit, static_argnums=(4, 5, 6, 7))  # n_cols (3) is traced
+def _candidates(seg_data, seg, col_start, n_cols, rows, image_width, image_height, perspective):
+    """Candidate pixels `[columns · rows]`: (pixel, segment, coverage, t, depth).
 
     Coverage 0 marks a candidate that is not drawn (outside the ribbon, the image, or
     padding). Column c of segment e is the pixel column (or row, for y-major segments)
     lo[e] + c; its rows are the `rows` pixels around the segment's line there.
     """
     dtype = jnp.result_type(float)
-    ends = jnp.cumsum(columns)
-    col = jnp.arange(n_cols)
-    seg = jnp.minimum(jnp.searchsorted(ends, col, side="right"), columns.shape[0] - 1)
+    col = jnp.arange(seg.shape[0])
     d = seg_data.astype(dtype)[seg]
     x0, y0, dx, dy, length, width, za, zb, lo, xm, reach = (d[:, i, None] for i in range(11))
     xm = xm > 0
-    k = lo + (col - (ends[seg] - columns[seg]))[:, None]
+    k = lo + (col - col_start[seg])[:, None]
     da = jnp.where(xm, dx, dy)
     db = jnp.where(xm, dy, dx)
     # Fires only on padding columns (length 0); a drawn segment has |da| ≥ L/√2 > 0.
@@ -165,7 +166,7 @@ def _candidates(seg_data, columns, n_cols, rows, image_width, image_height, pers
     cov = jnp.clip(jnp.minimum(dist + PIXEL_HALF_EXTENT, half)
                    - jnp.maximum(dist - PIXEL_HALF_EXTENT, -half), 0.0, 1.0)
     inside = (px >= 0) & (px < image_width) & (py >= 0) & (py < image_height)
-    valid = (col < ends[-1])[:, None] & inside & (s >= 0) & (s < length)
+    valid = (col < n_cols)[:, None] & inside & (s >= 0) & (s < length)
     cov = jnp.where(valid, cov, 0.0)
     t = s * inv_len
     if perspective:
