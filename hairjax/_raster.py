@@ -28,7 +28,7 @@ from ._constants import PIXEL_HALF_EXTENT
 
 __all__ = ["Fragments", "rasterize", "ribbon_coverage"]
 
-_CHUNK = 1 << 20  # columns per chunk: bounds peak memory to a few hundred MB
+_CHUNK = 1 << 20  # columns per kernel call: bounds peak memory to a few hundred MB
 
 
 def ribbon_coverage(d: np.ndarray, width: np.ndarray) -> np.ndarray:
@@ -99,24 +99,22 @@ def rasterize(xy0: np.ndarray, xy1: np.ndarray, z0: np.ndarray, z1: np.ndarray,
     # Per segment, what the kernel needs (float64 here; the kernel casts).
     seg_data = np.stack([xy0[:, 0], xy0[:, 1], delta[:, 0], delta[:, 1], length, width,
                          z0, z1, lo, x_major.astype(np.float64), reach], axis=1)
+    # Columns are independent once they carry their segment's data, so they are cut into
+    # chunks of exactly _CHUNK (only the last is padded): the kernel compiles for one size.
+    seg_of_col = np.repeat(np.arange(n, dtype=np.int64), columns)
+    first_col = np.cumsum(columns) - columns
+    total = seg_of_col.size
     parts = []
-    ends = np.cumsum(columns)
-    total = int(ends[-1]) if n else 0
-    cuts = np.searchsorted(ends, np.arange(1, 1 + total // _CHUNK) * _CHUNK)
-    bounds = np.unique(np.concatenate([[0], cuts, [n]]))
-    for s_lo, s_hi in zip(bounds[:-1], bounds[1:]):
-        cols = columns[s_lo:s_hi]
-        n_cols = int(cols.sum())
-        if n_cols == 0:
-            continue
-        # Segment and first column of every column (within the chunk).
-        seg_of_col = np.repeat(np.arange(s_hi - s_lo, dtype=np.int32), cols)
-        col_start = (np.cumsum(cols) - cols).astype(np.int32)
-        out = _candidates(_pad(seg_data[s_lo:s_hi]), _pad(seg_of_col), _pad(col_start),
-                          np.int32(n_cols), rows, image_width, image_height, perspective)
-        pixel, seg, cov, t, depth = (np.asarray(o)[: n_cols * rows] for o in out)
+    for c_lo in range(0, total, _CHUNK):
+        seg = seg_of_col[c_lo:c_lo + _CHUNK]
+        data = seg_data[seg]
+        data[:, 8] += np.arange(c_lo, c_lo + seg.size) - first_col[seg]  # lo → this column
+        size = _CHUNK if total > _CHUNK else _bucket(seg.size)
+        out = _candidates(np.pad(data, ((0, size - seg.size), (0, 0))), rows, image_width,
+                          image_height, perspective)
+        pixel, cov, t, depth = (np.asarray(o)[: seg.size * rows] for o in out)
         keep = np.flatnonzero(cov > 0)
-        parts.append((pixel[keep].astype(np.int64), seg[keep].astype(np.int64) + s_lo,
+        parts.append((pixel[keep].astype(np.int64), seg[keep // rows],
                       cov[keep].astype(np.float64), t[keep].astype(np.float64),
                       depth[keep].astype(np.float64)))
     if not parts:
@@ -130,24 +128,19 @@ def _bucket(n: int) -> int:
     return max(4096, 1 << int(np.ceil(np.log2(max(n, 1)))))
 
 
-def _pad(x: np.ndarray) -> np.ndarray:
-    return np.pad(x, [(0, _bucket(x.shape[0]) - x.shape[0])] + [(0, 0)] * (x.ndim - 1))
-
-
-@functools.partial(jax.jit, static_argnums=(4, 5, 6, 7))  # n_cols (3) is traced
-def _candidates(seg_data, seg, col_start, n_cols, rows, image_width, image_height, perspective):
-    """Candidate pixels `[columns · rows]`: (pixel, segment, coverage, t, depth).
+@functools.partial(jax.jit, static_argnums=(1, 2, 3, 4))
+def _candidates(columns, rows, image_width, image_height, perspective):
+    """Candidate pixels `[columns · rows]`: (pixel, coverage, t, depth).
 
     Coverage 0 marks a candidate that is not drawn (outside the ribbon, the image, or
-    padding). Column c of segment e is the pixel column (or row, for y-major segments)
-    lo[e] + c; its rows are the `rows` pixels around the segment's line there.
+    padding). A column is the pixel column k (row, for y-major segments) of one segment,
+    given as that segment's (x0, y0, dx, dy, L, w, z0, z1, k, x-major, reach); its
+    candidates are the `rows` pixels around the segment's line there.
     """
     dtype = jnp.result_type(float)
-    col = jnp.arange(seg.shape[0])
-    d = seg_data.astype(dtype)[seg]
-    x0, y0, dx, dy, length, width, za, zb, lo, xm, reach = (d[:, i, None] for i in range(11))
+    c = columns.astype(dtype)
+    x0, y0, dx, dy, length, width, za, zb, k, xm, reach = (c[:, i, None] for i in range(11))
     xm = xm > 0
-    k = lo + (col - col_start[seg])[:, None]
     da = jnp.where(xm, dx, dy)
     db = jnp.where(xm, dy, dx)
     # Fires only on padding columns (length 0); a drawn segment has |da| ≥ L/√2 > 0.
@@ -166,7 +159,8 @@ def _candidates(seg_data, seg, col_start, n_cols, rows, image_width, image_heigh
     cov = jnp.clip(jnp.minimum(dist + PIXEL_HALF_EXTENT, half)
                    - jnp.maximum(dist - PIXEL_HALF_EXTENT, -half), 0.0, 1.0)
     inside = (px >= 0) & (px < image_width) & (py >= 0) & (py < image_height)
-    valid = (col < n_cols)[:, None] & inside & (s >= 0) & (s < length)
+    # Padding columns have length 0 and fail s < L.
+    valid = inside & (s >= 0) & (s < length)
     cov = jnp.where(valid, cov, 0.0)
     t = s * inv_len
     if perspective:
@@ -180,5 +174,4 @@ def _candidates(seg_data, seg, col_start, n_cols, rows, image_width, image_heigh
         # z₀ + t(z₁ − z₀) is exactly z₀ for segments at constant depth.
         depth = za + t * (zb - za)
     pixel = py.astype(jnp.int32) * image_width + px.astype(jnp.int32)
-    seg = jnp.broadcast_to(seg[:, None], cov.shape)
-    return tuple(x.ravel() for x in (pixel, seg, cov, t, depth))
+    return tuple(x.ravel() for x in (pixel, cov, t, depth))

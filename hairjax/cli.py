@@ -79,11 +79,30 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _enable_compilation_cache() -> None:
+    """Keep compiled XLA kernels on disk, so a second `hairjax` run skips compilation.
+
+    The folder is $HAIRJAX_CACHE_DIR, else ~/.cache/hairjax/xla; set the variable to an
+    empty string to turn the cache off.
+    """
+    import os
+
+    import jax
+
+    folder = os.environ.get("HAIRJAX_CACHE_DIR", str(Path.home() / ".cache" / "hairjax" / "xla"))
+    if not folder or jax.config.jax_compilation_cache_dir:
+        return  # off, or the user configured a cache already
+    jax.config.update("jax_compilation_cache_dir", folder)
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.2)
+
+
 def main(argv=None) -> int:
     from ._errors import HairFormatError, SceneError
     from ._image import ImageError
 
     args = build_parser().parse_args(argv)
+    if args.command in ("render", "bench"):
+        _enable_compilation_cache()
     try:
         return args.func(args)
     except (SceneError, HairFormatError, ImageError, ValueError) as err:
