@@ -12,9 +12,10 @@ Each figure is the median of ``--repeats`` runs after one warm-up run that is no
 counted (it holds JAX's compilation). One run is a full render in stages, as
 `render_profiled` does it: the NumPy set-up (`prepare`, its cache cleared first), the
 JAX opacity stage (`geometry_stage`) and the shading stage, each waited for with
-`jax.block_until_ready`; "full render" is their sum within a run. The gradient of
-``sum((image - target)^2)`` with respect to kd, ks, shininess and kappa reuses the
-geometry, as does the shading stage.
+`jax.block_until_ready`; "full render" is their sum within a run. The shading stage
+alone and the gradient of ``sum((image - target)^2)`` with respect to kd, ks, shininess
+and kappa are then timed as warm calls on the last run's geometry, and the ordering as
+`draw_order(segment_depth(...), "bins", 256)` on the scene's camera depths.
 """
 
 from __future__ import annotations
@@ -124,7 +125,7 @@ def _measure(cfg: dict, repeats: int, progress) -> dict:
         return setup, geom, image, (t1 - t0, t2 - t1, t3 - t2)
 
     runs: dict[str, list[float]] = {k: [] for k in ("geometry_setup", "geometry_opacity",
-                                                    "shading", "full_render")}
+                                                    "full_render")}
     substeps: dict[str, list[float]] = {}
     progress("warm-up run (compiles)")
     setup, geom, image, _ = one_run()
@@ -135,10 +136,18 @@ def _measure(cfg: dict, repeats: int, progress) -> dict:
         setup, geom, image, (t_setup, t_opacity, t_shading) = one_run()
         runs["geometry_setup"].append(t_setup)
         runs["geometry_opacity"].append(t_opacity)
-        runs["shading"].append(t_shading)
         runs["full_render"].append(t_setup + t_opacity + t_shading)
         for key, value in setup.timings.items():
             substeps.setdefault(key, []).append(value)
+
+    # The shading stage alone, geometry reused: warm calls, as the gradient below. (Its
+    # time within a full render, right after a fresh geometry, is noisier.)
+    progress("shading stage alone")
+    runs["shading"] = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        image = jax.block_until_ready(shading_stage(geom, params))
+        runs["shading"].append(time.perf_counter() - t0)
 
     # Gradient of an image loss with respect to the shading parameters, geometry reused.
     # The geometry is an argument rather than a closed-over constant, so that XLA does not

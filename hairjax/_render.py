@@ -241,14 +241,12 @@ def _exact_opacity(alpha, frag_strand, frag_coverage, frag_first, index, weight)
 
 
 def _omega(scene: Scene, shadow: ShadowSetup, alpha, dtype):
-    segments = scene.strands.segments()
-    frag_strand = scene.strands.strand_of_point[segments[shadow.frag_segment, 0]]
     coverage = jnp.asarray(shadow.frag_coverage, dtype)
     if shadow.method == "opacity-maps":
-        return _map_opacity(alpha, frag_strand, coverage, shadow.frag_cell, shadow.plane,
+        return _map_opacity(alpha, shadow.frag_strand, coverage, shadow.frag_cell, shadow.plane,
                             jnp.asarray(shadow.f, dtype), shadow.texel, scene.shadows.maps,
                             scene.shadows.resolution)
-    return _exact_opacity(alpha, frag_strand, coverage, shadow.frag_first, shadow.index,
+    return _exact_opacity(alpha, shadow.frag_strand, coverage, shadow.frag_first, shadow.index,
                           jnp.asarray(shadow.weight, dtype))
 
 

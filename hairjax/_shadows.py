@@ -38,7 +38,7 @@ MAX_MAP_CELLS = 1 << 28
 class ShadowSetup:
     """What Ω needs that does not depend on opacity.
 
-    `frag_segment[F]`, `frag_coverage[F]`: light-space fragments. For `opacity-maps`:
+    `frag_strand[F]`, `frag_coverage[F]`: light-space fragments. For `opacity-maps`:
     `frag_cell[F]` = slice · R² + texel (slice N: beyond the last plane, dropped) and per
     point the plane index `plane[P]`, its weight `f[P]` and texel `texel[P]` (−1 outside).
     For `exact`: fragments sorted by (texel, depth) with `frag_first[F]`, and per point
@@ -48,7 +48,7 @@ class ShadowSetup:
     method: str
     view: View
     planes: np.ndarray | None
-    frag_segment: np.ndarray
+    frag_strand: np.ndarray
     frag_coverage: np.ndarray
     frag_cell: np.ndarray | None = None
     plane: np.ndarray | None = None
@@ -93,7 +93,8 @@ def shadow_setup(points, segments, seg_strand, width, light, method: str, maps: 
     tx = np.floor(xy[:, 0]).astype(np.int64)
     ty = np.floor(xy[:, 1]).astype(np.int64)
     inside = seen & (tx >= 0) & (tx < resolution) & (ty >= 0) & (ty < resolution)
-    common = dict(view=view, frag_segment=seg_ids[frags.segment], frag_coverage=frags.coverage)
+    common = dict(view=view, frag_strand=seg_strand[seg_ids[frags.segment]],
+                  frag_coverage=frags.coverage)
 
     if method == "opacity-maps":
         delta = span / maps
@@ -129,7 +130,7 @@ def shadow_setup(points, segments, seg_strand, width, light, method: str, maps: 
     # [start, stop): the texel's fragments strictly nearer the light than the point; the
     # per-texel inclusive prefix at stop − 1 sums them.
     has_any = valid & (stop > start)
-    common["frag_segment"] = common["frag_segment"][order]
+    common["frag_strand"] = common["frag_strand"][order]
     common["frag_coverage"] = common["frag_coverage"][order]
     return ShadowSetup(method=method, planes=None, frag_first=first,
                        index=np.where(has_any, stop - 1, 0),
