@@ -250,15 +250,30 @@ def _omega(scene: Scene, shadow: ShadowSetup, alpha, dtype):
                           jnp.asarray(shadow.weight, dtype))
 
 
+_GEOMETRY_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def geometry_stage(scene: Scene, alpha: Float[Array, " S"] | None = None) -> Geometry:
     """Compositing weights and Ω for `scene`, differentiable in the per-strand `alpha`.
 
     **Arguments:** `scene`; `alpha` (`[S]`, default the scene's strand opacities) — may be
-    a traced JAX array, e.g. under `jax.grad`.
+    a traced JAX array, e.g. under `jax.grad`. With the default, the result is computed
+    once per scene (eagerly, even under a trace) and cached.
     """
+    if alpha is None:
+        cached = _GEOMETRY_CACHE.get(scene)
+        if cached is None:
+            with jax.ensure_compile_time_eval():
+                cached = _geometry_stage(scene, scene.strands.alpha)
+            _GEOMETRY_CACHE[scene] = cached
+        return cached
+    return _geometry_stage(scene, alpha)
+
+
+def _geometry_stage(scene: Scene, alpha) -> Geometry:
     setup = prepare(scene)
     dtype = jnp.result_type(float)
-    alpha = jnp.asarray(scene.strands.alpha if alpha is None else alpha, dtype=dtype)
+    alpha = jnp.asarray(alpha, dtype=dtype)
     hw = scene.camera.width * scene.camera.height
     last_pixel = np.where(setup.frag_last, setup.frag_pixel, hw)
     weights, transmittance, alpha_channel = _composite_weights(
@@ -309,7 +324,10 @@ def render(scene: Scene, params: ShadingParams | None = None,
 
     Differentiable in `params` (default `scene.params`) and in the per-strand `alpha`
     (default the scene's); jit-able with the scene closed over:
-    `jax.jit(lambda p: render(scene, p))`.
+    `jax.jit(lambda p: render(scene, p))` (the geometry then enters the compiled function
+    as constants; for repeated calls, `shading_stage(geometry_stage(scene), p)` passes it
+    as arguments instead). With the default `alpha`, both earlier stages are cached per
+    scene, so a new `params` re-runs only the shading stage.
     """
     params = scene.params if params is None else params
     return shading_stage(geometry_stage(scene, alpha), params)
@@ -323,6 +341,7 @@ def render_profiled(scene: Scene, params: ShadingParams | None = None):
     """
     params = scene.params if params is None else params
     _SETUP_CACHE.pop(scene, None)
+    _GEOMETRY_CACHE.pop(scene, None)
     t0 = time.perf_counter()
     setup = prepare(scene)
     t1 = time.perf_counter()

@@ -126,9 +126,12 @@ def test_extreme_values_stay_finite():
 
 def test_geometry_reused_and_unneeded_work_skipped(monkeypatch):
     scene = small_furball_scene(shadows="none")
-    calls = []
+    calls, opacity_calls = [], []
     original = render_mod._prepare
     monkeypatch.setattr(render_mod, "_prepare", lambda s: calls.append(s) or original(s))
+    original_weights = render_mod._composite_weights
+    monkeypatch.setattr(render_mod, "_composite_weights",
+                        lambda *a: opacity_calls.append(1) or original_weights(*a))
 
     def forbidden(*args, **kwargs):
         raise AssertionError("this stage must not run for this scene")
@@ -137,7 +140,7 @@ def test_geometry_reused_and_unneeded_work_skipped(monkeypatch):
     monkeypatch.setattr(render_mod, "_sphere_hits", forbidden)
     a = hj.render(scene)
     b = hj.render(scene, hj.ShadingParams(kd=0.1))
-    assert len(calls) == 1
+    assert len(calls) == 1 and len(opacity_calls) == 1
     assert np.abs(np.asarray(a) - np.asarray(b)).max() > 0
     assert hj.geometry_stage(scene).omega is None
 
