@@ -9,9 +9,9 @@ Every configuration runs in a fresh child process (the same interpreter), so tha
   next.
 
 Each figure is the median of ``--repeats`` runs after one warm-up run that is not
-counted (it holds JAX's compilation). One run is a full render in stages, as
-`render_profiled` does it: the NumPy set-up (`prepare`, its cache cleared first), the
-JAX opacity stage (`geometry_stage`) and the shading stage, each waited for with
+counted (it holds JAX's compilation). One run is `render_profiled(scene)`: the NumPy
+set-up (`prepare`, with the scene's cached set-up and geometry cleared first), the JAX
+opacity stage (`geometry_stage`) and the shading stage, each waited for with
 `jax.block_until_ready`; "full render" is their sum within a run. The shading stage
 alone and the gradient of ``sum((image - target)^2)`` with respect to kd, ks, shininess
 and kappa are then timed as warm calls on the last run's geometry, and the ordering as
@@ -91,9 +91,8 @@ def _measure(cfg: dict, repeats: int, progress) -> dict:
     import jax
     import jax.numpy as jnp
 
-    from . import _render
     from ._ordering import draw_order, segment_depth
-    from ._render import geometry_stage, prepare, shading_stage
+    from ._render import geometry_stage, prepare, render_profiled, shading_stage
     from ._scene import Camera, Light, Ordering, Scene, Shadows
     from ._shading import ShadingParams
     from ._sources import furball
@@ -113,32 +112,25 @@ def _measure(cfg: dict, repeats: int, progress) -> dict:
     )
     params = scene.params
 
-    def one_run():
-        _render._SETUP_CACHE.pop(scene, None)
-        t0 = time.perf_counter()
-        setup = prepare(scene)
-        t1 = time.perf_counter()
-        geom = jax.block_until_ready(geometry_stage(scene))
-        t2 = time.perf_counter()
-        image = jax.block_until_ready(shading_stage(geom, params))
-        t3 = time.perf_counter()
-        return setup, geom, image, (t1 - t0, t2 - t1, t3 - t2)
-
+    # One run is `render_profiled`: it clears the scene's cached set-up and geometry, then
+    # times prepare, geometry_stage and shading_stage, blocking between them.
     runs: dict[str, list[float]] = {k: [] for k in ("geometry_setup", "geometry_opacity",
                                                     "full_render")}
     substeps: dict[str, list[float]] = {}
     progress("warm-up run (compiles)")
-    setup, geom, image, _ = one_run()
+    image, _ = render_profiled(scene)
     for i in range(repeats):
-        # Drop the previous run's arrays first so that two set-ups never coexist.
-        del setup, geom, image
+        del image  # so that two runs' arrays never coexist
         progress(f"run {i + 1}/{repeats}")
-        setup, geom, image, (t_setup, t_opacity, t_shading) = one_run()
-        runs["geometry_setup"].append(t_setup)
-        runs["geometry_opacity"].append(t_opacity)
-        runs["full_render"].append(t_setup + t_opacity + t_shading)
-        for key, value in setup.timings.items():
-            substeps.setdefault(key, []).append(value)
+        image, timings = render_profiled(scene)
+        runs["geometry_setup"].append(timings["geometry set-up (NumPy)"])
+        runs["geometry_opacity"].append(timings["geometry opacity (JAX)"])
+        runs["full_render"].append(timings["total"])
+        for key, value in timings.items():
+            if key.startswith("geometry/"):
+                substeps.setdefault(key.split("/", 1)[1], []).append(value)
+    setup = prepare(scene)  # the last run's, cached
+    geom = geometry_stage(scene)
 
     # The shading stage alone, geometry reused: warm calls, as the gradient below. (Its
     # time within a full render, right after a fresh geometry, is noisier.)
