@@ -11,7 +11,8 @@ Along the segment, the half-open interval [0, L) gives every pixel to exactly on
 collinear neighbours: a straight strand drawn as 1 or 8 segments covers the same pixels
 with the same coverage (no double-covered joints, no gaps).
 
-Geometry only: NumPy float64, no gradients flow through here.
+Geometry only, no gradients flow through here: column set-up in NumPy float64, the
+per-pixel maths in one jitted XLA kernel in JAX's default float precision.
 """
 
 from __future__ import annotations
@@ -42,7 +43,8 @@ def ribbon_coverage(d: np.ndarray, width: np.ndarray) -> np.ndarray:
 class Fragments:
     """Pixels covered by segments, grouped by segment in input order.
 
-    `pixel`: row-major pixel index y·W + x; `segment`: index into the input arrays;
+    `pixel` (int32): row-major pixel index y·W + x; `segment` (int32): index into the input
+    arrays; floats are in JAX's default precision (float32, or float64 with x64 on);
     `coverage` ∈ (0, 1]; `t` ∈ [0, 1): screen-space position along the segment;
     `depth`: interpolated depth (perspective-correct for perspective views).
     """
@@ -93,15 +95,16 @@ def rasterize(xy0: np.ndarray, xy1: np.ndarray, z0: np.ndarray, z1: np.ndarray,
     hi = np.clip(np.ceil(np.maximum(a0, a1) + reach - 0.5) - 1, -1, size_a - 1)
     # Zero-length segments (repeated points) cover nothing: a ribbon of length 0.
     columns = np.where(length > 0, np.maximum(hi - lo + 1, 0), 0).astype(np.int64)
-    # Rows per column: centres within reach/|u_major| ≤ reach·√2 of the line, plus rounding.
-    rows = int(np.ceil(2 * float(reach.max(initial=0.0)) * np.sqrt(2))) + 2
+    # Rows per column: pixel centres in an open interval of length 2·reach/|u_major| ≤
+    # 2·reach·√2 around the line; an interval of length ℓ holds at most ⌈ℓ⌉ + 1 of them.
+    rows = int(np.ceil(2 * float(reach.max(initial=0.0)) * np.sqrt(2))) + 1
 
     # Per segment, what the kernel needs (float64 here; the kernel casts).
     seg_data = np.stack([xy0[:, 0], xy0[:, 1], delta[:, 0], delta[:, 1], length, width,
                          z0, z1, lo, x_major.astype(np.float64), reach], axis=1)
     # Columns are independent once they carry their segment's data, so they are cut into
     # chunks of exactly _CHUNK (only the last is padded): the kernel compiles for one size.
-    seg_of_col = np.repeat(np.arange(n, dtype=np.int64), columns)
+    seg_of_col = np.repeat(np.arange(n, dtype=np.int32), columns)
     first_col = np.cumsum(columns) - columns
     total = seg_of_col.size
     parts = []
@@ -114,11 +117,10 @@ def rasterize(xy0: np.ndarray, xy1: np.ndarray, z0: np.ndarray, z1: np.ndarray,
                           image_height, perspective)
         pixel, cov, t, depth = (np.asarray(o)[: seg.size * rows] for o in out)
         keep = np.flatnonzero(cov > 0)
-        parts.append((pixel[keep].astype(np.int64), seg[keep // rows],
-                      cov[keep].astype(np.float64), t[keep].astype(np.float64),
-                      depth[keep].astype(np.float64)))
+        parts.append((pixel[keep], seg[keep // rows].astype(np.int32), cov[keep], t[keep],
+                      depth[keep]))
     if not parts:
-        empty_i, empty_f = np.zeros(0, np.int64), np.zeros(0, np.float64)
+        empty_i, empty_f = np.zeros(0, np.int32), np.zeros(0, jnp.result_type(float))
         return Fragments(empty_i, empty_i, empty_f, empty_f, empty_f)
     return Fragments(*(np.concatenate(p) for p in zip(*parts)))
 

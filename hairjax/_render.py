@@ -71,8 +71,7 @@ class Setup:
     light_rgb: np.ndarray        # [3]
     # Camera fragments, sorted by pixel, front to back within a pixel:
     frag_pixel: np.ndarray       # [F]
-    frag_i0: np.ndarray          # [F] first point of the fragment's segment
-    frag_i1: np.ndarray          # [F] second point
+    frag_i0: np.ndarray          # [F] first point of the fragment's segment (the second is i0 + 1)
     frag_t: np.ndarray           # [F] screen-space position along the segment
     frag_strand: np.ndarray      # [F]
     frag_coverage: np.ndarray    # [F]
@@ -95,8 +94,7 @@ class Geometry(eqx.Module):
     light_rgb: Float[Array, "3"]
     omega: Float[Array, " P"] | None
     frag_pixel: Array
-    frag_i0: Array
-    frag_i1: Array
+    frag_i0: Array  # the segment's first point; its second is frag_i0 + 1
     frag_t: Float[Array, " F"]
     frag_weight: Float[Array, " F"]
     transmittance: Float[Array, " HW"]
@@ -163,15 +161,18 @@ def _prepare(scene: Scene) -> Setup:
         lambert = np.clip(np.sum(normal[opaque] * to_l, axis=1), 0.0, None)
         backdrop[opaque] = np.asarray(scene.occluder.color) * light_rgb * lambert[:, None]
         # kim-2003 §3: depth test on, hair does not write depth.
-        frags = frags.take(np.flatnonzero(frags.depth < hit_depth[frags.pixel]))
+        visible = np.flatnonzero(frags.depth < hit_depth[frags.pixel])
+        frags = frags.take(visible)
         lap("occluder")
 
+    # Only what compositing needs is permuted: pixel, segment, coverage, t (not depth).
     sort = stable_argsort_uint32(frags.pixel)
-    frags = frags.take(sort)
-    seg = near_first[frags.segment]
-    first = np.ones(frags.size, bool)
-    first[1:] = frags.pixel[1:] != frags.pixel[:-1]
-    last = np.ones(frags.size, bool)
+    pixel, frag_coverage, frag_t = frags.pixel[sort], frags.coverage[sort], frags.t[sort]
+    seg = near_first[frags.segment[sort]]
+    del frags
+    first = np.ones(pixel.size, bool)
+    first[1:] = pixel[1:] != pixel[:-1]
+    last = np.ones(pixel.size, bool)
     last[:-1] = first[1:]
     lap("sort fragments")
 
@@ -185,8 +186,8 @@ def _prepare(scene: Scene) -> Setup:
     return Setup(
         view=view, tangent=tangents(points, strands.offsets), to_light=_to_light(light, points),
         to_eye=_unit(view.origin - points), base_color=base_color, light_rgb=light_rgb,
-        frag_pixel=frags.pixel, frag_i0=segments[seg, 0], frag_i1=segments[seg, 1],
-        frag_t=frags.t, frag_strand=seg_strand[seg], frag_coverage=frags.coverage,
+        frag_pixel=pixel, frag_i0=segments[seg, 0].astype(np.int32), frag_t=frag_t,
+        frag_strand=seg_strand[seg].astype(np.int32), frag_coverage=frag_coverage,
         frag_first=first, frag_last=last, backdrop=backdrop, opaque=opaque, shadow=shadow,
         order=order, timings=timings,
     )
@@ -285,7 +286,7 @@ def _geometry_stage(scene: Scene, alpha) -> Geometry:
         to_eye=jnp.asarray(setup.to_eye, dtype), base_color=jnp.asarray(setup.base_color, dtype),
         light_rgb=jnp.asarray(setup.light_rgb, dtype), omega=omega,
         frag_pixel=jnp.asarray(setup.frag_pixel, jnp.int32),
-        frag_i0=jnp.asarray(setup.frag_i0, jnp.int32), frag_i1=jnp.asarray(setup.frag_i1, jnp.int32),
+        frag_i0=jnp.asarray(setup.frag_i0, jnp.int32),
         frag_t=jnp.asarray(setup.frag_t, dtype), frag_weight=weights,
         transmittance=transmittance, backdrop=jnp.asarray(setup.backdrop, dtype),
         alpha_channel=alpha_channel, height=scene.camera.height, width=scene.camera.width,
@@ -309,7 +310,7 @@ def shading_stage(geometry: Geometry, params: ShadingParams) -> Float[Array, "H 
     """The image from the geometry stage and the shading parameters (`[H, W, 4]`)."""
     colors = point_colors(geometry, params)
     t = geometry.frag_t[:, None]
-    frag_color = (1 - t) * colors[geometry.frag_i0] + t * colors[geometry.frag_i1]
+    frag_color = (1 - t) * colors[geometry.frag_i0] + t * colors[geometry.frag_i0 + 1]
     hw = geometry.height * geometry.width
     rgb = jax.ops.segment_sum(geometry.frag_weight[:, None] * frag_color, geometry.frag_pixel,
                               num_segments=hw, indices_are_sorted=True)

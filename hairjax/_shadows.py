@@ -106,8 +106,10 @@ def shadow_setup(points, segments, seg_strand, width, light, method: str, maps: 
         plane = np.clip(np.floor(u), 0, maps - 1).astype(np.int64)
         f = np.clip(u - plane, 0.0, 1.0)
         return ShadowSetup(method=method, planes=zmin + delta * np.arange(maps + 1),
-                           frag_cell=j * resolution**2 + frags.pixel, plane=plane, f=f,
-                           texel=np.where(inside, ty * resolution + tx, -1), **common)
+                           frag_cell=(j * resolution**2 + frags.pixel).astype(np.int32),
+                           plane=plane.astype(np.int32), f=f,
+                           texel=np.where(inside, ty * resolution + tx, -1).astype(np.int32),
+                           **common)
 
     # exact: fragments sorted by one float key, texel + depth fraction / 2.
     def key(texel, z):
