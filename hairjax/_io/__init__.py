@@ -53,7 +53,10 @@ def load_hair(path, alpha=1.0, width=1.0) -> Strands:
     except OSError as error:
         raise HairFormatError(path, f"cannot read the file: {error.strerror or error}") from error
     try:
-        fields = parse(data, path)
+        # Casting float32 to float64 raises the 'invalid' flag for signalling NaNs, which
+        # numpy reports as a RuntimeWarning; the parsers check finiteness where it matters.
+        with np.errstate(invalid="ignore"):
+            fields = parse(data, path)
     except HairFormatError:
         raise
     except (ValueError, IndexError, struct.error, OverflowError, MemoryError) as error:

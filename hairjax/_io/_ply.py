@@ -61,13 +61,7 @@ def parse_ply(data: bytes, path) -> dict:
     (float64 [P, 3] or None) and `attributes`.
     Raises `HairFormatError` naming the problem for any malformed input.
     """
-    # Casting float32 to float64 raises the 'invalid' flag for signalling NaNs, which numpy
-    # reports as a RuntimeWarning; finiteness is checked explicitly where it matters.
-    with np.errstate(invalid="ignore"):
-        return _parse_ply(data, path)
 
-
-def _parse_ply(data: bytes, path) -> dict:
     def fail(problem: str):
         raise HairFormatError(path, problem)
 

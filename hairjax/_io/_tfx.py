@@ -74,13 +74,7 @@ def parse_tfx(data: bytes, path) -> dict:
     TressFX colours are kept as the "vertex_color" attribute) and `attributes`.
     Raises `HairFormatError` naming the problem for any malformed input.
     """
-    # Casting float32 to float64 raises the 'invalid' flag for signalling NaNs, which numpy
-    # reports as a RuntimeWarning; finiteness is checked explicitly where it matters.
-    with np.errstate(invalid="ignore"):
-        return _parse_tfx(data, path)
 
-
-def _parse_tfx(data: bytes, path) -> dict:
     def fail(problem: str):
         raise HairFormatError(path, problem)
 
