@@ -60,6 +60,10 @@ def write_image(path, image) -> Path:
         ok = out.close() and ok
         if not ok:
             raise ImageError(f"{path}: write failed: {out.geterror() or oiio.geterror()}")
+        # mkstemp creates the file private (0600); give it the permissions of a plain write.
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):

@@ -45,6 +45,9 @@ def test_render_writes_exr_and_png(scene_file, tmp_path, capsys):
     # sRGB decode (2.4/1.055 at 1.0) times 0.5/255.
     np.testing.assert_allclose(view, np.clip(expected[..., :3], 0, 1), atol=2.4 / 1.055 * 0.5 / 255)
     assert sorted(os.listdir(exr.parent)) == ["a.exr", "a.png"]  # no temporary files left
+    umask = os.umask(0)
+    os.umask(umask)
+    assert exr.stat().st_mode & 0o777 == 0o666 & ~umask  # as a plain write, not mkstemp's 0600
 
 
 def test_failed_write_leaves_no_file(scene_file, tmp_path, capsys):
