@@ -1,4 +1,4 @@
-"""Back-to-front "over" compositing as per-fragment weights (docs/model.md §9).
+"""Back-to-front "over" compositing as per-fragment weights (docs/model.md §6).
 
 Drawing fragments far to near with over gives, per pixel,
 

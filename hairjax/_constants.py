@@ -4,7 +4,7 @@ One definition for the JAX renderer, the GLSL shaders (issue 3 injects these) an
 """
 
 # Antialiasing: a pixel is a unit box aligned with the ribbon; coverage across the ribbon
-# is the overlap of [d - 0.5, d + 0.5] with [-w/2, w/2] (kim-2003 §2, docs/model.md §6).
+# is the overlap of [d - 0.5, d + 0.5] with [-w/2, w/2] (kim-2003 §2, docs/model.md §5).
 PIXEL_HALF_EXTENT = 0.5
 
 # Opacity maps are sampled with a (2r + 1)² box filter around the texel of the point

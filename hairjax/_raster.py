@@ -1,4 +1,4 @@
-"""Ribbon rasterisation with analytic coverage (kim-2003 §2; docs/model.md §6).
+"""Ribbon rasterisation with analytic coverage (kim-2003 §2; docs/model.md §5).
 
 A segment (x0, y0) → (x1, y1) in pixel coordinates is a screen-aligned ribbon of width w.
 A pixel centre c, at signed position s = (c − p0)·u along the segment and distance
