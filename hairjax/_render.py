@@ -32,7 +32,8 @@ from ._scene import Scene
 from ._shading import ShadingParams, kajiya_kay
 from ._shadows import ShadowSetup, exact_opacity, opacity_maps, point_opacity, shadow_setup
 
-__all__ = ["Setup", "Geometry", "prepare", "geometry_stage", "shading_stage", "render",
+__all__ = ["Setup", "Geometry", "prepare", "visibility_order", "sphere_hits", "to_light",
+           "geometry_stage", "shading_stage", "render",
            "render_profiled", "tangents"]
 
 
@@ -120,6 +121,24 @@ def prepare(scene: Scene) -> Setup:
     return cached
 
 
+def visibility_order(scene: Scene):
+    """Camera projection and the segments' draw order (docs/model.md §2, §4), shared by
+    the JAX and GL renderers.
+
+    Returns `(view, xy [P, 2], depth [P], segments [E, 2], order)`; `order` lists the
+    drawable segments (both ends beyond the near plane), the first drawn first.
+    """
+    cam = scene.camera
+    view = camera_view(cam)
+    xy, depth = view.project(scene.strands.points)
+    segments = scene.strands.segments()
+    # Segments with an end nearer than the near plane (or behind the eye) are not drawn.
+    drawable = np.flatnonzero((depth[segments[:, 0]] > cam.near) & (depth[segments[:, 1]] > cam.near))
+    order = drawable[draw_order(segment_depth(depth, segments[drawable]),
+                                scene.ordering.method, scene.ordering.bins)]
+    return view, xy, depth, segments, order
+
+
 def _prepare(scene: Scene) -> Setup:
     timings = {}
     clock = time.perf_counter()
@@ -132,14 +151,8 @@ def _prepare(scene: Scene) -> Setup:
 
     strands, cam = scene.strands, scene.camera
     points = strands.points
-    view = camera_view(cam)
-    xy, depth = view.project(points)
-    segments = strands.segments()
+    view, xy, depth, segments, order = visibility_order(scene)
     seg_strand = strands.strand_of_point[segments[:, 0]]
-    # Segments with an end nearer than the near plane (or behind the eye) are not drawn.
-    drawable = np.flatnonzero((depth[segments[:, 0]] > cam.near) & (depth[segments[:, 1]] > cam.near))
-    order = drawable[draw_order(segment_depth(depth, segments[drawable]),
-                                scene.ordering.method, scene.ordering.bins)]
     lap("project+order")
 
     # Rasterise nearest-first, then a stable sort by pixel gives front-to-back per pixel.
@@ -155,9 +168,9 @@ def _prepare(scene: Scene) -> Setup:
     backdrop = np.broadcast_to(np.asarray(scene.background, np.float64), (hw, 3)).copy()
     opaque = np.zeros(hw, bool)
     if scene.occluder is not None:
-        hit_depth, normal, hit_point = _sphere_hits(view, scene.occluder)
+        hit_depth, normal, hit_point = sphere_hits(view, scene.occluder)
         opaque = np.isfinite(hit_depth)
-        to_l = _to_light(light, hit_point[opaque])
+        to_l = to_light(light, hit_point[opaque])
         lambert = np.clip(np.sum(normal[opaque] * to_l, axis=1), 0.0, None)
         backdrop[opaque] = np.asarray(scene.occluder.color) * light_rgb * lambert[:, None]
         # kim-2003 §3: depth test on, hair does not write depth.
@@ -184,7 +197,7 @@ def _prepare(scene: Scene) -> Setup:
 
     base_color = strands.color if strands.color is not None else np.ones_like(points)
     return Setup(
-        view=view, tangent=tangents(points, strands.offsets), to_light=_to_light(light, points),
+        view=view, tangent=tangents(points, strands.offsets), to_light=to_light(light, points),
         to_eye=_unit(view.origin - points), base_color=base_color, light_rgb=light_rgb,
         frag_pixel=pixel, frag_i0=segments[seg, 0].astype(np.int32), frag_t=frag_t,
         frag_strand=seg_strand[seg].astype(np.int32), frag_coverage=frag_coverage,
@@ -193,14 +206,14 @@ def _prepare(scene: Scene) -> Setup:
     )
 
 
-def _to_light(light, points: np.ndarray) -> np.ndarray:
+def to_light(light, points: np.ndarray) -> np.ndarray:
     if light.kind == "directional":
         d = -np.asarray(light.direction, dtype=np.float64)
         return np.broadcast_to(d / np.linalg.norm(d), points.shape)
     return _unit(np.asarray(light.position, dtype=np.float64) - points)
 
 
-def _sphere_hits(view: View, occluder):
+def sphere_hits(view: View, occluder):
     """Per pixel centre: view depth of the first hit on the sphere (inf if none), normal, point."""
     origin, direction = view.pixel_rays()
     centre = np.asarray(occluder.center, dtype=np.float64)

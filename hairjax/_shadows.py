@@ -28,7 +28,7 @@ from ._constants import PIXEL_HALF_EXTENT, SHADOW_FILTER_RADIUS
 from ._projection import View, light_view
 from ._raster import rasterize
 
-__all__ = ["ShadowSetup", "shadow_setup", "opacity_maps", "point_opacity", "MAX_MAP_CELLS"]
+__all__ = ["ShadowSetup", "LightFrame", "light_frame", "point_planes", "shadow_setup", "opacity_maps", "point_opacity", "MAX_MAP_CELLS"]
 
 # (N + 1) · R² map cells at most: 1 GiB in float32.
 MAX_MAP_CELLS = 1 << 28
@@ -64,6 +64,46 @@ def map_margin(width: np.ndarray) -> int:
     return int(np.ceil(0.5 * float(np.max(width, initial=1.0)) + PIXEL_HALF_EXTENT)) + SHADOW_FILTER_RADIUS
 
 
+@dataclasses.dataclass(frozen=True)
+class LightFrame:
+    """The light's raster and depth range, shared by the JAX and GL renderers.
+
+    `xy`, `depth`: every point in the light's view; `seen`: points in front of a point
+    light (all, for a directional one); `drawable`: segments with both ends seen;
+    slices are measured from `zmin` over `span` (D₀ and D_N − D₀ of docs/model.md §7).
+    """
+
+    view: View
+    xy: np.ndarray
+    depth: np.ndarray
+    seen: np.ndarray
+    drawable: np.ndarray
+    zmin: float
+    span: float
+
+    def slice_coordinate(self, z: np.ndarray, maps: int) -> np.ndarray:
+        """(z − D₀)·N/span: exactly N at z = D_N, so the farthest points' own fragments
+        never count as nearer than the last plane."""
+        return (z - self.zmin) * maps / self.span
+
+
+def light_frame(points, segments, width, light, resolution: int) -> LightFrame:
+    view = light_view(light, points, resolution, map_margin(width))
+    xy, depth = view.project(points)
+    seen = np.ones(len(points), bool)
+    if view.perspective:
+        # Point light: points behind its near plane get no shadow and cast none.
+        seen = depth > view.near
+    drawable = np.flatnonzero(seen[segments[:, 0]] & seen[segments[:, 1]])
+    zmin = float(depth[seen].min()) if seen.any() else 0.0
+    zmax = float(depth[seen].max()) if seen.any() else 0.0
+    span = zmax - zmin
+    # Fires when every point is at one depth from the light: nothing is strictly nearer
+    # than any plane, and any positive spacing gives that Ω = 0.
+    span = span if span > 0 else 1.0
+    return LightFrame(view, xy, depth, seen, drawable, zmin, span)
+
+
 def shadow_setup(points, segments, seg_strand, width, light, method: str, maps: int,
                  resolution: int) -> ShadowSetup:
     """Rasterise the strands from the light (same ribbons as the camera pass; width in
@@ -71,24 +111,13 @@ def shadow_setup(points, segments, seg_strand, width, light, method: str, maps: 
     if method == "opacity-maps" and (maps + 1) * resolution**2 > MAX_MAP_CELLS:
         raise ValueError(f"{maps} maps of {resolution}² exceed {MAX_MAP_CELLS} cells; "
                          "use fewer maps or a lower resolution")
-    view = light_view(light, points, resolution, map_margin(width))
-    xy, depth = view.project(points)
-    drawable = np.ones(len(segments), bool)
-    seen = np.ones(len(points), bool)
-    if view.perspective:
-        # Point light: points behind its near plane get no shadow and cast none.
-        seen = depth > view.near
-        drawable = seen[segments[:, 0]] & seen[segments[:, 1]]
-    seg_ids = np.flatnonzero(drawable)
+    frame = light_frame(points, segments, width, light, resolution)
+    view, xy, depth, seen, zmin, span = (frame.view, frame.xy, frame.depth, frame.seen,
+                                         frame.zmin, frame.span)
+    seg_ids = frame.drawable
     s0, s1 = segments[seg_ids, 0], segments[seg_ids, 1]
     frags = rasterize(xy[s0], xy[s1], depth[s0], depth[s1], width[seg_strand[seg_ids]],
                       resolution, resolution, view.perspective)
-    zmin = float(depth[seen].min()) if seen.any() else 0.0
-    zmax = float(depth[seen].max()) if seen.any() else 0.0
-    span = zmax - zmin
-    # Fires when every point is at one depth from the light: nothing is strictly nearer
-    # than any plane, and any positive spacing gives that Ω = 0.
-    span = span if span > 0 else 1.0
 
     tx = np.floor(xy[:, 0]).astype(np.int64)
     ty = np.floor(xy[:, 1]).astype(np.int64)
@@ -98,13 +127,9 @@ def shadow_setup(points, segments, seg_strand, width, light, method: str, maps: 
 
     if method == "opacity-maps":
         delta = span / maps
-        # Slice coordinate (z − D₀)·N/span: exactly N at z = D_N, so the farthest points'
-        # own fragments never count as nearer than the last plane.
-        j = np.clip(np.floor((frags.depth - zmin) * maps / span), 0, maps).astype(np.int64)
         # A fragment in [D_j, D_{j+1}) counts towards planes j + 1 … N (strictly nearer).
-        u = (depth - zmin) * maps / span
-        plane = np.clip(np.floor(u), 0, maps - 1).astype(np.int64)
-        f = np.clip(u - plane, 0.0, 1.0)
+        j = np.clip(np.floor(frame.slice_coordinate(frags.depth, maps)), 0, maps).astype(np.int64)
+        plane, f = point_planes(frame, maps)
         return ShadowSetup(method=method, planes=zmin + delta * np.arange(maps + 1),
                            frag_cell=(j * resolution**2 + frags.pixel).astype(np.int32),
                            plane=plane.astype(np.int32), f=f,
@@ -137,6 +162,13 @@ def shadow_setup(points, segments, seg_strand, width, light, method: str, maps: 
     return ShadowSetup(method=method, planes=None, frag_first=first,
                        index=np.where(has_any, stop - 1, 0),
                        weight=np.where(has_any, 1.0 / (2 * r + 1) ** 2, 0.0), **common)
+
+
+def point_planes(frame: LightFrame, maps: int) -> tuple[np.ndarray, np.ndarray]:
+    """Each point's plane i (its slice, clamped to 0 … N − 1) and weight f ∈ [0, 1]."""
+    u = frame.slice_coordinate(frame.depth, maps)
+    plane = np.clip(np.floor(u), 0, maps - 1).astype(np.int64)
+    return plane, np.clip(u - plane, 0.0, 1.0)
 
 
 def box_filter(maps: Float[Array, "n r r"]) -> Float[Array, "n r r"]:

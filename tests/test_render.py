@@ -137,7 +137,7 @@ def test_geometry_reused_and_unneeded_work_skipped(monkeypatch):
         raise AssertionError("this stage must not run for this scene")
 
     monkeypatch.setattr(render_mod, "shadow_setup", forbidden)
-    monkeypatch.setattr(render_mod, "_sphere_hits", forbidden)
+    monkeypatch.setattr(render_mod, "sphere_hits", forbidden)
     a = hj.render(scene)
     b = hj.render(scene, hj.ShadingParams(kd=0.1))
     assert len(calls) == 1 and len(opacity_calls) == 1
