@@ -1,0 +1,78 @@
+"""Shader programs, compiled once per context from `shaders/` and the shared constants.
+
+The constants include is generated from `hairjax/_constants.py`, so GLSL and JAX read one
+definition; `model.glsl` holds the model's formulas (docs/model.md) for every shader.
+"""
+
+from __future__ import annotations
+
+from importlib import resources
+
+from .. import _constants
+from ._context import GLError
+
+__all__ = ["programs", "constants_glsl", "shader_source"]
+
+SHADING_MODEL_IDS = {"kajiya-kay": 0, "kajiya-kay-mirror": 1}
+
+
+def constants_glsl() -> str:
+    """GLSL `const` declarations for every constant in hairjax/_constants.py."""
+    lines = ["// Generated from hairjax/_constants.py: do not edit."]
+    for name in dir(_constants):
+        value = getattr(_constants, name)
+        if not name.isupper() or isinstance(value, bool):
+            continue
+        if isinstance(value, int):
+            lines.append(f"const int {name} = {value};")
+        elif isinstance(value, float):
+            lines.append(f"const float {name} = {value!r};")
+    for name, value in SHADING_MODEL_IDS.items():
+        lines.append(f"const int SHADING_{name.upper().replace('-', '_')} = {value};")
+    return "\n".join(lines) + "\n"
+
+
+def shader_source(name: str) -> str:
+    return resources.files(__package__).joinpath("shaders", name).read_text()
+
+
+_PROGRAMS = {
+    "camera": dict(vertex_shader="strand.vert", geometry_shader="ribbon.geom",
+                   fragment_shader="camera.frag"),
+    "light_slice": dict(vertex_shader="strand.vert", geometry_shader="ribbon.geom",
+                        fragment_shader="light_slice.frag"),
+    "light_list": dict(vertex_shader="strand.vert", geometry_shader="ribbon.geom",
+                       fragment_shader="light_list.frag"),
+    "sphere": dict(vertex_shader="fullscreen.vert", fragment_shader="sphere.frag"),
+}
+_COMPUTE = {"omega_maps": "omega_maps.comp", "omega_exact": "omega_exact.comp"}
+_CACHE: dict = {}
+
+
+def programs(ctx) -> dict:
+    """All programs for `ctx`, by name (compiled on first use)."""
+    key = id(ctx)
+    if key not in _CACHE:
+        # moderngl expands includes one level deep: put the constants into the model.
+        ctx.includes["hairjax_model"] = shader_source("model.glsl").replace(
+            '#include "hairjax_constants"', constants_glsl())
+        ctx.includes["hairjax_ribbon_fragment"] = shader_source("ribbon_fragment.glsl")
+        built = {}
+        for name, stages in _PROGRAMS.items():
+            try:
+                built[name] = ctx.program(**{k: shader_source(v) for k, v in stages.items()})
+            except Exception as err:
+                raise GLError(f"shader program {name!r} ({', '.join(stages.values())}) "
+                              f"failed to build:\n{err}") from err
+        for name, file in _COMPUTE.items():
+            try:
+                built[name] = ctx.compute_shader(shader_source(file))
+            except Exception as err:
+                raise GLError(f"compute shader {name!r} ({file}) failed to build:\n{err}") from err
+        _CACHE[key] = built
+    return _CACHE[key]
+
+
+def clear_cache() -> None:
+    """Forget compiled programs (tests that change shader sources call this)."""
+    _CACHE.clear()
