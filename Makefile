@@ -12,8 +12,24 @@ $(BIN)/python:
 		|| { echo "hairjax needs Python >= 3.11 (found: $(PY))"; exit 1; }
 	$(PY) -m venv $(VENV)
 
+# The GL renderer needs EGL and Mesa's drivers (llvmpipe without a GPU). On Debian, install
+# them when missing and when we may (root, apt-get present); elsewhere say what is needed.
+GL_PACKAGES := libegl1 libgl1-mesa-dri
+
+.PHONY: system-packages
+system-packages:
+	@if command -v dpkg >/dev/null && ! dpkg -s $(GL_PACKAGES) >/dev/null 2>&1; then \
+		if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+			echo "installing $(GL_PACKAGES) for the GL renderer"; \
+			apt-get update -qq && DEBIAN_FRONTEND=noninteractive \
+				apt-get install -y -qq --no-install-recommends $(GL_PACKAGES); \
+		else \
+			echo "note: the GL renderer needs $(GL_PACKAGES); the JAX renderer works without"; \
+		fi; \
+	fi
+
 # Reinstall only when the package metadata changes.
-$(STAMP): pyproject.toml | $(BIN)/python
+$(STAMP): pyproject.toml | $(BIN)/python system-packages
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[test]'
 	$(BIN)/python -m ipykernel install --user --name hairjax --display-name "hairjax (.venv)" >/dev/null
