@@ -1,4 +1,4 @@
-"""The `hairjax` command line: render, info, bench."""
+"""The `hairjax` command line: render, compare, info, bench."""
 
 from __future__ import annotations
 
@@ -16,10 +16,17 @@ def _render(args) -> int:
     from ._render import render, render_profiled
     from ._scene_file import default_scene_path, load_scene
 
-    if args.backend != "jax":
-        raise SystemExit(f"hairjax: backend {args.backend!r} is not available yet (only 'jax')")
     scene = load_scene(args.scene or default_scene_path())
-    if args.profile:
+    if args.backend == "gl":
+        from .gl import render_gl
+
+        result = render_gl(scene)
+        if args.profile:
+            warm = render_gl(scene).timings  # the second run: shaders built
+            for key in result.timings:
+                print(f"{key:<14} {result.timings[key]:8.3f} s  {warm[key]:8.3f} s")
+        image = result.image
+    elif args.profile:
         image, timings = render_profiled(scene)
         # A second run shows the steady state, with compilation out of the way.
         _, warm = render_profiled(scene)
@@ -37,6 +44,26 @@ def _render(args) -> int:
     if args.png:
         write_image(args.png, image)
         print(f"wrote {args.png}")
+    return 0
+
+
+def _compare(args) -> int:
+    import json
+    import os
+    import tempfile
+
+    from ._compare import compare, format_report
+    from ._scene_file import default_scene_path, load_scene
+
+    report = compare(load_scene(args.scene or default_scene_path()), repeats=args.repeats)
+    print(format_report(report))
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=args.json.parent, suffix=".json")
+        with os.fdopen(fd, "w") as f:
+            json.dump(report, f, indent=2)
+        os.replace(tmp, args.json)
+        print(f"wrote {args.json}")
     return 0
 
 
@@ -64,8 +91,15 @@ def build_parser() -> argparse.ArgumentParser:
                    help="output image, .exr (float) or .png (default: out/render.exr)")
     p.add_argument("--png", type=Path, help="also write an 8-bit sRGB PNG here")
     p.add_argument("--profile", action="store_true", help="print the time of each stage")
-    p.add_argument("--backend", choices=["jax", "gl"], default="jax")
+    p.add_argument("--backend", choices=["jax", "gl"], default="jax",
+                   help="jax: the differentiable reference; gl: the OpenGL renderer")
     p.set_defaults(func=_render)
+
+    p = sub.add_parser("compare", help="render with JAX and GL and report the differences")
+    p.add_argument("scene", nargs="?", type=Path, help="scene TOML file (default: built-in)")
+    p.add_argument("--json", type=Path, help="also write the report as JSON")
+    p.add_argument("--repeats", type=int, default=3, help="timed runs per renderer (median)")
+    p.set_defaults(func=_compare)
 
     p = sub.add_parser("info", help="summarise a hair file (.hair, .tfx, .ply)")
     p.add_argument("file", type=Path)
@@ -99,13 +133,14 @@ def _enable_compilation_cache() -> None:
 def main(argv=None) -> int:
     from ._errors import HairFormatError, SceneError
     from ._image import ImageError
+    from .gl import GLError, GLUnavailable
 
     args = build_parser().parse_args(argv)
-    if args.command in ("render", "bench"):
+    if args.command in ("render", "bench", "compare"):
         _enable_compilation_cache()
     try:
         return args.func(args)
-    except (SceneError, HairFormatError, ImageError, ValueError) as err:
+    except (SceneError, HairFormatError, ImageError, ValueError, GLUnavailable, GLError) as err:
         print(f"hairjax: error: {err}", file=sys.stderr)
         return 2
     except FileNotFoundError as err:

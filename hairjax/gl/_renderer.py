@@ -91,10 +91,14 @@ class _Strands:
 
 
 def render_gl(scene: Scene, params: ShadingParams | None = None, *,
-              clip_slices: bool = True) -> GLResult:
-    """Render `scene` with OpenGL. `clip_slices`: draw into each opacity map only the
-    segments whose depth range meets its slice (kim-2003 §4.2); off draws all of them
-    into every map (the basic algorithm) — same image, for timing comparisons."""
+              clip_slices: bool = True, omega: np.ndarray | None = None) -> GLResult:
+    """Render `scene` with OpenGL.
+
+    **Arguments:** `params` (default `scene.params`); `clip_slices`: draw into each
+    opacity map only the segments whose depth range meets its slice (kim-2003 §4.2); off
+    draws all of them into every map (the basic algorithm) — the same image, for timing;
+    `omega`: use this Ω per point (`[P]`) instead of computing the shadows.
+    """
     params = scene.params if params is None else params
     ctx = get_context()
     progs = programs(ctx)
@@ -111,8 +115,10 @@ def render_gl(scene: Scene, params: ShadingParams | None = None, *,
     strands = _Strands(ctx, scene)
     try:
         lap("upload")
-        omega = None
-        if scene.shadows.method != "none":
+        if omega is not None:
+            omega = np.asarray(omega, dtype="f4").reshape(strands.count)
+            strands.omega.write(omega.tobytes())
+        elif scene.shadows.method != "none":
             frame = light_frame(scene.strands.points, strands.segments, scene.strands.width,
                                 scene.light, scene.shadows.resolution)
             if scene.shadows.method == "opacity-maps":
