@@ -16,6 +16,14 @@ opacity stage (`geometry_stage`) and the shading stage, each waited for with
 alone and the gradient of ``sum((image - target)^2)`` with respect to kd, ks, shininess
 and kappa are then timed as warm calls on the last run's geometry, and the ordering as
 `draw_order(segment_depth(...), "bins", 256)` on the scene's camera depths.
+
+`--backend gl` times the GL renderer instead (`hairjax.gl.render_gl(scene)`: upload, the
+opacity-map passes and the camera pass, each waited for with ``glFinish``; "full render"
+is the wall time of the call, medians after one warm-up run that compiles the shaders);
+`--backend both` times both paths on the same scene in the same child process, GL first,
+and prints the ratio JAX full render / GL full render. If no OpenGL context can be
+created (`hairjax.gl.GLUnavailable`) the table says "GL unavailable: ..." and the JAX
+figures are measured as usual.
 """
 
 from __future__ import annotations
@@ -50,6 +58,12 @@ TARGETS = {
     "ordering_msegments_per_s": 20.0,  # every configuration
 }
 FULL_RENDER_TARGET_CONFIG = (100_000, 1024)
+# --backend both: the GL full render of FULL_RENDER_TARGET_CONFIG (64 maps) is no slower
+# than the JAX path's, i.e. JAX full render / GL full render >= 1.
+GL_TARGET_RATIO = 1.0
+BACKENDS = ("jax", "gl", "both")
+# Sub-timings of `render_gl`, in the order of its passes (GLResult.timings keys).
+GL_PASSES = ("upload", "shadows", "camera pass")
 
 # Stage keys of the JSON ("stages"), in table order; set-up sub-steps follow as
 # "geometry_setup/<step>" with the step names of `Setup.timings`.
@@ -87,18 +101,13 @@ def _median(xs):
     return statistics.median(xs) if xs else float("nan")
 
 
-def _measure(cfg: dict, repeats: int, progress) -> dict:
-    import jax
-    import jax.numpy as jnp
-
-    from ._ordering import draw_order, segment_depth
-    from ._render import geometry_stage, prepare, render_profiled, shading_stage
+def _bench_scene(cfg: dict):
     from ._scene import Camera, Light, Ordering, Scene, Shadows
     from ._shading import ShadingParams
     from ._sources import furball
 
     hair = furball(strands=cfg["strands"], points=POINTS)
-    scene = Scene(
+    return Scene(
         strands=hair,
         camera=Camera(eye=EYE, target=TARGET, fov=FOV, width=cfg["size"], height=cfg["size"]),
         light=Light(kind="directional", direction=(-0.6, -0.8, -0.5)),
@@ -110,6 +119,69 @@ def _measure(cfg: dict, repeats: int, progress) -> dict:
         background=(0.02, 0.02, 0.03),
         name="bench",
     )
+
+
+def _measure_gl(scene, repeats: int, progress) -> dict:
+    """Time `render_gl(scene)`: one warm-up run (shader compilation), then `repeats`."""
+    import numpy as np
+
+    from .gl import GLUnavailable, get_context, render_gl
+
+    try:
+        ctx = get_context()
+    except GLUnavailable as err:
+        return {"status": "unavailable", "error": f"GL unavailable: {err}"}
+    info = {"gl_renderer": ctx.info.get("GL_RENDERER"), "gl_version": ctx.info.get("GL_VERSION")}
+    progress("GL warm-up run (compiles the shaders)")
+    result = render_gl(scene)
+    total: list[float] = []
+    passes: dict[str, list[float]] = {}
+    for i in range(repeats):
+        del result
+        progress(f"GL run {i + 1}/{repeats}")
+        t0 = time.perf_counter()
+        result = render_gl(scene)
+        total.append(time.perf_counter() - t0)
+        for key, value in result.timings.items():
+            passes.setdefault(key, []).append(value)
+    return {
+        "status": "ok", "error": None, **info,
+        "full_render": {"median_s": _median(total), "runs_s": total},
+        "passes": {k: {"median_s": _median(v), "runs_s": v} for k, v in passes.items()},
+        "image_finite": bool(np.all(np.isfinite(result.image))),
+    }
+
+
+def _measure(cfg: dict, repeats: int, progress) -> dict:
+    backend = cfg.get("backend", "jax")
+    scene = _bench_scene(cfg)
+    out = {}
+    if backend in ("gl", "both"):
+        try:
+            out["gl"] = _measure_gl(scene, repeats, progress)
+        except MemoryError:
+            raise
+        except Exception as err:  # a GL failure is reported; the JAX figures still come
+            out["gl"] = {"status": "error", "error": f"GL: {type(err).__name__}: {err}"[:2000]}
+        if out["gl"]["status"] == "unavailable":
+            progress(out["gl"]["error"])
+    if backend == "gl" and out["gl"]["status"] == "ok":
+        return out
+    out.update(_measure_jax(scene, repeats, progress))
+    if out.get("gl", {}).get("status") == "ok":
+        out["jax_over_gl"] = (out["stages"]["full_render"]["median_s"]
+                              / out["gl"]["full_render"]["median_s"])
+    return out
+
+
+def _measure_jax(scene, repeats: int, progress) -> dict:
+    import jax
+    import jax.numpy as jnp
+
+    from ._ordering import draw_order, segment_depth
+    from ._render import geometry_stage, prepare, render_profiled, shading_stage
+    from ._shading import ShadingParams
+
     params = scene.params
 
     # One run is `render_profiled`: it clears the scene's cached set-up and geometry, then
@@ -293,14 +365,20 @@ def _machine_info(results: list[dict]) -> dict:
 def _targets_met(cfg: dict, r: dict) -> dict:
     if r.get("status") != "ok":
         return {}
-    met = {
+    met = {}
+    target_config = (cfg["strands"], cfg["size"]) == FULL_RENDER_TARGET_CONFIG
+    if target_config and "jax_over_gl" in r:
+        met["jax_over_gl"] = r["jax_over_gl"] >= GL_TARGET_RATIO
+    if "stages" not in r:
+        return met
+    met |= {
         "shading_s": r["stages"]["shading"]["median_s"] <= TARGETS["shading_s"],
         "gradient_over_shading":
             r["gradient_over_shading"] <= TARGETS["gradient_over_shading"],
         "ordering_msegments_per_s":
             r["ordering"]["msegments_per_s"] >= TARGETS["ordering_msegments_per_s"],
     }
-    if (cfg["strands"], cfg["size"]) == FULL_RENDER_TARGET_CONFIG:
+    if target_config:
         met["full_render_s"] = r["stages"]["full_render"]["median_s"] <= TARGETS["full_render_s"]
     return met
 
@@ -330,42 +408,68 @@ def _format_table(configs: list[dict], results: list[dict], header: str) -> str:
     def stage(key):
         return lambda c, r: _fmt_time(r["stages"].get(key, {}).get("median_s"))
 
+    have_jax = any("stages" in r for r in results)
+    have_gl = any("gl" in r for r in results)
+
+    def jax_cells(fn):
+        return cells(lambda c, r: fn(c, r) if "stages" in r else "")
+
+    def gl_cells(fn):
+        return cells(lambda c, r: fn(c, r) if r.get("gl", {}).get("status") == "ok" else "")
+
     substeps = []
     for r in results:
         for key in r.get("stages", {}):
             if key.startswith("geometry_setup/") and key not in substeps:
                 substeps.append(key)
 
-    rows.append((STAGE_LABELS["geometry_setup"], cells(stage("geometry_setup")), ""))
-    for key in substeps:
-        rows.append(("  " + key.split("/", 1)[1], cells(stage(key)), ""))
-    rows.append((STAGE_LABELS["geometry_opacity"], cells(stage("geometry_opacity")), ""))
-    rows.append((STAGE_LABELS["shading"],
-                 cells(lambda c, r: _fmt_time(r["stages"]["shading"]["median_s"])
-                       + _mark(r["targets_met"].get("shading_s"))),
-                 f"<= {TARGETS['shading_s'] * 1e3:.0f} ms"))
-    rows.append((STAGE_LABELS["gradient"], cells(stage("gradient")), ""))
-    rows.append(("  gradient / shading",
-                 cells(lambda c, r: f"{r['gradient_over_shading']:.2f}x"
-                       + _mark(r["targets_met"].get("gradient_over_shading"))),
-                 f"<= {TARGETS['gradient_over_shading']:g}x"))
-    rows.append((STAGE_LABELS["full_render"],
-                 cells(lambda c, r: _fmt_time(r["stages"]["full_render"]["median_s"])
-                       + _mark(r["targets_met"].get("full_render_s"))),
-                 f"<= {TARGETS['full_render_s']:g} s at "
-                 f"{FULL_RENDER_TARGET_CONFIG[0] // 1000}k @ {FULL_RENDER_TARGET_CONFIG[1]}"))
-    rows.append(("ordering (M segments/s)",
-                 cells(lambda c, r: f"{r['ordering']['msegments_per_s']:.1f}"
-                       + _mark(r["targets_met"].get("ordering_msegments_per_s"))),
-                 f">= {TARGETS['ordering_msegments_per_s']:g}"))
-    rows.append(("  speed-up over kim-2003",
-                 cells(lambda c, r: f"{r['ordering']['speedup_over_kim_2003']:.0f}x"),
-                 "(0.7 M/s, P-III 700 MHz)"))
-    rows.append(("  segments ordered", cells(lambda c, r: f"{r['ordering']['segments']:,}"), ""))
-    rows.append(("camera fragments", cells(lambda c, r: f"{r['fragments']:,}"), ""))
-    rows.append(("shadow-map fragments",
-                 cells(lambda c, r: "-" if r["shadow_fragments"] is None
-                       else f"{r['shadow_fragments']:,}"), ""))
+    if have_jax:
+        rows.append((STAGE_LABELS["geometry_setup"], jax_cells(stage("geometry_setup")), ""))
+        for key in substeps:
+            rows.append(("  " + key.split("/", 1)[1], jax_cells(stage(key)), ""))
+        rows.append((STAGE_LABELS["geometry_opacity"], jax_cells(stage("geometry_opacity")), ""))
+        rows.append((STAGE_LABELS["shading"],
+                     jax_cells(lambda c, r: _fmt_time(r["stages"]["shading"]["median_s"])
+                               + _mark(r["targets_met"].get("shading_s"))),
+                     f"<= {TARGETS['shading_s'] * 1e3:.0f} ms"))
+        rows.append((STAGE_LABELS["gradient"], jax_cells(stage("gradient")), ""))
+        rows.append(("  gradient / shading",
+                     jax_cells(lambda c, r: f"{r['gradient_over_shading']:.2f}x"
+                               + _mark(r["targets_met"].get("gradient_over_shading"))),
+                     f"<= {TARGETS['gradient_over_shading']:g}x"))
+        rows.append((STAGE_LABELS["full_render"],
+                     jax_cells(lambda c, r: _fmt_time(r["stages"]["full_render"]["median_s"])
+                               + _mark(r["targets_met"].get("full_render_s"))),
+                     f"<= {TARGETS['full_render_s']:g} s at "
+                     f"{FULL_RENDER_TARGET_CONFIG[0] // 1000}k @ {FULL_RENDER_TARGET_CONFIG[1]}"))
+        rows.append(("ordering (M segments/s)",
+                     jax_cells(lambda c, r: f"{r['ordering']['msegments_per_s']:.1f}"
+                               + _mark(r["targets_met"].get("ordering_msegments_per_s"))),
+                     f">= {TARGETS['ordering_msegments_per_s']:g}"))
+        rows.append(("  speed-up over kim-2003",
+                     jax_cells(lambda c, r: f"{r['ordering']['speedup_over_kim_2003']:.0f}x"),
+                     "(0.7 M/s, P-III 700 MHz)"))
+        rows.append(("  segments ordered",
+                     jax_cells(lambda c, r: f"{r['ordering']['segments']:,}"), ""))
+        rows.append(("camera fragments", jax_cells(lambda c, r: f"{r['fragments']:,}"), ""))
+        rows.append(("shadow-map fragments",
+                     jax_cells(lambda c, r: "-" if r["shadow_fragments"] is None
+                               else f"{r['shadow_fragments']:,}"), ""))
+    if have_gl:
+        for key in GL_PASSES:
+            rows.append((f"GL {key}", gl_cells(
+                lambda c, r, key=key: _fmt_time(r["gl"]["passes"].get(key, {}).get("median_s"))),
+                ""))
+        rows.append(("GL full render",
+                     gl_cells(lambda c, r: _fmt_time(r["gl"]["full_render"]["median_s"])), ""))
+        if have_jax:
+            rows.append(("JAX / GL full render",
+                         cells(lambda c, r: f"{r['jax_over_gl']:.2f}x"
+                               + _mark(r["targets_met"].get("jax_over_gl"))
+                               if "jax_over_gl" in r else ""),
+                         f">= {GL_TARGET_RATIO:g}x at {FULL_RENDER_TARGET_CONFIG[0] // 1000}k @ "
+                         f"{FULL_RENDER_TARGET_CONFIG[1]}, 64 maps (GL no slower than JAX)"))
+        rows.append(("GL status", [r.get("gl", {}).get("status", "-") for r in results], ""))
     rows.append(("peak RSS",
                  [f"{r['peak_rss_kib'] / 1024 ** 2:.2f} GiB" if r.get("peak_rss_kib") else "-"
                   for r in results], ""))
@@ -386,6 +490,8 @@ def _format_table(configs: list[dict], results: list[dict], header: str) -> str:
     out = [header, "", line(*head), "  ".join("-" * w for w in widths)]
     out += [line(*r) for r in rows]
     errors = [(n, r["error"]) for n, r in zip(names, results) if r.get("error")]
+    errors += [(n, r["gl"]["error"]) for n, r in zip(names, results)
+               if r.get("gl", {}).get("error")]
     if errors:
         out.append("")
         out += [f"{n}: {e}" for n, e in errors]
@@ -427,10 +533,14 @@ def _write_json_atomic(path: Path, data) -> None:
 
 
 def main(args) -> int:
-    """`hairjax bench [--quick] [--repeats N] [--json PATH]`; returns the exit status."""
+    """`hairjax bench [--quick] [--repeats N] [--json PATH] [--backend jax|gl|both]`;
+    returns the exit status."""
     import jax
 
     quick = bool(getattr(args, "quick", False))
+    backend = getattr(args, "backend", None) or "jax"
+    if backend not in BACKENDS:
+        raise ValueError(f"--backend must be one of {BACKENDS}, got {backend!r}")
     repeats = int(getattr(args, "repeats", 5))
     if repeats < 1:
         raise ValueError(f"--repeats must be at least 1, got {repeats}")
@@ -443,7 +553,8 @@ def main(args) -> int:
     started = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="hairjax-bench-") as tmp:
         for i, cfg in enumerate(configs):
-            cfg = dict(cfg, index=i, name=_config_name(cfg), repeats=repeats, x64=x64)
+            cfg = dict(cfg, index=i, name=_config_name(cfg), repeats=repeats, x64=x64,
+                       backend=backend)
             print(f"[{i + 1}/{len(configs)}] {cfg['name']}: {cfg['strands']:,} strands x "
                   f"{POINTS} points, {cfg['maps']} opacity maps of {cfg['map_resolution']}^2",
                   flush=True)
@@ -455,11 +566,20 @@ def main(args) -> int:
 
     machine = _machine_info(results)
     dtype = next((r["dtype"] for r in results if r.get("dtype")), "?")
-    header = (f"hairjax bench: median of {repeats} run(s) after 1 warm-up; "
+    gl_info = next((r["gl"] for r in results if r.get("gl", {}).get("status") == "ok"), None)
+    if gl_info is not None:
+        machine["gl_renderer"] = gl_info.get("gl_renderer")
+        machine["gl_version"] = gl_info.get("gl_version")
+    gl_line = ""
+    if backend != "jax":
+        gl_line = ("\nGL: " + (f"{gl_info['gl_renderer']} ({gl_info['gl_version']})"
+                               if gl_info else next((r["gl"]["error"] for r in results
+                                                     if r.get("gl", {}).get("error")), "-")))
+    header = (f"hairjax bench ({backend}): median of {repeats} run(s) after 1 warm-up; "
               f"{machine['platform']}, {machine['cpu_count']} CPUs, "
               f"jax {machine['jax_version']} ({machine['jax_backend']}, {dtype})\n"
               f"scene: fur balls of {POINTS}-point strands, directional light, bins ordering "
-              f"({ORDERING_BINS}), camera eye {EYE} target {TARGET} fov {FOV:g}")
+              f"({ORDERING_BINS}), camera eye {EYE} target {TARGET} fov {FOV:g}{gl_line}")
     print()
     print(_format_table(configs, results, header))
     print(f"\ntotal {time.perf_counter() - started:.1f} s")
@@ -469,11 +589,13 @@ def main(args) -> int:
             "schema": 1,
             "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
             "quick": quick,
+            "backend": backend,
             "repeats": repeats,
             "warmup_runs": 1,
             "machine": machine,
             "targets": dict(TARGETS, full_render_config={
-                "strands": FULL_RENDER_TARGET_CONFIG[0], "size": FULL_RENDER_TARGET_CONFIG[1]}),
+                "strands": FULL_RENDER_TARGET_CONFIG[0], "size": FULL_RENDER_TARGET_CONFIG[1]},
+                jax_over_gl=GL_TARGET_RATIO),
             "kim_2003_segments_per_s": KIM_2003_SEGMENTS_PER_S,
             "configurations": [
                 {"name": _config_name(c), "strands": c["strands"], "points_per_strand": POINTS,
@@ -486,4 +608,7 @@ def main(args) -> int:
         _write_json_atomic(args.json, data)
         print(f"wrote {args.json}")
     # Running out of memory is a property of the machine, not a failure of the benchmark.
-    return 1 if any(r["status"] not in ("ok", "MemoryError") for r in results) else 0
+    # So is a machine without OpenGL ("unavailable"); a GL error is a failure.
+    failed = any(r["status"] not in ("ok", "MemoryError")
+                 or r.get("gl", {}).get("status") == "error" for r in results)
+    return 1 if failed else 0

@@ -109,6 +109,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quick", action="store_true", help="small sizes only, for a smoke test")
     p.add_argument("--repeats", type=int, default=5)
     p.add_argument("--json", type=Path, help="also write the figures as JSON")
+    p.add_argument("--backend", choices=["jax", "gl", "both"], default="jax",
+                   help="time the JAX path (default), the GL renderer, or both in the same "
+                        "process with the ratio of their full renders")
     p.set_defaults(func=_bench)
     return parser
 

@@ -1,4 +1,5 @@
-"""Smoke test of `hairjax bench --quick`: it runs, and its JSON holds every figure.
+"""Smoke tests of `hairjax bench --quick` (JAX, and `--backend both`): it runs, and its
+JSON holds every figure.
 
 No timing thresholds: the targets are printed by the benchmark, not asserted here.
 """
@@ -8,7 +9,10 @@ from __future__ import annotations
 import json
 import math
 
-from hairjax._bench import STAGES
+import pytest
+
+from hairjax import _bench
+from hairjax._bench import GL_PASSES, STAGES
 from hairjax.cli import main
 
 
@@ -44,3 +48,44 @@ def test_bench_quick_writes_every_figure(tmp_path, capsys):
     assert config["ordering"]["segments"] == 2000 * 15
     assert config["fragments"] > 0
     assert config["peak_rss_kib"] > 0
+
+
+def test_bench_quick_both_backends(tmp_path, capsys):
+    out = tmp_path / "b.json"
+    status = main(["bench", "--quick", "--repeats", "2", "--backend", "both",
+                   "--json", str(out)])
+    assert status == 0
+    printed = capsys.readouterr().out
+    data = json.loads(out.read_text())
+    assert data["backend"] == "both"
+    (config,) = data["configurations"]
+    assert config["status"] == "ok", config["error"]
+    gl = config["gl"]
+    if gl["status"] == "unavailable":
+        assert "GL unavailable:" in printed
+        pytest.skip(gl["error"])
+    assert gl["status"] == "ok", gl["error"]
+    assert "GL full render" in printed and "JAX / GL full render" in printed
+    assert _positive_finite(gl["full_render"]["median_s"])
+    assert len(gl["full_render"]["runs_s"]) == 2
+    for key in GL_PASSES:
+        assert _positive_finite(gl["passes"][key]["median_s"]), key
+    assert gl["image_finite"]
+    assert _positive_finite(config["jax_over_gl"])
+    # The JAX figures are still all there.
+    assert set(STAGES) <= set(config["stages"])
+
+
+def test_bench_reports_gl_unavailable(monkeypatch):
+    import hairjax.gl
+
+    def unavailable():
+        raise hairjax.gl.GLUnavailable("no EGL here")
+
+    monkeypatch.setattr(hairjax.gl, "get_context", unavailable)
+    r = _bench._measure_gl(None, 1, lambda msg: None)
+    assert r == {"status": "unavailable", "error": "GL unavailable: no EGL here"}
+    cfg = dict(strands=2000, size=128)
+    table = _bench._format_table([cfg], [{"status": "ok", "gl": r}], "header")
+    assert "GL status" in table and "unavailable" in table
+    assert "GL unavailable: no EGL here" in table
