@@ -1,0 +1,96 @@
+"""GL plumbing: context errors, shader errors, shared constants, the CLI's GL commands."""
+
+import json
+
+import numpy as np
+import pytest
+
+import hairjax as hj
+from hairjax import _constants
+from hairjax.cli import main
+from hairjax.gl import GLError, GLUnavailable, _context, _programs
+
+SMALL = """
+[hair]
+source = "furball"
+strands = 80
+points = 5
+[camera]
+width = 48
+height = 40
+[shadows]
+maps = 4
+resolution = 32
+"""
+
+
+def test_constants_come_from_one_definition():
+    glsl = _programs.constants_glsl()
+    for name in ("PIXEL_HALF_EXTENT", "SHADOW_FILTER_RADIUS", "SPECULAR_BASE_EPS", "SAFE_NORM_EPS"):
+        value = getattr(_constants, name)
+        assert f"{name} = {value!r};" in glsl
+    model = _programs.shader_source("model.glsl")
+    assert '#include "hairjax_constants"' in model
+    # No shader spells a model constant as a literal instead of including it.
+    for shader in ("camera.frag", "light_slice.frag", "ribbon.geom", "omega_maps.comp"):
+        assert "0.5 * vin[0].width + 0.5" not in _programs.shader_source(shader)
+
+
+def test_missing_egl_names_the_packages(monkeypatch):
+    import moderngl
+
+    def no_egl(**kwargs):
+        raise RuntimeError("libEGL.so.1: cannot open shared object file")
+
+    monkeypatch.setattr(moderngl, "create_context", no_egl)
+    # The uncached function: the session's cached context stays as it is.
+    with pytest.raises(GLUnavailable, match="libegl1 libgl1-mesa-dri"):
+        _context.get_context.__wrapped__()
+
+
+def test_cli_reports_missing_gl_and_jax_still_works(monkeypatch, tmp_path, capsys):
+    import hairjax.gl
+
+    def unavailable():
+        raise GLUnavailable("no EGL here; apt-get install libegl1 libgl1-mesa-dri")
+
+    scene = tmp_path / "s.toml"
+    scene.write_text(SMALL)
+    monkeypatch.setattr(hairjax.gl._renderer, "get_context", unavailable)
+    assert main(["render", str(scene), "--backend", "gl", "-o", str(tmp_path / "g.exr")]) == 2
+    assert "libegl1" in capsys.readouterr().err
+    assert main(["render", str(scene), "-o", str(tmp_path / "j.exr")]) == 0
+
+
+def test_shader_compile_errors_name_the_shader(gl, monkeypatch):
+    original = _programs.shader_source
+    monkeypatch.setattr(_programs, "shader_source",
+                        lambda name: original(name) + ("\nthis is not glsl;" if name == "camera.frag" else ""))
+    _programs.clear_cache()
+    try:
+        with pytest.raises(GLError, match=r"camera.*camera\.frag"):
+            _programs.programs(gl)
+    finally:
+        monkeypatch.undo()
+        _programs.clear_cache()
+
+
+def test_render_gl_and_compare_from_the_cli(gl, tmp_path, capsys):
+    scene = tmp_path / "s.toml"
+    scene.write_text(SMALL)
+    out = tmp_path / "gl.exr"
+    assert main(["render", str(scene), "--backend", "gl", "-o", str(out), "--profile"]) == 0
+    image = hj.read_image(out)
+    assert image.shape == (40, 48, 4) and image[..., 3].max() > 0
+    report = tmp_path / "cmp.json"
+    assert main(["compare", str(scene), "--json", str(report), "--repeats", "1"]) == 0
+    text = capsys.readouterr().out
+    assert "RMSE" in text and "PSNR" in text
+    data = json.loads(report.read_text())
+    for key in ("max_abs", "rmse", "psnr_db", "share_over_1e-4", "tau_max_abs", "jax_s", "gl_s"):
+        assert key in data
+    assert data["rmse"] < 1e-3 and data["jax_s"] > 0 and data["gl_s"] > 0
+    # The GL image written by render equals a direct render_gl (float32 EXR).
+    from hairjax.gl import render_gl
+
+    np.testing.assert_array_equal(image, render_gl(hj.load_scene(scene)).image)
