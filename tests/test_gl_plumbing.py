@@ -94,3 +94,44 @@ def test_render_gl_and_compare_from_the_cli(gl, tmp_path, capsys):
     from hairjax.gl import render_gl
 
     np.testing.assert_array_equal(image, render_gl(hj.load_scene(scene)).image)
+
+
+def small_scene(tmp_path, shadows="opacity-maps"):
+    path = tmp_path / "s.toml"
+    path.write_text(SMALL.replace("maps = 4", f'maps = 4\nmethod = "{shadows}"'))
+    return hj.load_scene(path)
+
+
+def test_no_shadow_passes_without_shadows(gl, tmp_path, monkeypatch):
+    from hairjax.gl import _renderer, render_gl
+
+    def forbidden(*args, **kwargs):
+        raise AssertionError("shadow passes ran for a scene without shadows")
+
+    monkeypatch.setattr(_renderer, "_opacity_maps", forbidden)
+    monkeypatch.setattr(_renderer, "_exact_opacity", forbidden)
+    result = render_gl(small_scene(tmp_path, "none"))
+    assert result.omega is None and "shadows" not in result.timings
+
+
+def test_slice_clipping_draws_less_and_changes_nothing(gl, tmp_path, monkeypatch):
+    """kim-2003 §4.2: drawing only the segments that meet each slice gives the same Ω."""
+    from hairjax.gl import _renderer, render_gl
+
+    drawn = []
+    original = _renderer._Strands.index_buffer
+
+    def counting(self, segment_ids):
+        drawn.append(len(segment_ids))
+        return original(self, segment_ids)
+
+    monkeypatch.setattr(_renderer._Strands, "index_buffer", counting)
+    scene = small_scene(tmp_path)
+    clipped = render_gl(scene, clip_slices=True)
+    n_clipped = drawn[0]
+    drawn.clear()
+    full = render_gl(scene, clip_slices=False)
+    n_full = drawn[0] * scene.shadows.maps  # every segment, in every one of the N passes
+    np.testing.assert_array_equal(clipped.omega, full.omega)
+    np.testing.assert_array_equal(clipped.image, full.image)
+    assert n_clipped < n_full / 2
