@@ -33,7 +33,7 @@ from ._shading import ShadingParams, kajiya_kay
 from ._shadows import ShadowSetup, exact_opacity, opacity_maps, point_opacity, shadow_setup
 
 __all__ = ["Setup", "Geometry", "prepare", "visibility_order", "sphere_hits", "to_light",
-           "geometry_stage", "shading_stage", "render",
+           "geometry_stage", "shading_stage", "composite", "point_colors", "render",
            "render_profiled", "tangents"]
 
 
@@ -318,15 +318,20 @@ def point_colors(geometry: Geometry, params: ShadingParams) -> Float[Array, "P 3
     return params.ambient[None, :] * geometry.base_color + lit
 
 
-@eqx.filter_jit
-def shading_stage(geometry: Geometry, params: ShadingParams) -> Float[Array, "H W 4"]:
-    """The image from the geometry stage and the shading parameters (`[H, W, 4]`)."""
-    colors = point_colors(geometry, params)
+def composite(geometry: Geometry, colors: Float[Array, "P C"]) -> Float[Array, "HW C"]:
+    """Σ_k w_k ((1 − t_k) c(p₀) + t_k c(p₁)) per pixel: the hair's part of the composite
+    (docs/model.md §6), linear in the point colours. The backdrop term is not included."""
     t = geometry.frag_t[:, None]
     frag_color = (1 - t) * colors[geometry.frag_i0] + t * colors[geometry.frag_i0 + 1]
     hw = geometry.height * geometry.width
-    rgb = jax.ops.segment_sum(geometry.frag_weight[:, None] * frag_color, geometry.frag_pixel,
-                              num_segments=hw, indices_are_sorted=True)
+    return jax.ops.segment_sum(geometry.frag_weight[:, None] * frag_color, geometry.frag_pixel,
+                               num_segments=hw, indices_are_sorted=True)
+
+
+@eqx.filter_jit
+def shading_stage(geometry: Geometry, params: ShadingParams) -> Float[Array, "H W 4"]:
+    """The image from the geometry stage and the shading parameters (`[H, W, 4]`)."""
+    rgb = composite(geometry, point_colors(geometry, params))
     rgb = rgb + geometry.transmittance[:, None] * geometry.backdrop
     image = jnp.concatenate([rgb, geometry.alpha_channel[:, None]], axis=1)
     return image.reshape(geometry.height, geometry.width, 4)

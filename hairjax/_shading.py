@@ -12,7 +12,7 @@ from jaxtyping import Array, ArrayLike, Float
 from ._constants import SPECULAR_BASE_EPS
 from ._vectors import safe_norm
 
-__all__ = ["ShadingParams", "kajiya_kay", "specular_power", "SHADING_MODELS"]
+__all__ = ["ShadingParams", "kajiya_kay", "kajiya_kay_terms", "specular_power", "SHADING_MODELS"]
 
 SHADING_MODELS = ("kajiya-kay", "kajiya-kay-mirror")
 
@@ -52,6 +52,26 @@ def specular_power(base: Float[Array, ""], p: Float[Array, ""]) -> Float[Array, 
     return jnp.where(positive, jnp.exp(p * jnp.log(safe)), 0.0)
 
 
+def kajiya_kay_terms(
+    tangent: Float[Array, "3"], to_light: Float[Array, "3"], to_eye: Float[Array, "3"],
+    model: str = "kajiya-kay",
+) -> tuple[Float[Array, ""], Float[Array, ""]]:
+    """The geometric part of Kajiya-Kay at one point: (sin(T, L), b), with
+    b = (T·L)(T·V) ± sin(T, L) sin(T, V) (docs/model.md §8). No shading parameter enters."""
+    tl = jnp.dot(tangent, to_light)
+    tv = jnp.dot(tangent, to_eye)
+    # sin via the cross product: exact near 0, where sqrt(1 - cos²) loses all digits.
+    sin_tl = safe_norm(jnp.cross(tangent, to_light))
+    sin_tv = safe_norm(jnp.cross(tangent, to_eye))
+    if model == "kajiya-kay":
+        base = tl * tv + sin_tl * sin_tv
+    elif model == "kajiya-kay-mirror":
+        base = sin_tl * sin_tv - tl * tv
+    else:
+        raise ValueError(f"unknown shading model {model!r}; expected one of {SHADING_MODELS}")
+    return sin_tl, base
+
+
 def kajiya_kay(
     tangent: Float[Array, "3"],
     to_light: Float[Array, "3"],
@@ -68,17 +88,7 @@ def kajiya_kay(
     **Returns:** `(diffuse, specular)`, each RGB: Kd·sin(T, L) and Ks·base^p with
     base = (T·L)(T·V) ± sin(T, L) sin(T, V) (see docs/model.md §8).
     """
-    tl = jnp.dot(tangent, to_light)
-    tv = jnp.dot(tangent, to_eye)
-    # sin via the cross product: exact near 0, where sqrt(1 - cos²) loses all digits.
-    sin_tl = safe_norm(jnp.cross(tangent, to_light))
-    sin_tv = safe_norm(jnp.cross(tangent, to_eye))
-    if model == "kajiya-kay":
-        base = tl * tv + sin_tl * sin_tv
-    elif model == "kajiya-kay-mirror":
-        base = sin_tl * sin_tv - tl * tv
-    else:
-        raise ValueError(f"unknown shading model {model!r}; expected one of {SHADING_MODELS}")
+    sin_tl, base = kajiya_kay_terms(tangent, to_light, to_eye, model)
     diffuse = params.kd * sin_tl
     specular = params.ks * specular_power(base, params.shininess)
     return diffuse, specular
