@@ -8,6 +8,7 @@ down once, in docs/model.md.
 from importlib.metadata import PackageNotFoundError, version
 
 from ._errors import HairFormatError as HairFormatError, SceneError as SceneError
+from ._fit import FitError as FitError, FitResult as FitResult, fit as fit
 from ._image import read_image as read_image, write_image as write_image
 from ._io import hair_info as hair_info, load_hair as load_hair
 from ._render import (

@@ -1,0 +1,343 @@
+"""Fitting Kd, Ks, shininess and κ to target images with optimistix (docs/fitting.md).
+
+The image is linear in Kd, Ks and the ambient term:
+
+    image = ambient⊙A + Kd⊙K_d(κ) + Ks⊙K_s(κ, p) + T·backdrop,
+
+A = composite(c), K_d = composite(τ·light·sin(T, L)·c), K_s = composite(τ·light·b^p)
+(docs/model.md §6, §8). The geometry stage runs once per target; Kajiya-Kay's geometric
+terms once per target; K_d is recomputed per step only when κ is fitted, K_s only when κ or
+the shininess is, and otherwise a step is a handful of per-pixel multiply-adds.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Callable, Sequence
+
+import equinox as eqx
+import jax
+import jax.flatten_util
+import jax.numpy as jnp
+import numpy as np
+
+from ._render import composite, geometry_stage
+from ._scene import Scene
+from ._shading import ShadingParams, kajiya_kay_terms, specular_power
+
+__all__ = ["fit", "FitResult", "FitError", "FITTABLE", "SOLVERS"]
+
+FITTABLE = ("kd", "ks", "shininess", "kappa")
+SOLVERS = ("levenberg-marquardt", "gauss-newton", "dogleg", "bfgs")
+_ALIASES = {"lm": "levenberg-marquardt", "gn": "gauss-newton"}
+
+
+class FitError(ValueError):
+    """Bad fit input (unknown parameter, target size, NaN pixels, …), raised before work."""
+
+
+# Transforms from the optimiser's unconstrained z to the parameter x (docs/fitting.md):
+# log for the scale-free exponent and extinction, softplus for the colour gains.
+def _softplus(z):
+    return jnp.logaddexp(z, 0.0)
+
+
+def _softplus_inv(x):
+    # log(expm1(x)), written to stay accurate for small and large x.
+    return x + jnp.log(-jnp.expm1(-x))
+
+
+_TRANSFORMS = {
+    "kd": (_softplus, _softplus_inv),
+    "ks": (_softplus, _softplus_inv),
+    "shininess": (jnp.exp, jnp.log),
+    "kappa": (jnp.exp, jnp.log),
+}
+# Smallest value a parameter starts from: the inverse transforms need x > 0.
+_FLOOR = 1e-6
+
+
+@dataclasses.dataclass(frozen=True)
+class FitResult:
+    """The outcome of `fit`.
+
+    `params`, `initial`: ShadingParams; `loss`: ½‖r‖² after each step (index 0: initial);
+    `steps`, `time_s` (after the geometry stage), `termination` (why it stopped);
+    `std_error`: name → standard error (array like the parameter) from (JᵀJ)⁻¹σ², or
+    None where it is not defined; `undetermined`: names the data cannot determine;
+    `rmse` over the fitted pixels; `geometry_s`: time of the geometry stages.
+    """
+
+    params: ShadingParams
+    initial: ShadingParams
+    fitted: tuple[str, ...]
+    loss: list
+    steps: int
+    time_s: float
+    geometry_s: float
+    termination: str
+    std_error: dict
+    undetermined: tuple[str, ...]
+    rmse: float
+
+    def to_json(self) -> dict:
+        def value(p, name):
+            v = np.asarray(getattr(p, name), dtype=float)
+            return v.tolist() if v.ndim else float(v)
+
+        names = ("kd", "ks", "shininess", "kappa", "ambient")
+        return {
+            "params": {n: value(self.params, n) for n in names},
+            "initial": {n: value(self.initial, n) for n in names},
+            "fitted": list(self.fitted),
+            "std_error": {k: (None if v is None else np.asarray(v, float).tolist())
+                          for k, v in self.std_error.items()},
+            "undetermined": list(self.undetermined),
+            "steps": self.steps, "time_s": self.time_s, "geometry_s": self.geometry_s,
+            "loss": [float(x) for x in self.loss], "rmse": self.rmse,
+            "termination": self.termination,
+        }
+
+
+class _Terms(eqx.Module):
+    """Per target, everything a step needs that no fitted parameter reaches."""
+
+    geometry: object
+    sin_tl: jax.Array
+    base: jax.Array
+    lit_color: jax.Array  # light · c per point
+    light: jax.Array
+    omega: jax.Array | None
+    constant: jax.Array  # ambient⊙A + T·backdrop, [HW, 3]
+    kd_image: jax.Array | None  # K_d when κ is fixed
+    ks_image: jax.Array | None  # K_s when κ and p are fixed
+    target: jax.Array
+    sqrt_weight: jax.Array
+
+
+def _check_names(fit_names, scalar) -> tuple[str, ...]:
+    names = tuple(fit_names)
+    for n in (*names, *scalar):
+        if n not in FITTABLE:
+            raise FitError(f"unknown parameter {n!r}; fittable: {', '.join(FITTABLE)}")
+    if len(set(names)) != len(names) or not names:
+        raise FitError(f"fit needs distinct parameter names, got {names!r}")
+    for n in scalar:
+        if n not in ("kd", "ks"):
+            raise FitError(f"only kd and ks can be fitted as one grey value, not {n!r}")
+    return names
+
+
+def _target_arrays(scene: Scene, target, mask, weight):
+    h, w = scene.camera.height, scene.camera.width
+    image = np.asarray(target, dtype=np.float64)
+    if image.ndim != 3 or image.shape[2] < 3:
+        raise FitError(f"target for {scene.name!r} must be [H, W, 3 or 4], got {image.shape}")
+    if image.shape[:2] != (h, w):
+        raise FitError(f"target is {image.shape[1]}x{image.shape[0]} but scene {scene.name!r} "
+                       f"renders {w}x{h}")
+    if not np.all(np.isfinite(image[..., :3])):
+        raise FitError(f"target for {scene.name!r} has NaN or infinite pixels")
+    wt = np.ones((h, w)) if weight is None else np.broadcast_to(np.asarray(weight, float), (h, w))
+    if mask is not None:
+        wt = wt * (np.broadcast_to(np.asarray(mask), (h, w)) > 0)
+    if not np.all(np.isfinite(wt)) or np.any(wt < 0):
+        raise FitError("weights must be finite and non-negative")
+    return image[..., :3].reshape(-1, 3), np.sqrt(wt).reshape(-1, 1)
+
+
+def _prepare_terms(scene: Scene, params: ShadingParams, names, target, sqrt_weight) -> _Terms:
+    geom = geometry_stage(scene)
+    sin_tl, base = jax.vmap(kajiya_kay_terms, in_axes=(0, 0, 0, None))(
+        geom.tangent, geom.to_light, geom.to_eye, geom.model)
+    light = geom.light_rgb[None, :]
+    lit_color = light * geom.base_color
+    omega = geom.omega
+    tau = None if omega is None else jnp.exp(-params.kappa * omega)
+    constant = (composite(geom, params.ambient[None, :] * geom.base_color)
+                + geom.transmittance[:, None] * geom.backdrop)
+    kd_image = ks_image = None
+    if "kappa" not in names or omega is None:
+        scale = 1.0 if tau is None else tau[:, None]
+        kd_image = composite(geom, scale * sin_tl[:, None] * lit_color)
+        if "shininess" not in names:
+            ks_image = composite(geom, scale * specular_power(base, params.shininess)[:, None] * light)
+    return _Terms(geom, sin_tl, base, lit_color, light, omega, constant, kd_image, ks_image,
+                  jnp.asarray(target), jnp.asarray(sqrt_weight))
+
+
+def _image(terms: _Terms, kd, ks, shininess, kappa):
+    """The RGB image [HW, 3] of one target for the given parameter values."""
+    tau = None if terms.omega is None else jnp.exp(-kappa * terms.omega)[:, None]
+    kd_image = terms.kd_image
+    if kd_image is None:
+        kd_image = composite(terms.geometry, tau * terms.sin_tl[:, None] * terms.lit_color)
+    ks_image = terms.ks_image
+    if ks_image is None:
+        spec = specular_power(terms.base, shininess)[:, None] * terms.light
+        ks_image = composite(terms.geometry, spec if tau is None else tau * spec)
+    return terms.constant + kd[None, :] * kd_image + ks[None, :] * ks_image
+
+
+def _solver(name: str, rtol: float, atol: float):
+    import optimistix as optx
+
+    name = _ALIASES.get(name, name)
+    if name == "levenberg-marquardt":
+        return optx.LevenbergMarquardt(rtol=rtol, atol=atol), True
+    if name == "gauss-newton":
+        return optx.GaussNewton(rtol=rtol, atol=atol), True
+    if name == "dogleg":
+        return optx.Dogleg(rtol=rtol, atol=atol), True
+    if name == "bfgs":
+        return optx.BFGS(rtol=rtol, atol=atol), False
+    raise FitError(f"unknown solver {name!r}; choose from {', '.join(SOLVERS)} (or lm, gn)")
+
+
+def fit(
+    scene: Scene | Sequence[Scene],
+    targets,
+    fit: Sequence[str] = FITTABLE,
+    init: ShadingParams | None = None,
+    solver: str = "levenberg-marquardt",
+    *,
+    masks=None,
+    weights=None,
+    scalar: Sequence[str] = (),
+    max_steps: int = 100,
+    rtol: float = 1e-8,
+    atol: float = 1e-10,
+    progress: Callable[[int, float, float], None] | None = None,
+) -> FitResult:
+    """Least-squares fit of shading parameters to one or more target images.
+
+    **Arguments:**
+    - `scene`: a Scene, or one per target (the same hair under several views or lights).
+    - `targets`: an `[H, W, 3|4]` linear image, or a list of them (alpha is ignored).
+    - `fit`: names among kd, ks, shininess, kappa; the rest stay at `init`.
+    - `init`: starting (and fixed) parameters, default the first scene's.
+    - `solver`: levenberg-marquardt (lm), gauss-newton, dogleg, or bfgs (on ½‖r‖²).
+    - `masks`, `weights`: optional per-target `[H, W]` pixel masks and weights.
+    - `scalar`: among kd, ks, those fitted as one grey value instead of RGB.
+    - `progress(step, loss, elapsed_s)`: called after every step.
+
+    **Returns:** a `FitResult`.
+    """
+    import optimistix as optx
+
+    scenes = [scene] if isinstance(scene, Scene) else list(scene)
+    target_list = [targets] if np.ndim(targets) == 3 else list(targets)
+    if len(scenes) == 1 and len(target_list) > 1:
+        scenes = scenes * len(target_list)
+    if len(scenes) != len(target_list):
+        raise FitError(f"{len(scenes)} scenes for {len(target_list)} targets")
+    mask_list = [None] * len(scenes) if masks is None else list(masks)
+    weight_list = [None] * len(scenes) if weights is None else list(weights)
+    names = _check_names(fit, scalar)
+    opt, least_squares = _solver(solver, rtol, atol)
+    init = scenes[0].params if init is None else init
+    arrays = [_target_arrays(s, t, m, w) for s, t, m, w in zip(scenes, target_list, mask_list, weight_list)]
+
+    start = time.perf_counter()
+    terms = [_prepare_terms(s, init, names, t, sw) for s, (t, sw) in zip(scenes, arrays)]
+    jax.block_until_ready(terms)
+    geometry_s = time.perf_counter() - start
+
+    def to_z(params):
+        z = {}
+        for n in names:
+            x = jnp.maximum(jnp.asarray(getattr(params, n)), _FLOOR)
+            if n in scalar:
+                x = jnp.mean(x, keepdims=True)
+            z[n] = _TRANSFORMS[n][1](x)
+        return z
+
+    def to_params(z, base: ShadingParams) -> ShadingParams:
+        values = {n: getattr(base, n) for n in FITTABLE}
+        for n in names:
+            x = _TRANSFORMS[n][0](z[n])
+            values[n] = jnp.broadcast_to(x, (3,)) if n in ("kd", "ks") else x.reshape(())
+        return ShadingParams(kd=values["kd"], ks=values["ks"], shininess=values["shininess"],
+                             kappa=values["kappa"], ambient=base.ambient)
+
+    def residuals(z, args):
+        p = to_params(z, init)
+        r = [t.sqrt_weight * (_image(t, p.kd, p.ks, p.shininess, p.kappa) - t.target) for t in args]
+        return jnp.concatenate([x.ravel() for x in r])
+
+    if least_squares:
+        fn = lambda z, args: (residuals(z, args), None)  # noqa: E731
+    else:
+        fn = lambda z, args: (0.5 * jnp.sum(residuals(z, args) ** 2), None)  # noqa: E731
+    fn = eqx.filter_jit(fn)
+    loss_of = eqx.filter_jit(lambda z, args: 0.5 * jnp.sum(residuals(z, args) ** 2))
+
+    z = to_z(init)
+    f_struct, aux_struct = jax.eval_shape(lambda: fn(z, terms))
+    options, tags = {}, frozenset()
+    step = eqx.filter_jit(eqx.Partial(opt.step, fn=fn, args=terms, options=options, tags=tags))
+    terminate = eqx.filter_jit(eqx.Partial(opt.terminate, fn=fn, args=terms, options=options,
+                                           tags=tags))
+    state = opt.init(fn, z, terms, options, f_struct, aux_struct, tags)
+    losses = [float(loss_of(z, terms))]
+    done, result = terminate(y=z, state=state)
+    steps = 0
+    while not bool(done) and steps < max_steps:
+        z, state, _ = step(y=z, state=state)
+        steps += 1
+        losses.append(float(loss_of(z, terms)))
+        if progress is not None:
+            progress(steps, losses[-1], time.perf_counter() - start - geometry_s)
+        if not np.isfinite(losses[-1]):
+            break
+        done, result = terminate(y=z, state=state)
+    if bool(done):
+        termination = ("converged" if result == optx.RESULTS.successful
+                       else f"stopped: {optx.RESULTS[result]}")
+    elif not np.isfinite(losses[-1]):
+        termination = "stopped: the loss became non-finite"
+    else:
+        termination = f"stopped: reached max_steps = {max_steps}"
+    z_final = z
+    fitted = to_params(z_final, init)
+    elapsed = time.perf_counter() - start - geometry_s
+
+    std_error, undetermined = _standard_errors(residuals, z_final, terms, names, scalar)
+    n_pixels = float(sum(np.count_nonzero(np.asarray(t.sqrt_weight)) for t in terms)) * 3
+    rmse = float(np.sqrt(2 * losses[-1] / max(n_pixels, 1.0)))
+    return FitResult(params=fitted, initial=init, fitted=names, loss=losses, steps=steps,
+                     time_s=elapsed, geometry_s=geometry_s, termination=termination,
+                     std_error=std_error, undetermined=undetermined, rmse=rmse)
+
+
+def _standard_errors(residuals, z, terms, names, scalar):
+    """Standard errors from σ²(JᵀJ)⁻¹ in z, mapped to the parameters by the transforms'
+    derivatives (delta method). Directions with JᵀJ eigenvalues below 1e-10·max are not
+    determined by the data; parameters with weight in them get no standard error."""
+    flat, unravel = jax.flatten_util.ravel_pytree(z)
+    r_fn = lambda v: residuals(unravel(v), terms)  # noqa: E731
+    jac = np.asarray(jax.jacfwd(r_fn)(flat), dtype=np.float64)
+    r = np.asarray(r_fn(flat), dtype=np.float64)
+    m, n = jac.shape
+    jtj = jac.T @ jac
+    evals, evecs = np.linalg.eigh(jtj)
+    null = evals <= 1e-10 * max(evals.max(initial=0.0), 1e-300)
+    sigma2 = float(r @ r) / max(m - n, 1)
+    inv = (evecs[:, ~null] / evals[~null]) @ evecs[:, ~null].T
+    var_z = sigma2 * np.diag(inv)
+    in_null = (np.abs(evecs[:, null]) > 0.1).any(axis=1) if null.any() else np.zeros(n, bool)
+    std, undetermined, offset = {}, [], 0
+    for name in names:
+        size = int(np.size(z[name]))
+        sl = slice(offset, offset + size)
+        offset += size
+        if in_null[sl].any():
+            std[name] = None
+            undetermined.append(name)
+            continue
+        forward = _TRANSFORMS[name][0]
+        dxdz = np.asarray(jax.vmap(jax.grad(lambda v: forward(v)))(jnp.ravel(z[name])))
+        se = np.abs(dxdz) * np.sqrt(np.maximum(var_z[sl], 0.0))
+        std[name] = se if size > 1 else float(se[0])
+    return std, tuple(undetermined)
