@@ -313,8 +313,12 @@ def fit(
 
 def _standard_errors(residuals, z, terms, names, scalar):
     """Standard errors from σ²(JᵀJ)⁻¹ in z, mapped to the parameters by the transforms'
-    derivatives (delta method). Directions with JᵀJ eigenvalues below 1e-10·max are not
-    determined by the data; parameters with weight in them get no standard error."""
+    derivatives (delta method).
+
+    A direction of z is not determined by the data when its JᵀJ eigenvalue λ is below
+    1e-10·λ_max (numerically singular) or below m·1e-12: moving along it by one unit (an
+    e-fold of shininess or κ) changes the m residuals by under 1e-6 RMS, below float32
+    resolution of an image. Parameters with weight in such a direction get no error."""
     flat, unravel = jax.flatten_util.ravel_pytree(z)
     r_fn = lambda v: residuals(unravel(v), terms)  # noqa: E731
     jac = np.asarray(jax.jacfwd(r_fn)(flat), dtype=np.float64)
@@ -322,7 +326,7 @@ def _standard_errors(residuals, z, terms, names, scalar):
     m, n = jac.shape
     jtj = jac.T @ jac
     evals, evecs = np.linalg.eigh(jtj)
-    null = evals <= 1e-10 * max(evals.max(initial=0.0), 1e-300)
+    null = (evals <= 1e-10 * max(evals.max(initial=0.0), 1e-300)) | (evals <= m * 1e-12)
     sigma2 = float(r @ r) / max(m - n, 1)
     inv = (evecs[:, ~null] / evals[~null]) @ evecs[:, ~null].T
     var_z = sigma2 * np.diag(inv)
