@@ -1,4 +1,4 @@
-"""The `hairjax` command line: render, compare, info, bench."""
+"""The `hairjax` command line: render, compare, fit, info, bench."""
 
 from __future__ import annotations
 
@@ -67,6 +67,64 @@ def _compare(args) -> int:
     return 0
 
 
+def _fit(args) -> int:
+    import json
+    import os
+    import tempfile
+
+    import numpy as np
+
+    from ._fit import FITTABLE, FitError, fit
+    from ._image import read_image, write_image
+    from ._render import render
+    from ._scene_file import default_scene_path, load_scene
+
+    names = tuple(n.strip() for n in args.fit.split(",") if n.strip())
+    unknown = [n for n in names if n not in FITTABLE]
+    if unknown:
+        raise FitError(f"unknown parameter {unknown[0]!r} in --fit; fittable: {', '.join(FITTABLE)}")
+    if len(args.scenes) >= len(args.target):
+        raise FitError(f"{1 + len(args.scenes)} scenes for {len(args.target)} targets: "
+                       "each extra --scene goes with one extra --target")
+    # Everything is read and checked before any rendering starts.
+    targets = [read_image(t) for t in args.target]
+    first = load_scene(args.scene or default_scene_path())
+    extra = [load_scene(s) for s in args.scenes]
+    scenes = [first, *extra, *[first] * (len(targets) - 1 - len(extra))]
+
+    def progress(step, loss, elapsed):
+        print(f"  step {step:4d}   loss {loss:.6e}   {elapsed:7.2f} s", file=sys.stderr, flush=True)
+
+    print(f"fitting {', '.join(names)} with {args.solver} to {len(targets)} target(s)",
+          file=sys.stderr)
+    result = fit(scenes, targets, fit=names, solver=args.solver, max_steps=args.max_steps,
+                 progress=progress)
+    rows = []
+    for name in ("kd", "ks", "shininess", "kappa"):
+        fmt = lambda v: " ".join(f"{x:.6g}" for x in np.atleast_1d(np.asarray(v, float)))  # noqa: E731
+        se = result.std_error.get(name)
+        se_text = ("undetermined" if name in result.undetermined
+                   else "fixed" if name not in names else fmt(se))
+        rows.append((name, fmt(getattr(result.initial, name)), fmt(getattr(result.params, name)), se_text))
+    widths = [max(len(r[i]) for r in rows + [("parameter", "initial", "fitted", "std. error")])
+              for i in range(4)]
+    for row in [("parameter", "initial", "fitted", "std. error"), *rows]:
+        print("  ".join(c.ljust(w) for c, w in zip(row, widths)))
+    print(f"{result.termination} after {result.steps} steps, {result.time_s:.2f} s "
+          f"(+ {result.geometry_s:.2f} s geometry); RMSE {result.rmse:.4g}")
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=args.json.parent, suffix=".json")
+        with os.fdopen(fd, "w") as f:
+            json.dump(result.to_json(), f, indent=2)
+        os.replace(tmp, args.json)
+        print(f"wrote {args.json}")
+    if args.out:
+        write_image(args.out, np.asarray(render(first, result.params)))
+        print(f"wrote {args.out}")
+    return 0
+
+
 def _info(args) -> int:
     from ._io import format_info, hair_info, load_hair
 
@@ -100,6 +158,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", type=Path, help="also write the report as JSON")
     p.add_argument("--repeats", type=int, default=3, help="timed runs per renderer (median)")
     p.set_defaults(func=_compare)
+
+    p = sub.add_parser("fit", help="fit Kd, Ks, shininess, kappa to target images")
+    p.add_argument("scene", nargs="?", type=Path, help="scene of the first target (default: built-in)")
+    p.add_argument("--target", action="append", type=Path, required=True,
+                   help="target image (.exr linear, or .png sRGB); repeat for several")
+    p.add_argument("--scene", dest="scenes", action="append", type=Path, default=[],
+                   help="scene of the next extra --target (default: the first scene)")
+    p.add_argument("--fit", default="kd,ks,shininess,kappa", help="parameters to fit")
+    p.add_argument("--solver", default="lm", help="lm, gauss-newton, dogleg or bfgs")
+    p.add_argument("--max-steps", type=int, default=100)
+    p.add_argument("--json", type=Path, help="write params, initial, steps, loss, … as JSON")
+    p.add_argument("--out", type=Path, help="render the first scene with the fitted parameters")
+    p.set_defaults(func=_fit)
 
     p = sub.add_parser("info", help="summarise a hair file (.hair, .tfx, .ply)")
     p.add_argument("file", type=Path)
@@ -139,7 +210,7 @@ def main(argv=None) -> int:
     from .gl import GLError, GLUnavailable
 
     args = build_parser().parse_args(argv)
-    if args.command in ("render", "bench", "compare"):
+    if args.command in ("render", "bench", "compare", "fit"):
         _enable_compilation_cache()
     try:
         return args.func(args)

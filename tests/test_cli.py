@@ -78,3 +78,45 @@ def test_info_on_malformed_file(tmp_path, capsys):
     bad.write_bytes(b"NOPE" + bytes(200))
     assert main(["info", str(bad)]) == 2
     assert "bad.hair" in capsys.readouterr().err
+
+
+def test_fit_from_the_cli(scene_file, tmp_path, capsys):
+    import json
+
+    scene = hj.load_scene(scene_file)
+    true = hj.ShadingParams(kd=(0.3, 0.5, 0.2), ks=0.4, shininess=25.0, kappa=2.5)
+    target = tmp_path / "t.exr"
+    hj.write_image(target, np.asarray(hj.render(scene, true)))
+    out, report = tmp_path / "fitted.exr", tmp_path / "fit.json"
+    assert main(["fit", str(scene_file), "--target", str(target), "--json", str(report),
+                 "--out", str(out)]) == 0
+    captured = capsys.readouterr()
+    assert "step" in captured.err and "loss" in captured.err  # the live progress lines
+    assert "fitted" in captured.out and "std. error" in captured.out
+    data = json.loads(report.read_text())
+    for key in ("params", "initial", "steps", "time_s", "loss", "rmse", "termination"):
+        assert key in data
+    # The target is float32 (EXR), so recovery is to float32 rounding, not 1e-12.
+    np.testing.assert_allclose(data["params"]["kappa"], 2.5, rtol=1e-3)
+    assert out.exists()
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--fit", "kd,gloss"], "unknown parameter 'gloss'"),
+    (["--target", "missing.exr"], "no such file"),
+])
+def test_fit_errors_before_work(scene_file, tmp_path, capsys, args, message):
+    target = tmp_path / "t.exr"
+    hj.write_image(target, np.zeros((30, 40, 4)))
+    argv = ["fit", str(scene_file), "--target", str(target), *args]
+    if args[0] == "--target":
+        argv = ["fit", str(scene_file), "--target", str(tmp_path / args[1])]
+    assert main(argv) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_fit_target_size_mismatch(scene_file, tmp_path, capsys):
+    target = tmp_path / "small.exr"
+    hj.write_image(target, np.zeros((10, 10, 4)))
+    assert main(["fit", str(scene_file), "--target", str(target)]) == 2
+    assert "renders 40x30" in capsys.readouterr().err
