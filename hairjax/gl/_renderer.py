@@ -269,16 +269,21 @@ def _opacity_maps(ctx, progs, scene, strands, frame: LightFrame, clip_slices: bo
         strands.position.bind_to_storage_buffer(0)
         id_buf.bind_to_storage_buffer(1)
         omega_buf.bind_to_storage_buffer(2)
+        drawn_since_copy = True
         for i in range(n):
-            ctx.copy_framebuffer(prev_fbo, fbo)  # B_prev = Ω(D_i)
+            if drawn_since_copy:  # B_prev = Ω(D_i); unchanged if slice i − 1 drew nothing
+                ctx.copy_framebuffer(prev_fbo, fbo)
+                drawn_since_copy = False
             fbo.use()
             _set(prog, slice=i)
             if clip_slices:
                 count = starts[i + 1] - starts[i]
                 if count:
                     vao.render(moderngl.LINES, vertices=2 * int(count), first=2 * int(starts[i]))
+                    drawn_since_copy = True
             elif len(seg_rep):
                 vao.render(moderngl.LINES, vertices=2 * len(seg_rep))
+                drawn_since_copy = True
             count = int(plane_starts[i + 1] - plane_starts[i])
             if count:
                 previous.use(0)
