@@ -167,16 +167,62 @@ def _prepare_terms(scene: Scene, params: ShadingParams, names, target, sqrt_weig
                   jnp.asarray(target), jnp.asarray(sqrt_weight))
 
 
+def _point_terms(terms: _Terms, shininess, kappa):
+    """Per point: the Kd and Ks colours before compositing, and their derivatives in κ and p:
+    τ·sin·light·c, τ·b^p·light, ∂/∂κ of both (−Ω times them), ∂/∂p of the second."""
+    tau = jnp.ones_like(terms.sin_tl) if terms.omega is None else jnp.exp(-kappa * terms.omega)
+    omega = jnp.zeros_like(terms.sin_tl) if terms.omega is None else terms.omega
+    spec = specular_power(terms.base, shininess)
+    # d(b^p)/dp through the same guarded power: 0 where b ≤ SPECULAR_BASE_EPS, never NaN.
+    dspec = jax.vmap(jax.grad(specular_power, argnums=1), in_axes=(0, None))(terms.base, shininess)
+    kd_col = (tau * terms.sin_tl)[:, None] * terms.lit_color
+    ks_col = (tau * spec)[:, None] * terms.light
+    dks_dp = (tau * dspec)[:, None] * terms.light
+    return kd_col, ks_col, -omega[:, None] * kd_col, -omega[:, None] * ks_col, dks_dp
+
+
+@jax.custom_jvp
+def _kd_ks_images(terms: _Terms, shininess, kappa):
+    """(K_d, K_s) images `[HW, 3]` for this κ and shininess (precomputed ones pass through)."""
+    kd_col, ks_col, *_ = _point_terms(terms, shininess, kappa)
+    kd_image = terms.kd_image if terms.kd_image is not None else composite(terms.geometry, kd_col)
+    ks_image = terms.ks_image if terms.ks_image is not None else composite(terms.geometry, ks_col)
+    return kd_image, ks_image
+
+
+@_kd_ks_images.defjvp
+def _kd_ks_images_jvp(primals, tangents):
+    """The images and their derivatives from one composite pass over all the channels.
+
+    Everything here depends on the primal (κ, p) only; the tangent output is a per-pixel
+    linear combination, so a Jacobian (vmap over tangent directions) batches only that,
+    not the composites. `terms` is data: its tangent is ignored.
+    """
+    terms, shininess, kappa = primals
+    _, d_shininess, d_kappa = tangents
+    cols = _point_terms(terms, shininess, kappa)
+    images = composite(terms.geometry, jnp.concatenate(cols, axis=1))
+    kd_image, ks_image, dkd_dk, dks_dk, dks_dp = jnp.split(images, 5, axis=1)
+    if terms.kd_image is not None:  # κ is not fitted: K_d is fixed
+        kd_image, dkd_dk = terms.kd_image, jnp.zeros_like(dkd_dk)
+    if terms.ks_image is not None:
+        ks_image, dks_dk, dks_dp = terms.ks_image, jnp.zeros_like(dks_dk), jnp.zeros_like(dks_dp)
+    d_kd = dkd_dk * d_kappa
+    d_ks = dks_dk * d_kappa + dks_dp * d_shininess
+    return (kd_image, ks_image), (d_kd, d_ks)
+
+
 def _image(terms: _Terms, kd, ks, shininess, kappa):
     """The RGB image [HW, 3] of one target for the given parameter values."""
-    tau = None if terms.omega is None else jnp.exp(-kappa * terms.omega)[:, None]
-    kd_image = terms.kd_image
-    if kd_image is None:
-        kd_image = composite(terms.geometry, tau * terms.sin_tl[:, None] * terms.lit_color)
-    ks_image = terms.ks_image
-    if ks_image is None:
-        spec = specular_power(terms.base, shininess)[:, None] * terms.light
-        ks_image = composite(terms.geometry, spec if tau is None else tau * spec)
+    kd_image, ks_image = _kd_ks_images(terms, shininess, kappa)
+    return terms.constant + kd[None, :] * kd_image + ks[None, :] * ks_image
+
+
+def _image_reference(terms: _Terms, kd, ks, shininess, kappa):
+    """The same image by plain autodiff-able code, for the tests of the custom JVP."""
+    kd_col, ks_col, *_ = _point_terms(terms, shininess, kappa)
+    kd_image = terms.kd_image if terms.kd_image is not None else composite(terms.geometry, kd_col)
+    ks_image = terms.ks_image if terms.ks_image is not None else composite(terms.geometry, ks_col)
     return terms.constant + kd[None, :] * kd_image + ks[None, :] * ks_image
 
 
