@@ -22,3 +22,8 @@ SAFE_NORM_EPS = 1e-30
 
 # Default near distance of the camera, as a fraction of |target - eye|.
 NEAR_FRACTION = 1e-3
+
+# Fitting only: fragments behind a front-to-back transmittance below this are left out of
+# the per-step composites. All of a pixel's fragments behind the cut weigh Σ w ≤ T_cut
+# together, so the image moves by at most T_cut × the brightest colour (1e-5 of it).
+FIT_TRANSMITTANCE_CUTOFF = 1e-5

@@ -24,6 +24,7 @@ import numpy as np
 
 from ._render import composite, geometry_stage
 from ._scene import Scene
+from ._constants import FIT_TRANSMITTANCE_CUTOFF
 from ._shading import ShadingParams, kajiya_kay_terms, specular_power
 
 __all__ = ["fit", "FitResult", "FitError", "FITTABLE", "SOLVERS"]
@@ -147,16 +148,32 @@ def _target_arrays(scene: Scene, target, mask, weight):
     return image[..., :3].reshape(-1, 3), np.sqrt(wt).reshape(-1, 1)
 
 
+def _visible_fragments(geom):
+    """The geometry without fragments behind transmittance < FIT_TRANSMITTANCE_CUTOFF
+    (their total weight per pixel is below the cutoff: see hairjax/_constants.py)."""
+    weight = np.asarray(geom.frag_weight)
+    # T_k = w_k / α_k; a fragment with w = 0 (behind an opaque one, or α·T underflowing)
+    # carries nothing and is dropped as well.
+    alpha = np.asarray(geom.frag_alpha)
+    keep = np.flatnonzero(weight >= FIT_TRANSMITTANCE_CUTOFF * alpha)
+    return eqx.tree_at(lambda g: (g.frag_pixel, g.frag_i0, g.frag_t, g.frag_weight, g.frag_alpha),
+                       geom, tuple(jnp.asarray(np.asarray(x)[keep]) for x in (
+                           geom.frag_pixel, geom.frag_i0, geom.frag_t, geom.frag_weight,
+                           geom.frag_alpha)))
+
+
 def _prepare_terms(scene: Scene, params: ShadingParams, names, target, sqrt_weight) -> _Terms:
-    geom = geometry_stage(scene)
+    full = geometry_stage(scene)
+    geom = _visible_fragments(full)
     sin_tl, base = jax.vmap(kajiya_kay_terms, in_axes=(0, 0, 0, None))(
         geom.tangent, geom.to_light, geom.to_eye, geom.model)
     light = geom.light_rgb[None, :]
     lit_color = light * geom.base_color
     omega = geom.omega
     tau = None if omega is None else jnp.exp(-params.kappa * omega)
-    constant = (composite(geom, params.ambient[None, :] * geom.base_color)
-                + geom.transmittance[:, None] * geom.backdrop)
+    # The fixed part of the image is computed once, with every fragment.
+    constant = (composite(full, params.ambient[None, :] * full.base_color)
+                + full.transmittance[:, None] * full.backdrop)
     kd_image = ks_image = None
     if "kappa" not in names or omega is None:
         scale = 1.0 if tau is None else tau[:, None]

@@ -98,6 +98,7 @@ class Geometry(eqx.Module):
     frag_i0: Array  # the segment's first point; its second is frag_i0 + 1
     frag_t: Float[Array, " F"]
     frag_weight: Float[Array, " F"]
+    frag_alpha: Float[Array, " F"]
     transmittance: Float[Array, " HW"]
     backdrop: Float[Array, "HW 3"]
     alpha_channel: Float[Array, " HW"]
@@ -234,13 +235,14 @@ def sphere_hits(view: View, occluder):
 @eqx.filter_jit
 def _composite_weights(alpha, frag_strand, frag_coverage, frag_first, frag_last, last_pixel,
                        opaque):
-    weights, inclusive = over_weights(alpha[frag_strand] * frag_coverage, frag_first, frag_last)
+    frag_alpha = alpha[frag_strand] * frag_coverage
+    weights, inclusive = over_weights(frag_alpha, frag_first, frag_last)
     # Pixels without fragments keep T = 1; each covered pixel's last fragment sets its T
     # (`last_pixel` points every other fragment past the end, where it is dropped).
     transmittance = jnp.ones(opaque.shape[0], weights.dtype).at[last_pixel].set(
         inclusive, mode="drop")
     alpha_channel = 1.0 - transmittance * (1.0 - opaque)
-    return weights, transmittance, alpha_channel
+    return weights, frag_alpha, transmittance, alpha_channel
 
 
 @eqx.filter_jit
@@ -290,7 +292,7 @@ def _geometry_stage(scene: Scene, alpha) -> Geometry:
     alpha = jnp.asarray(alpha, dtype=dtype)
     hw = scene.camera.width * scene.camera.height
     last_pixel = np.where(setup.frag_last, setup.frag_pixel, hw)
-    weights, transmittance, alpha_channel = _composite_weights(
+    weights, frag_alpha, transmittance, alpha_channel = _composite_weights(
         alpha, setup.frag_strand, jnp.asarray(setup.frag_coverage, dtype), setup.frag_first,
         setup.frag_last, last_pixel, jnp.asarray(setup.opaque, dtype))
     omega = None if setup.shadow is None else _omega(scene, setup.shadow, alpha, dtype)
@@ -300,7 +302,7 @@ def _geometry_stage(scene: Scene, alpha) -> Geometry:
         light_rgb=jnp.asarray(setup.light_rgb, dtype), omega=omega,
         frag_pixel=jnp.asarray(setup.frag_pixel, jnp.int32),
         frag_i0=jnp.asarray(setup.frag_i0, jnp.int32),
-        frag_t=jnp.asarray(setup.frag_t, dtype), frag_weight=weights,
+        frag_t=jnp.asarray(setup.frag_t, dtype), frag_weight=weights, frag_alpha=frag_alpha,
         transmittance=transmittance, backdrop=jnp.asarray(setup.backdrop, dtype),
         alpha_channel=alpha_channel, height=scene.camera.height, width=scene.camera.width,
         model=scene.shading_model,

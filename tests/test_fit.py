@@ -136,3 +136,19 @@ def test_custom_jvp_matches_autodiff(scene, target, names):
     # Same maths summed in a different order (one composite of 15 channels vs several).
     np.testing.assert_allclose(jvp_f, jvp_g, rtol=1e-10, atol=1e-13)
     assert np.abs(np.asarray(jvp_g)).max() > 0
+
+
+def test_pruned_fit_image_within_the_stated_bound():
+    """The fit's image (fragments behind T < 1e-5 left out) is within 1e-5 × the brightest
+    point colour of the renderer's exact image (hairjax/_constants.py)."""
+    from hairjax._constants import FIT_TRANSMITTANCE_CUTOFF
+    from hairjax._render import point_colors
+
+    dense = small_furball_scene(strands=2000, size=48, alpha=0.9)
+    names = ("kd", "ks", "shininess", "kappa")
+    exact = np.asarray(hj.render(dense, TRUE))[..., :3].reshape(-1, 3)
+    terms = fit_mod._prepare_terms(dense, TRUE, names, exact, np.ones((48 * 48, 1)))
+    assert terms.geometry.frag_weight.shape[0] < hj.geometry_stage(dense).frag_weight.shape[0]
+    image = np.asarray(fit_mod._image(terms, TRUE.kd, TRUE.ks, TRUE.shininess, TRUE.kappa))
+    brightest = float(np.max(np.asarray(point_colors(hj.geometry_stage(dense), TRUE))))
+    assert np.abs(image - exact).max() <= FIT_TRANSMITTANCE_CUTOFF * brightest
