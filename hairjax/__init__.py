@@ -7,29 +7,57 @@ down once, in docs/model.md.
 
 from importlib.metadata import PackageNotFoundError, version
 
-from ._errors import HairFormatError as HairFormatError, SceneError as SceneError
-from ._fit import FitError as FitError, FitResult as FitResult, fit as fit
-from ._image import read_image as read_image, write_image as write_image
-from ._io import hair_info as hair_info, load_hair as load_hair
+from ._errors import HairFormatError as HairFormatError
+from ._errors import SceneError as SceneError
+from ._fit import FitError as FitError
+from ._fit import FitResult as FitResult
+from ._fit import fit as fit
+from ._image import read_image as read_image
+from ._image import write_image as write_image
+from ._io import hair_info as hair_info
+from ._io import load_hair as load_hair
 from ._render import (
     Geometry as Geometry,
+)
+from ._render import (
     geometry_stage as geometry_stage,
+)
+from ._render import (
     prepare as prepare,
+)
+from ._render import (
     render as render,
+)
+from ._render import (
     render_profiled as render_profiled,
+)
+from ._render import (
     shading_stage as shading_stage,
 )
 from ._scene import (
     Camera as Camera,
+)
+from ._scene import (
     Light as Light,
+)
+from ._scene import (
     Occluder as Occluder,
+)
+from ._scene import (
     Ordering as Ordering,
+)
+from ._scene import (
     Scene as Scene,
+)
+from ._scene import (
     Shadows as Shadows,
 )
-from ._scene_file import default_scene_path as default_scene_path, load_scene as load_scene
-from ._shading import ShadingParams as ShadingParams, kajiya_kay as kajiya_kay
-from ._sources import furball as furball, scalp as scalp
+from ._scene_file import default_scene_path as default_scene_path
+from ._scene_file import load_scene as load_scene
+from ._shading import ShadingParams as ShadingParams
+from ._shading import kajiya_kay as kajiya_kay
+from ._sources import furball as furball
+from ._sources import scalp as scalp
 from ._strands import Strands as Strands
 
 try:

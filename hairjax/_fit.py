@@ -22,9 +22,9 @@ import jax.flatten_util
 import jax.numpy as jnp
 import numpy as np
 
+from ._constants import FIT_TRANSMITTANCE_CUTOFF
 from ._render import composite, geometry_stage
 from ._scene import Scene
-from ._constants import FIT_TRANSMITTANCE_CUTOFF
 from ._shading import ShadingParams, kajiya_kay_terms, specular_power
 
 __all__ = ["fit", "FitResult", "FitError", "FITTABLE", "SOLVERS"]

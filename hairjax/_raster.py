@@ -18,7 +18,6 @@ per-pixel maths in one jitted XLA kernel in JAX's default float precision.
 from __future__ import annotations
 
 import dataclasses
-
 import functools
 
 import jax

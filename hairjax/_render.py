@@ -92,7 +92,7 @@ class Geometry(eqx.Module):
     to_light: Float[Array, "P 3"]
     to_eye: Float[Array, "P 3"]
     base_color: Float[Array, "P 3"]
-    light_rgb: Float[Array, "3"]
+    light_rgb: Float[Array, 3]
     omega: Float[Array, " P"] | None
     frag_pixel: Array
     frag_i0: Array  # the segment's first point; its second is frag_i0 + 1

@@ -17,7 +17,7 @@ __all__ = ["ShadingParams", "kajiya_kay", "kajiya_kay_terms", "specular_power", 
 SHADING_MODELS = ("kajiya-kay", "kajiya-kay-mirror")
 
 
-def _rgb(x) -> Float[Array, "3"]:
+def _rgb(x) -> Float[Array, 3]:
     return jnp.broadcast_to(jnp.asarray(x, dtype=jnp.result_type(float)), (3,))
 
 
@@ -28,11 +28,11 @@ class ShadingParams(eqx.Module):
     specular exponent p; `kappa`: κ in τ = exp(−κΩ).
     """
 
-    kd: Float[Array, "3"]
-    ks: Float[Array, "3"]
+    kd: Float[Array, 3]
+    ks: Float[Array, 3]
     shininess: Float[Array, ""]
     kappa: Float[Array, ""]
-    ambient: Float[Array, "3"]
+    ambient: Float[Array, 3]
 
     def __init__(self, kd: ArrayLike = 0.6, ks: ArrayLike = 0.3, shininess: ArrayLike = 40.0,
                  kappa: ArrayLike = 1.0, ambient: ArrayLike = 0.0):
@@ -53,7 +53,7 @@ def specular_power(base: Float[Array, ""], p: Float[Array, ""]) -> Float[Array, 
 
 
 def kajiya_kay_terms(
-    tangent: Float[Array, "3"], to_light: Float[Array, "3"], to_eye: Float[Array, "3"],
+    tangent: Float[Array, 3], to_light: Float[Array, 3], to_eye: Float[Array, 3],
     model: str = "kajiya-kay",
 ) -> tuple[Float[Array, ""], Float[Array, ""]]:
     """The geometric part of Kajiya-Kay at one point: (sin(T, L), b), with
@@ -73,12 +73,12 @@ def kajiya_kay_terms(
 
 
 def kajiya_kay(
-    tangent: Float[Array, "3"],
-    to_light: Float[Array, "3"],
-    to_eye: Float[Array, "3"],
+    tangent: Float[Array, 3],
+    to_light: Float[Array, 3],
+    to_eye: Float[Array, 3],
     params: ShadingParams,
     model: str = "kajiya-kay",
-) -> tuple[Float[Array, "3"], Float[Array, "3"]]:
+) -> tuple[Float[Array, 3], Float[Array, 3]]:
     """Unshadowed Kajiya-Kay terms at one point.
 
     **Arguments:** unit `tangent` T, unit `to_light` L and `to_eye` V (from the point),

@@ -28,7 +28,8 @@ from ._constants import PIXEL_HALF_EXTENT, SHADOW_FILTER_RADIUS
 from ._projection import View, light_view
 from ._raster import rasterize
 
-__all__ = ["ShadowSetup", "LightFrame", "light_frame", "point_planes", "shadow_setup", "opacity_maps", "point_opacity", "MAX_MAP_CELLS"]
+__all__ = ["ShadowSetup", "LightFrame", "light_frame", "point_planes", "shadow_setup",
+           "opacity_maps", "point_opacity", "MAX_MAP_CELLS"]
 
 # (N + 1) · R² map cells at most: 1 GiB in float32.
 MAX_MAP_CELLS = 1 << 28

@@ -8,7 +8,7 @@ from jaxtyping import Array, Float
 from ._constants import SAFE_NORM_EPS
 
 
-def safe_norm(x: Float[Array, "... 3"]) -> Float[Array, "..."]:
+def safe_norm(x: Float[Array, "... 3"]) -> Float[Array, ...]:
     """‖x‖ with a zero (not NaN) gradient at x = 0."""
     sq = jnp.sum(x * x, axis=-1)
     # Double-where: fires for zero vectors (zero-length segments, T ∥ L in ‖T × L‖), where

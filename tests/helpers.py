@@ -4,8 +4,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
-
 import hairjax as hj
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"

@@ -4,10 +4,10 @@ import os
 
 import numpy as np
 import pytest
+from helpers import DATA
 
 import hairjax as hj
 from hairjax.cli import main
-from helpers import DATA
 
 SMALL_SCENE = """
 [hair]

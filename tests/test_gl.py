@@ -23,18 +23,20 @@ Tolerances:
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from helpers import DATA
 
 import hairjax as hj
 from hairjax._composite import over_weights
 from hairjax._raster import rasterize
 from hairjax._render import sphere_hits, visibility_order
 from hairjax._shadows import light_frame
-from helpers import DATA
 
-EXAMPLES = __import__("pathlib").Path(__file__).resolve().parents[1] / "experiments" / "scenes"
+EXAMPLES = Path(__file__).resolve().parents[1] / "experiments" / "scenes"
 PIXEL_TOL = 1e-4
 TAU_TOL = 1e-4
 SLICE_DELTA = 1e-4
@@ -187,7 +189,7 @@ def test_camera_pass_matches(gl, references, name):
     assert np.abs(result.image - jax_image).max() > 0 or scene.strands.num_strands == 0
 
 
-@pytest.mark.parametrize("name", [n for n in SCENES if n != "dense_opaque"] + ["dense_opaque"])
+@pytest.mark.parametrize("name", SCENES)
 def test_transmittance_matches(gl, references, name):
     """GL's Ω (its own opacity maps) gives τ within 1e-4 of JAX's except at points a
     light-side boundary explains."""

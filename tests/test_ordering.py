@@ -11,7 +11,8 @@ from hairjax._ordering import bin_index, draw_order, segment_depth, stable_argso
 def test_bin_formula_by_hand():
     # Dmin = 2, Dmax = 6, N = 4: ε = 4/8 = 0.5, i = ⌊4 (D − 2)/4.5⌋.
     depth = np.array([2.0, 3.0, 4.25, 5.0, 6.0, 3.125])
-    expected = [0, 0, 2, 2, 3, 1]  # 4·1/4.5 = 0.89, 4·2.25/4.5 = 2, 4·3/4.5 = 2.67, 4·4/4.5 = 3.56, 4·1.125/4.5 = 1
+    # 4·0/4.5 = 0, 4·1/4.5 = 0.89, 4·2.25/4.5 = 2, 4·3/4.5 = 2.67, 4·4/4.5 = 3.56, 4·1.125/4.5 = 1
+    expected = [0, 0, 2, 2, 3, 1]
     np.testing.assert_array_equal(bin_index(depth, 4), expected)
 
 

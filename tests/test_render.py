@@ -4,10 +4,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from helpers import central_difference, small_furball_scene
 
 import hairjax as hj
 import hairjax._render as render_mod
-from helpers import central_difference, small_furball_scene
 
 
 def stacked_hairs(ordering="bins", front_first=False):

@@ -1,6 +1,5 @@
 """Opacity shadow maps on a slab of parallel hairs, computed by hand (docs/model.md §7)."""
 
-import jax.numpy as jnp
 import numpy as np
 import pytest
 

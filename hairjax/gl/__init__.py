@@ -3,5 +3,8 @@
 The fast path; `hairjax compare` checks it pixel by pixel against the JAX renderer.
 """
 
-from ._context import GLError as GLError, GLUnavailable as GLUnavailable, get_context as get_context
-from ._renderer import GLResult as GLResult, render_gl as render_gl
+from ._context import GLError as GLError
+from ._context import GLUnavailable as GLUnavailable
+from ._context import get_context as get_context
+from ._renderer import GLResult as GLResult
+from ._renderer import render_gl as render_gl

@@ -17,8 +17,8 @@ import numpy as np
 
 from .._render import tangents, visibility_order
 from .._scene import Scene
-from .._shadows import LightFrame, light_frame, point_planes
 from .._shading import ShadingParams
+from .._shadows import LightFrame, light_frame, point_planes
 from ._context import check, get_context, release
 from ._programs import SHADING_MODEL_IDS, programs
 
@@ -231,7 +231,8 @@ def _opacity_maps(ctx, progs, scene, strands, frame: LightFrame, clip_slices: bo
     if clip_slices:
         spans = np.maximum(u1 - u0 + 1, 0)
         seg_rep = np.repeat(ids, spans)
-        slice_rep = np.repeat(u0, spans) + (np.arange(spans.sum()) - np.repeat(np.cumsum(spans) - spans, spans))
+        within = np.arange(spans.sum()) - np.repeat(np.cumsum(spans) - spans, spans)
+        slice_rep = np.repeat(u0, spans) + within
         order = np.argsort(slice_rep, kind="stable")
         seg_rep, slice_rep = seg_rep[order], slice_rep[order]
         starts = np.searchsorted(slice_rep, np.arange(n + 1))
