@@ -351,6 +351,7 @@ def fit(
     losses = [float(loss_of(z, terms))]
     done, result = terminate(y=z, state=state)
     steps = 0
+    last_finite = z
     while not bool(done) and steps < max_steps:
         z, state, _ = step(y=z, state=state)
         steps += 1
@@ -358,13 +359,17 @@ def fit(
         if progress is not None:
             progress(steps, losses[-1], time.perf_counter() - start - geometry_s)
         if not np.isfinite(losses[-1]):
+            # An undamped solver (Gauss-Newton) can overshoot into exp overflow: stop, and
+            # return the last point where the image was finite.
+            z = last_finite
             break
+        last_finite = z
         done, result = terminate(y=z, state=state)
     if bool(done):
         termination = ("converged" if result == optx.RESULTS.successful
                        else f"stopped: {optx.RESULTS[result]}")
     elif not np.isfinite(losses[-1]):
-        termination = "stopped: the loss became non-finite"
+        termination = "stopped: diverged (the loss became non-finite); kept the last finite point"
     else:
         termination = f"stopped: reached max_steps = {max_steps}"
     z_final = z
@@ -392,6 +397,9 @@ def _standard_errors(residuals, z, terms, names, scalar):
     jac = np.asarray(jax.jacfwd(r_fn)(flat), dtype=np.float64)
     r = np.asarray(r_fn(flat), dtype=np.float64)
     m, n = jac.shape
+    if not (np.all(np.isfinite(jac)) and np.all(np.isfinite(r))):
+        # Fires at a point where the image or its derivatives overflow: nothing is known.
+        return {name: None for name in names}, tuple(names)
     jtj = jac.T @ jac
     evals, evecs = np.linalg.eigh(jtj)
     null = (evals <= 1e-10 * max(evals.max(initial=0.0), 1e-300)) | (evals <= m * 1e-12)

@@ -152,3 +152,24 @@ def test_pruned_fit_image_within_the_stated_bound():
     image = np.asarray(fit_mod._image(terms, TRUE.kd, TRUE.ks, TRUE.shininess, TRUE.kappa))
     brightest = float(np.max(np.asarray(point_colors(hj.geometry_stage(dense), TRUE))))
     assert np.abs(image - exact).max() <= FIT_TRANSMITTANCE_CUTOFF * brightest
+
+
+def test_divergence_ends_cleanly(scene, target, monkeypatch):
+    """A step into overflow stops the fit with a reason and the last finite point."""
+    original = fit_mod._image
+
+    def overflowing(terms, kd, ks, shininess, kappa):
+        # Beyond κ = 5 the image overflows, as an undamped step into exp(z) can.
+        return jnp.where(kappa > 5.0, jnp.inf, original(terms, kd, ks, shininess, kappa))
+
+    monkeypatch.setattr(fit_mod, "_image", overflowing)
+    start = hj.ShadingParams(kd=TRUE.kd, ks=TRUE.ks, shininess=TRUE.shininess, kappa=4.0,
+                             ambient=TRUE.ambient)
+    far = np.asarray(hj.render(scene, hj.ShadingParams(kd=TRUE.kd, ks=TRUE.ks,
+                                                        shininess=TRUE.shininess, kappa=40.0)))
+    r = hj.fit(scene, far, fit=("kappa",), init=start, solver="gauss-newton")
+    assert r.termination.startswith("stopped: diverged")
+    assert not np.isfinite(r.loss[-1])  # the step that overflowed is recorded
+    # ... but the result is the last finite point, and nothing is claimed about it.
+    assert np.isfinite(float(r.params.kappa)) and float(r.params.kappa) <= 5.0
+    assert r.undetermined == () or all(r.std_error[n] is None for n in r.undetermined)
