@@ -39,6 +39,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from ._files import write_json
+
 __all__ = ["main", "configurations", "TARGETS", "STAGES"]
 
 # Scene of the benchmark: the default scene's camera and light (hairjax/scenes/default.toml).
@@ -510,26 +512,8 @@ def _finite_or_none(x):
 
 
 def _write_json_atomic(path: Path, data) -> None:
-    """Write JSON to a temporary file in the same folder, then rename it over `path`."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; give the usual mode
-        with os.fdopen(fd, "w") as f:
-            json.dump(_finite_or_none(data), f, indent=2, allow_nan=False)
-            f.write("\n")
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
+    """Write JSON atomically; non-finite numbers become null (strict JSON)."""
+    write_json(path, _finite_or_none(data), allow_nan=False)
 
 
 def main(args) -> int:

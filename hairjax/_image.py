@@ -1,16 +1,15 @@
 """Image files through OpenImageIO: EXR float for data, PNG 8-bit sRGB for viewing.
 
-Writes are atomic: the image goes to a temporary file in the target's folder and is
-renamed over the target only when complete, so an error never leaves a half-written file.
+Writes are atomic (`_files.atomic_path`): an error never leaves a half-written file.
 """
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
+
+from ._files import atomic_path
 
 __all__ = ["write_image", "read_image", "linear_to_srgb", "srgb_to_linear", "ImageError"]
 
@@ -47,10 +46,7 @@ def write_image(path, image) -> Path:
         fmt = "uint8"
     else:
         raise ImageError(f"{path}: unsupported image type {suffix!r} (use .exr or .png)")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=suffix, dir=path.parent)
-    os.close(fd)
-    try:
+    with atomic_path(path, suffix) as tmp:
         h, w, c = data.shape
         spec = oiio.ImageSpec(w, h, c, fmt)
         out = oiio.ImageOutput.create(tmp)
@@ -60,14 +56,6 @@ def write_image(path, image) -> Path:
         ok = out.close() and ok
         if not ok:
             raise ImageError(f"{path}: write failed: {out.geterror() or oiio.geterror()}")
-        # mkstemp creates the file private (0600); give it the permissions of a plain write.
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
     return path
 
 

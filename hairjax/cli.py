@@ -48,32 +48,21 @@ def _render(args) -> int:
 
 
 def _compare(args) -> int:
-    import json
-    import os
-    import tempfile
-
     from ._compare import compare, format_report
+    from ._files import write_json
     from ._scene_file import default_scene_path, load_scene
 
     report = compare(load_scene(args.scene or default_scene_path()), repeats=args.repeats)
     print(format_report(report))
     if args.json:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=args.json.parent, suffix=".json")
-        with os.fdopen(fd, "w") as f:
-            json.dump(report, f, indent=2)
-        os.replace(tmp, args.json)
-        print(f"wrote {args.json}")
+        print(f"wrote {write_json(args.json, report)}")
     return 0
 
 
 def _fit(args) -> int:
-    import json
-    import os
-    import tempfile
-
     import numpy as np
 
+    from ._files import write_json
     from ._fit import FITTABLE, FitError, fit
     from ._image import read_image, write_image
     from ._render import render
@@ -113,12 +102,7 @@ def _fit(args) -> int:
     print(f"{result.termination} after {result.steps} steps, {result.time_s:.2f} s "
           f"(+ {result.geometry_s:.2f} s geometry); RMSE {result.rmse:.4g}")
     if args.json:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=args.json.parent, suffix=".json")
-        with os.fdopen(fd, "w") as f:
-            json.dump(result.to_json(), f, indent=2)
-        os.replace(tmp, args.json)
-        print(f"wrote {args.json}")
+        print(f"wrote {write_json(args.json, result.to_json())}")
     if args.out:
         write_image(args.out, np.asarray(render(first, result.params)))
         print(f"wrote {args.out}")
