@@ -31,11 +31,12 @@ __all__ = ["Fragments", "rasterize", "ribbon_coverage"]
 _CHUNK = 1 << 20  # columns per kernel call: bounds peak memory to a few hundred MB
 
 
-def ribbon_coverage(d: np.ndarray, width: np.ndarray) -> np.ndarray:
-    """Coverage of a unit box at distance `d` from the ribbon axis by a ribbon of `width`."""
+def ribbon_coverage(d, width):
+    """Coverage of a unit box at distance `d` from the ribbon axis by a ribbon of `width`
+    (docs/model.md §5). The rasteriser's kernel calls this, so the tests check what renders."""
     half = 0.5 * width
-    return np.clip(np.minimum(d + PIXEL_HALF_EXTENT, half) - np.maximum(d - PIXEL_HALF_EXTENT, -half),
-                   0.0, 1.0)
+    return jnp.clip(jnp.minimum(d + PIXEL_HALF_EXTENT, half) - jnp.maximum(d - PIXEL_HALF_EXTENT, -half),
+                    0.0, 1.0)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -156,9 +157,7 @@ def _candidates(columns, rows, image_width, image_height, perspective):
     ry = py + 0.5 - y0
     s = (rx * dx + ry * dy) * inv_len
     dist = jnp.abs(rx * dy - ry * dx) * inv_len
-    half = 0.5 * width
-    cov = jnp.clip(jnp.minimum(dist + PIXEL_HALF_EXTENT, half)
-                   - jnp.maximum(dist - PIXEL_HALF_EXTENT, -half), 0.0, 1.0)
+    cov = ribbon_coverage(dist, width)
     inside = (px >= 0) & (px < image_width) & (py >= 0) & (py < image_height)
     # Padding columns have length 0 and fail s < L.
     valid = inside & (s >= 0) & (s < length)
