@@ -48,15 +48,14 @@ def tangents(points: np.ndarray, offsets: np.ndarray) -> np.ndarray:
     starts, ends = offsets[:-1], offsets[1:] - 1
     prev[starts] = starts
     nxt[ends] = ends
-    diff = points[nxt] - points[prev]
-    norm = np.linalg.norm(diff, axis=1, keepdims=True)
-    # Fires for repeated points and one-point strands: the tangent does not exist.
-    return np.where(norm > 0, diff / np.where(norm > 0, norm, 1.0), 0.0)
+    # _unit gives 0 for repeated points and one-point strands: the tangent does not exist.
+    return _unit(points[nxt] - points[prev])
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
     norm = np.linalg.norm(v, axis=-1, keepdims=True)
-    # Fires for a point light at a strand point or the eye at one: no direction, no light.
+    # Fires for zero vectors (a repeated point's tangent, a point light or the eye at a
+    # strand point): no direction, so no light.
     return np.where(norm > 0, v / np.where(norm > 0, norm, 1.0), 0.0)
 
 
@@ -81,7 +80,6 @@ class Setup:
     backdrop: np.ndarray         # [H*W, 3] what lies behind the hair: background or occluder
     opaque: np.ndarray           # [H*W] the occluder covers the pixel centre
     shadow: ShadowSetup | None
-    order: np.ndarray            # [E] draw order of segments
     timings: dict
 
 
@@ -203,7 +201,7 @@ def _prepare(scene: Scene) -> Setup:
         frag_pixel=pixel, frag_i0=segments[seg, 0].astype(np.int32), frag_t=frag_t,
         frag_strand=seg_strand[seg].astype(np.int32), frag_coverage=frag_coverage,
         frag_first=first, frag_last=last, backdrop=backdrop, opaque=opaque, shadow=shadow,
-        order=order, timings=timings,
+        timings=timings,
     )
 
 

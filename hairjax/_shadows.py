@@ -48,7 +48,6 @@ class ShadowSetup:
 
     method: str
     view: View
-    planes: np.ndarray | None
     frag_strand: np.ndarray
     frag_coverage: np.ndarray
     frag_cell: np.ndarray | None = None
@@ -127,12 +126,10 @@ def shadow_setup(points, segments, seg_strand, width, light, method: str, maps: 
                   frag_coverage=frags.coverage)
 
     if method == "opacity-maps":
-        delta = span / maps
         # A fragment in [D_j, D_{j+1}) counts towards planes j + 1 … N (strictly nearer).
         j = np.clip(np.floor(frame.slice_coordinate(frags.depth, maps)), 0, maps).astype(np.int64)
         plane, f = point_planes(frame, maps)
-        return ShadowSetup(method=method, planes=zmin + delta * np.arange(maps + 1),
-                           frag_cell=(j * resolution**2 + frags.pixel).astype(np.int32),
+        return ShadowSetup(method=method, frag_cell=(j * resolution**2 + frags.pixel).astype(np.int32),
                            plane=plane.astype(np.int32), f=f,
                            texel=np.where(inside, ty * resolution + tx, -1).astype(np.int32),
                            **common)
@@ -160,7 +157,7 @@ def shadow_setup(points, segments, seg_strand, width, light, method: str, maps: 
     has_any = valid & (stop > start)
     common["frag_strand"] = common["frag_strand"][order]
     common["frag_coverage"] = common["frag_coverage"][order]
-    return ShadowSetup(method=method, planes=None, frag_first=first,
+    return ShadowSetup(method=method, frag_first=first,
                        index=np.where(has_any, stop - 1, 0),
                        weight=np.where(has_any, 1.0 / (2 * r + 1) ** 2, 0.0), **common)
 
