@@ -198,13 +198,16 @@ def _point_terms(terms: _Terms, shininess, kappa):
     return kd_col, ks_col, -omega[:, None] * kd_col, -omega[:, None] * ks_col, dks_dp
 
 
-@jax.custom_jvp
-def _kd_ks_images(terms: _Terms, shininess, kappa):
+def _kd_ks_images_plain(terms: _Terms, shininess, kappa):
     """(K_d, K_s) images `[HW, 3]` for this κ and shininess (precomputed ones pass through)."""
     kd_col, ks_col, *_ = _point_terms(terms, shininess, kappa)
     kd_image = terms.kd_image if terms.kd_image is not None else composite(terms.geometry, kd_col)
     ks_image = terms.ks_image if terms.ks_image is not None else composite(terms.geometry, ks_col)
     return kd_image, ks_image
+
+
+# The same function with the one-pass derivative rule below.
+_kd_ks_images = jax.custom_jvp(_kd_ks_images_plain)
 
 
 @_kd_ks_images.defjvp
@@ -229,17 +232,10 @@ def _kd_ks_images_jvp(primals, tangents):
     return (kd_image, ks_image), (d_kd, d_ks)
 
 
-def _image(terms: _Terms, kd, ks, shininess, kappa):
-    """The RGB image [HW, 3] of one target for the given parameter values."""
-    kd_image, ks_image = _kd_ks_images(terms, shininess, kappa)
-    return terms.constant + kd[None, :] * kd_image + ks[None, :] * ks_image
-
-
-def _image_reference(terms: _Terms, kd, ks, shininess, kappa):
-    """The same image by plain autodiff-able code, for the tests of the custom JVP."""
-    kd_col, ks_col, *_ = _point_terms(terms, shininess, kappa)
-    kd_image = terms.kd_image if terms.kd_image is not None else composite(terms.geometry, kd_col)
-    ks_image = terms.ks_image if terms.ks_image is not None else composite(terms.geometry, ks_col)
+def _image(terms: _Terms, kd, ks, shininess, kappa, images=_kd_ks_images):
+    """The RGB image [HW, 3] of one target for the given parameter values.
+    (`images=_kd_ks_images_plain` gives plain autodiff, which the tests compare against.)"""
+    kd_image, ks_image = images(terms, shininess, kappa)
     return terms.constant + kd[None, :] * kd_image + ks[None, :] * ks_image
 
 
