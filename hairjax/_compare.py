@@ -8,7 +8,7 @@ import time
 import jax
 import numpy as np
 
-from ._render import _GEOMETRY_CACHE, _SETUP_CACHE, geometry_stage, render
+from ._render import forget, geometry_stage, render
 from ._scene import Scene
 
 __all__ = ["compare", "image_stats", "format_report"]
@@ -55,8 +55,7 @@ def compare(scene: Scene, repeats: int = 3) -> dict:
         tau_diff = float(np.abs(jax_tau - gl_tau).max(initial=0.0))
 
     def jax_full():
-        _SETUP_CACHE.pop(scene, None)
-        _GEOMETRY_CACHE.pop(scene, None)
+        forget(scene)
         jax.block_until_ready(render(scene))
 
     return {

@@ -34,7 +34,7 @@ from ._shadows import ShadowSetup, exact_opacity, opacity_maps, point_opacity, s
 
 __all__ = ["Setup", "Geometry", "prepare", "visibility_order", "sphere_hits", "to_light",
            "geometry_stage", "shading_stage", "composite", "point_colors", "render",
-           "render_profiled", "tangents"]
+           "render_profiled", "forget", "tangents"]
 
 
 def tangents(points: np.ndarray, offsets: np.ndarray) -> np.ndarray:
@@ -352,6 +352,13 @@ def render(scene: Scene, params: ShadingParams | None = None,
     return shading_stage(geometry_stage(scene, alpha), params)
 
 
+def forget(scene: Scene) -> None:
+    """Drop `scene`'s cached set-up and geometry stage, so the next render runs them all
+    again (for timing a full render)."""
+    _SETUP_CACHE.pop(scene, None)
+    _GEOMETRY_CACHE.pop(scene, None)
+
+
 def render_profiled(scene: Scene, params: ShadingParams | None = None):
     """Render and time each stage (block-until-ready between stages).
 
@@ -359,8 +366,7 @@ def render_profiled(scene: Scene, params: ShadingParams | None = None):
     prefixed with `geometry/`. Includes compilation on a first call.
     """
     params = scene.params if params is None else params
-    _SETUP_CACHE.pop(scene, None)
-    _GEOMETRY_CACHE.pop(scene, None)
+    forget(scene)
     t0 = time.perf_counter()
     setup = prepare(scene)
     t1 = time.perf_counter()
