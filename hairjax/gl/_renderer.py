@@ -47,10 +47,14 @@ def _set(prog, **values) -> None:
         uniform.value = value
 
 
+def _vec(v) -> tuple:
+    """A vector as the tuple of Python floats a moderngl uniform takes."""
+    return tuple(float(x) for x in np.asarray(v).ravel())
+
+
 def _view_uniforms(prefix: str, view) -> dict:
-    f = lambda v: tuple(float(x) for x in v)  # noqa: E731
-    return {f"{prefix}.origin": f(view.origin), f"{prefix}.forward": f(view.forward),
-            f"{prefix}.right": f(view.right), f"{prefix}.up": f(view.up),
+    return {f"{prefix}.origin": _vec(view.origin), f"{prefix}.forward": _vec(view.forward),
+            f"{prefix}.right": _vec(view.right), f"{prefix}.up": _vec(view.up),
             f"{prefix}.focal": float(view.focal), f"{prefix}.center": (float(view.cx), float(view.cy)),
             f"{prefix}.near": float(view.near) if np.isfinite(view.near) else -1e30,
             f"{prefix}.perspective": bool(view.perspective)}
@@ -140,8 +144,8 @@ def _light_uniforms(scene: Scene) -> dict:
         vector, point = d / np.linalg.norm(d), False
     else:
         vector, point = np.asarray(light.position, dtype=np.float64), True
-    return {"light_vector": tuple(float(x) for x in vector), "point_light": point,
-            "light_rgb": tuple(float(x) for x in light.color)}
+    return {"light_vector": _vec(vector), "point_light": point,
+            "light_rgb": _vec(light.color)}
 
 
 def _camera_pass(ctx, progs, scene: Scene, params: ShadingParams, strands) -> np.ndarray:
@@ -162,7 +166,7 @@ def _camera_pass(ctx, progs, scene: Scene, params: ShadingParams, strands) -> np
     try:
         fbo.use()
         ctx.viewport = (0, 0, w, h)
-        bg = tuple(float(x) for x in scene.background)
+        bg = _vec(scene.background)
         fbo.clear(*bg, 0.0, depth=1.0)
         common = dict(raster_size=(float(w), float(h)), depth_far=depth_far,
                       **_view_uniforms("view", view), **_light_uniforms(scene))
@@ -172,8 +176,8 @@ def _camera_pass(ctx, progs, scene: Scene, params: ShadingParams, strands) -> np
             ctx.depth_func = "<"
             fbo.depth_mask = True
             occ = scene.occluder
-            _set(progs["sphere"], center=tuple(occ.center), radius=float(occ.radius),
-                 albedo=tuple(occ.color), **common)
+            _set(progs["sphere"], center=_vec(occ.center), radius=float(occ.radius),
+                 albedo=_vec(occ.color), **common)
             sphere_vao = ctx.vertex_array(progs["sphere"], [])
             sphere_vao.render(moderngl.TRIANGLES, vertices=3)
             sphere_vao.release()
@@ -188,10 +192,10 @@ def _camera_pass(ctx, progs, scene: Scene, params: ShadingParams, strands) -> np
                           moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA)
         ctx.blend_equation = moderngl.FUNC_ADD
         prog = progs["camera"]
-        _set(prog, shade=True, eye=tuple(float(x) for x in view.origin),
-             **{"shading.kd": tuple(float(x) for x in np.asarray(params.kd)),
-                "shading.ks": tuple(float(x) for x in np.asarray(params.ks)),
-                "shading.ambient": tuple(float(x) for x in np.asarray(params.ambient)),
+        _set(prog, shade=True, eye=_vec(view.origin),
+             **{"shading.kd": _vec(params.kd),
+                "shading.ks": _vec(params.ks),
+                "shading.ambient": _vec(params.ambient),
                 "shading.shininess": float(params.shininess), "shading.kappa": float(params.kappa),
                 "shading.model": SHADING_MODEL_IDS[scene.shading_model]}, **common)
         vao = strands.vertex_array(prog, ibo)
@@ -200,7 +204,6 @@ def _camera_pass(ctx, progs, scene: Scene, params: ShadingParams, strands) -> np
         vao.release()
         check(ctx, "camera pass")
         data = np.frombuffer(color.read(), dtype="f4").reshape(h, w, 4)
-        fbo.depth_mask = True
         return data[::-1].copy()  # GL's row 0 is the bottom
     finally:
         ctx.disable(moderngl.BLEND | moderngl.DEPTH_TEST)
