@@ -250,8 +250,69 @@ def _solver(name: str, rtol: float, atol: float):
     if name == "dogleg":
         return optx.Dogleg(rtol=rtol, atol=atol), True
     if name == "bfgs":
-        return optx.BFGS(rtol=rtol, atol=atol), False
+        return _bfgs(rtol, atol), False
     raise FitError(f"unknown solver {name!r}; choose from {', '.join(SOLVERS)} (or lm, gn)")
+
+
+def _quiet(*args, **kwargs) -> None:
+    """optimistix's `verbose` hook: `fit` reports progress itself."""
+
+
+def _bfgs(rtol: float, atol: float):
+    """BFGS on ½‖r‖² over a flat z (docs/fitting.md, "BFGS"): optimistix's quasi-Newton
+    step and Armijo backtracking, with the initial Hessian scaled as Nocedal & Wright
+    (2006, §6.1) advise instead of left at the identity, and a scale-free test for skipping
+    an update. Both matter here:
+    - With H₀ = I the first step is −∇f, which grows with the pixel count; it threw a faint
+      Ks deep into the softplus's flat tail, where its gradient vanishes, and BFGS
+      "converged" with Ks = 0. Here the first step is −∇f/‖∇f‖ (unit length in z: one
+      e-fold of p or κ), and before the first update H is reset to (yᵀy / sᵀy)·I.
+    - optimistix updates only when sᵀy > ε (absolute). In float32 sᵀy falls below 1.2e-7
+      near the optimum of a small loss, every update was skipped and BFGS crawled on a stale
+      Hessian; here the test is sᵀy > ε‖s‖‖y‖."""
+    import lineax as lx
+    import optimistix as optx
+
+    def operator(matrix):
+        return lx.MatrixLinearOperator(matrix, lx.positive_semidefinite_tag)
+
+    class _BFGS(optx.AbstractBFGS):
+        rtol: float
+        atol: float
+        norm: Callable = optx.max_norm
+        use_inverse: bool = False
+        descent: optx.AbstractDescent = optx.NewtonDescent(linear_solver=lx.Cholesky())
+        search: optx.AbstractSearch = optx.BacktrackingArmijo()
+        verbose: Callable = _quiet
+
+        def init_hessian(self, y, f, grad):
+            # The state counts the updates made: 0 before the first step, 1 before the first
+            # (s, y) pair.
+            eye = jnp.eye(y.size, dtype=y.dtype)
+            return optx.FunctionInfo.EvalGradHessian(f, grad, operator(eye)), jnp.array(0)
+
+        def update_hessian(self, y, y_eval, f_info, f_eval_info, count):
+            g = f_eval_info.grad
+            s, dg = y_eval - y, g - f_info.grad
+            eye = jnp.eye(y.size, dtype=y.dtype)
+            g_norm = jnp.linalg.norm(g)
+            sy, yy = s @ dg, dg @ dg
+            # Fires when sᵀy is not positive beyond rounding (the curvature condition fails,
+            # and the update would make H indefinite): keep H.
+            ok = sy > jnp.finfo(sy.dtype).eps * jnp.linalg.norm(s) * jnp.sqrt(yy)
+            sy_safe = jnp.where(ok, sy, 1.0)  # fires with `ok` false: the value is unused
+            h = jnp.where(count == 0, jnp.where(g_norm > 0, g_norm, 1.0) * eye,
+                          jnp.where(count == 1, (yy / sy_safe) * eye, f_info.hessian.as_matrix()))
+            hs = h @ s
+            shs = s @ hs
+            # shs > 0 whenever ok (h is positive definite and s ≠ 0); guarded all the same.
+            shs_safe = jnp.where(ok & (shs > 0), shs, 1.0)
+            updated = h + jnp.outer(dg, dg) / sy_safe - jnp.outer(hs, hs) / shs_safe
+            h = jnp.where(ok & (shs > 0), updated, jnp.where(count == 1, f_info.hessian.as_matrix(), h))
+            info = optx.FunctionInfo.EvalGradHessian(f_eval_info.f, g, operator(h))
+            return info, count + jnp.where((count == 0) | ok, 1, 0)
+
+    return _BFGS(rtol=rtol, atol=atol)
 
 
 def fit(
@@ -325,8 +386,11 @@ def fit(
         return ShadingParams(kd=values["kd"], ks=values["ks"], shininess=values["shininess"],
                              kappa=values["kappa"], ambient=base.ambient)
 
+    # The solvers see one flat vector z (the fitted values in `names` order).
+    z, unravel = jax.flatten_util.ravel_pytree(to_z(init))
+
     def residuals(z, args):
-        p = to_params(z, init)
+        p = to_params(unravel(z), init)
         r = [t.sqrt_weight * (_image(t, p.kd, p.ks, p.shininess, p.kappa) - t.target) for t in args]
         return jnp.concatenate([x.ravel() for x in r])
 
@@ -337,7 +401,6 @@ def fit(
     fn = eqx.filter_jit(fn)
     loss_of = eqx.filter_jit(lambda z, args: 0.5 * jnp.sum(residuals(z, args) ** 2))
 
-    z = to_z(init)
     f_struct, aux_struct = jax.eval_shape(lambda: fn(z, terms))
     options, tags = {}, frozenset()
     step = eqx.filter_jit(eqx.Partial(opt.step, fn=fn, args=terms, options=options, tags=tags))
@@ -368,11 +431,10 @@ def fit(
         termination = "stopped: diverged (the loss became non-finite); kept the last finite point"
     else:
         termination = f"stopped: reached max_steps = {max_steps}"
-    z_final = z
-    fitted = to_params(z_final, init)
+    fitted = to_params(unravel(z), init)
     elapsed = time.perf_counter() - start - geometry_s
 
-    std_error, undetermined = _standard_errors(residuals, z_final, terms, names, scalar)
+    std_error, undetermined = _standard_errors(residuals, z, unravel, terms, names)
     n_pixels = float(sum(np.count_nonzero(np.asarray(t.sqrt_weight)) for t in terms)) * 3
     rmse = float(np.sqrt(2 * losses[-1] / max(n_pixels, 1.0)))
     return FitResult(params=fitted, initial=init, fitted=names, loss=losses, steps=steps,
@@ -380,7 +442,13 @@ def fit(
                      std_error=std_error, undetermined=undetermined, rmse=rmse)
 
 
-def _standard_errors(residuals, z, terms, names, scalar):
+def _jacobian(residuals, z, terms) -> tuple[np.ndarray, np.ndarray]:
+    """The residuals' Jacobian in z and the residuals, in float64 NumPy."""
+    jac = jax.jacfwd(residuals)(z, terms)
+    return np.asarray(jac, dtype=np.float64), np.asarray(residuals(z, terms), dtype=np.float64)
+
+
+def _standard_errors(residuals, flat, unravel, terms, names):
     """Standard errors from σ²(JᵀJ)⁻¹ in z, mapped to the parameters by the transforms'
     derivatives (delta method).
 
@@ -388,10 +456,7 @@ def _standard_errors(residuals, z, terms, names, scalar):
     1e-10·λ_max (numerically singular) or below m·1e-12: moving along it by one unit (an
     e-fold of shininess or κ) changes the m residuals by under 1e-6 RMS, below float32
     resolution of an image. Parameters with weight in such a direction get no error."""
-    flat, unravel = jax.flatten_util.ravel_pytree(z)
-    r_fn = lambda v: residuals(unravel(v), terms)  # noqa: E731
-    jac = np.asarray(jax.jacfwd(r_fn)(flat), dtype=np.float64)
-    r = np.asarray(r_fn(flat), dtype=np.float64)
+    jac, r = _jacobian(residuals, flat, terms)
     m, n = jac.shape
     if not (np.all(np.isfinite(jac)) and np.all(np.isfinite(r))):
         # Fires at a point where the image or its derivatives overflow: nothing is known.
@@ -403,11 +468,14 @@ def _standard_errors(residuals, z, terms, names, scalar):
     inv = (evecs[:, ~null] / evals[~null]) @ evecs[:, ~null].T
     var_z = sigma2 * np.diag(inv)
     in_null = (np.abs(evecs[:, null]) > 0.1).any(axis=1) if null.any() else np.zeros(n, bool)
-    std, undetermined, offset = {}, [], 0
+    z = unravel(flat)
+    # Where each parameter's values sit in the flat vector (ravel_pytree orders a dict's
+    # keys by name, not by `names`).
+    index = unravel(jnp.arange(flat.size, dtype=flat.dtype))
+    std, undetermined = {}, []
     for name in names:
         size = int(np.size(z[name]))
-        sl = slice(offset, offset + size)
-        offset += size
+        sl = np.asarray(index[name]).astype(int).ravel()
         if in_null[sl].any():
             std[name] = None
             undetermined.append(name)

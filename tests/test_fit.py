@@ -98,6 +98,85 @@ def test_standard_errors_with_noise(scene, target):
                       < 5 * se + 1e-12), name
 
 
+def test_standard_errors_equal_the_parameter_space_formula(scene, target):
+    """σ²(JₓᵀJₓ)⁻¹ with Jₓ taken by autodiff of the renderer in the parameters themselves
+    equals the fit's delta-method errors from z (exact at first order). Names in an order
+    other than the flat vector's (which sorts them) and an RGB Kd check the bookkeeping."""
+    import jax
+
+    rng = np.random.default_rng(1)
+    noisy = target[..., :3] + rng.normal(0, 0.01, target[..., :3].shape)
+    names = ("shininess", "kd", "kappa")
+    r = hj.fit(scene, noisy, fit=names, init=INIT)
+
+    def image(x):
+        p = hj.ShadingParams(kd=x[1:4], ks=r.params.ks, shininess=x[0], kappa=x[4],
+                             ambient=r.params.ambient)
+        return hj.render(scene, p)[..., :3].ravel()
+
+    x = jnp.concatenate([r.params.shininess[None], r.params.kd, r.params.kappa[None]])
+    jac = np.asarray(jax.jacfwd(image)(x))
+    res = np.asarray(image(x)) - noisy.ravel()
+    sigma2 = res @ res / (res.size - x.size)
+    se = np.sqrt(sigma2 * np.diag(np.linalg.inv(jac.T @ jac)))
+    got = np.concatenate([[r.std_error["shininess"]], r.std_error["kd"], [r.std_error["kappa"]]])
+    # 1e-3: the fit's image leaves out fragments behind T < 1e-5 (test above); the errors
+    # of different parameters differ by far more than that.
+    np.testing.assert_allclose(got, se, rtol=1e-3)
+
+
+def test_bfgs_on_a_faint_highlight_in_float32():
+    """Ks ≈ 0.02 with a sharp highlight, in float32 (as the CLI and experiments run). With
+    optimistix's BFGS the updates were skipped (sᵀy < 1.2e-7) and it crawled 300 steps to
+    Ks channels 40 % off; with a scale-free skip test and a unit first step it converges."""
+    import jax
+
+    with jax.enable_x64(False):
+        truth = hj.ShadingParams(kd=(0.65, 0.3, 0.09), ks=0.0165, shininess=178.0, kappa=12.6)
+        scene = small_furball_scene(strands=400, size=48)
+        target = np.asarray(hj.render(scene, truth))
+        assert target.dtype == np.float32
+        r = hj.fit(scene, target, solver="bfgs", max_steps=300,
+                   init=hj.ShadingParams(kd=0.5, ks=0.3, shininess=40.0, kappa=2.0))
+    assert r.termination == "converged" and r.undetermined == ()
+    # 1e-3: the issue's noise-free bound.
+    for name in ("kd", "ks", "shininess", "kappa"):
+        assert rel(getattr(r.params, name), getattr(truth, name)) < 1e-3, name
+
+
+def test_bfgs_first_step_has_unit_length():
+    """The first step is −∇f/‖∇f‖ whatever the loss's scale (a 1e6-times steeper bowl)."""
+    import jax
+
+    opt = fit_mod._bfgs(rtol=1e-8, atol=1e-10)
+    fn = lambda z, args: (1e6 * jnp.sum((z - 3.0) ** 2), None)  # noqa: E731
+    z0 = jnp.zeros(4)
+    f_struct, aux_struct = jax.eval_shape(lambda: fn(z0, None))
+    state = opt.init(fn, z0, None, {}, f_struct, aux_struct, frozenset())
+    z, state, _ = opt.step(fn, z0, None, {}, state, frozenset())
+    np.testing.assert_allclose(np.linalg.norm(state.y_eval - z0), 1.0, rtol=1e-12)
+
+
+def test_bfgs_update_satisfies_the_secant_equation_at_small_scale():
+    """After the first pair, H s = y even when sᵀy ≈ 1e-12 (optimistix skips below ε)."""
+    import optimistix as optx
+
+    opt = fit_mod._bfgs(rtol=1e-8, atol=1e-10)
+    z = jnp.zeros(3)
+    info, count = opt.init_hessian(z, jnp.asarray(0.0), z)
+    g0 = jnp.asarray([1e-6, -2e-6, 5e-7])
+    info, count = opt.update_hessian(z, z, info, optx.FunctionInfo.EvalGrad(1.0, g0), count)
+    s = jnp.asarray([1e-6, 2e-6, -1e-6])
+    y = jnp.asarray([2e-6, 1e-6, -3e-6])  # sᵀy = 7e-12 > 0
+    for _ in range(2):  # the first pair (H rescaled, then updated) and a second one
+        info, count = opt.update_hessian(z, z + s, info, optx.FunctionInfo.EvalGrad(1.0, g0 + y),
+                                         count)
+        np.testing.assert_allclose(info.hessian.as_matrix() @ s, y, rtol=1e-9)
+        z, g0 = z + s, g0 + y
+        s, y = jnp.asarray([-1e-6, 1e-6, 2e-6]), jnp.asarray([-1e-6, 3e-6, 4e-6])
+    assert int(count) == 3
+
+
 @pytest.mark.parametrize("kwargs, message", [
     (dict(fit=("kd", "gloss")), "unknown parameter 'gloss'"),
     (dict(solver="adam"), "unknown solver"),
