@@ -78,14 +78,15 @@ def _basis(forward: np.ndarray, up_hint: np.ndarray) -> tuple[np.ndarray, np.nda
 
 
 def camera_view(camera) -> View:
-    """The camera's view: `target` lands at (W/2, H/2); world up is up in the image."""
+    """The camera's view: `target` lands at (W/2, H/2) + offset; world up is up in the image."""
     eye = np.asarray(camera.eye, dtype=np.float64)
     forward = np.asarray(camera.target, dtype=np.float64) - eye
     forward /= np.linalg.norm(forward)
     right, up = _basis(forward, np.asarray(camera.up, dtype=np.float64))
     focal = 0.5 * camera.height / np.tan(np.radians(camera.fov) / 2)
     return View(eye, forward, right, up, camera.width, camera.height, float(focal),
-                camera.width / 2, camera.height / 2, True, camera.near)
+                camera.width / 2 + camera.offset[0], camera.height / 2 + camera.offset[1], True,
+                camera.near)
 
 
 def light_view(light, points: np.ndarray, resolution: int, margin: int) -> View:

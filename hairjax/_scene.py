@@ -42,7 +42,9 @@ class Camera:
     Images are `[height, width, 4]`, row 0 at the top; pixel (i, j) has its centre at
     (i + 0.5, j + 0.5); `target` projects to (width/2, height/2); world `up` is up.
     `near` (world units) defaults to 1e-3 × |target − eye|; segments with an endpoint
-    nearer than it are not drawn.
+    nearer than it are not drawn. `offset` (pixels, each in [-0.5, 0.5]) shifts the image:
+    `target` projects to (width/2 + offset[0], height/2 + offset[1]); supersampling averages
+    images rendered with a grid of such offsets (`hairjax.supersample`).
     """
 
     eye: tuple[float, float, float] = (0.0, 0.0, 4.0)
@@ -52,6 +54,7 @@ class Camera:
     width: int = 512
     height: int = 512
     near: float | None = None
+    offset: tuple[float, float] = (0.0, 0.0)
 
     def __post_init__(self):
         eye = _vec3("camera.eye", self.eye)
@@ -73,9 +76,15 @@ class Camera:
             near = 1e-3 * float(np.linalg.norm(d))
         if not (np.isfinite(near) and near > 0):
             raise SceneError(f"camera.near must be positive, got {self.near!r}")
+        try:
+            offset = np.asarray(self.offset, dtype=np.float64)
+        except (TypeError, ValueError):
+            offset = np.full(1, np.nan)  # not numbers: refused below
+        if offset.shape != (2,) or not np.all(np.abs(offset) <= 0.5):
+            raise SceneError(f"camera.offset must be two numbers in [-0.5, 0.5], got {self.offset!r}")
         for key, v in (("eye", eye), ("target", target), ("up", up), ("fov", float(self.fov)),
                        ("width", int(self.width)), ("height", int(self.height)),
-                       ("near", float(near))):
+                       ("near", float(near)), ("offset", (float(offset[0]), float(offset[1])))):
             object.__setattr__(self, key, v)
 
 

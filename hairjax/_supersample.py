@@ -1,0 +1,45 @@
+"""Supersampling: the box-filtered average of images rendered on a grid of sub-pixel offsets.
+
+Each of the s × s images is a full render whose camera is shifted by an offset
+((i + ½)/s − ½, (j + ½)/s − ½) pixels (`Camera.offset`), so the average samples every
+pixel at s² positions spread evenly over its area. Ribbon widths stay in pixels and the
+light's view does not move: only what the camera sees is resampled (docs/model.md §12).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+
+import numpy as np
+
+from ._scene import Scene
+
+__all__ = ["supersample", "supersample_offsets", "shifted"]
+
+
+def supersample_offsets(s: int) -> list[tuple[float, float]]:
+    """The s² camera offsets, in pixels, of an s × s supersampling grid."""
+    if isinstance(s, bool) or int(s) != s or s < 1:
+        raise ValueError(f"supersampling must be a positive integer, got {s!r}")
+    steps = (np.arange(int(s)) + 0.5) / s - 0.5
+    return [(float(x), float(y)) for y in steps for x in steps]
+
+
+def shifted(scene: Scene, offset: tuple[float, float]) -> Scene:
+    """`scene` with its camera shifted by `offset` pixels."""
+    return scene.replace(camera=dataclasses.replace(scene.camera, offset=offset))
+
+
+def supersample(render: Callable[[Scene], object], scene: Scene, s: int):
+    """The mean of `render(shifted(scene, o))` over the s × s offsets. `render` returns an
+    image (NumPy or JAX: the mean is taken with the array's own operators, so a JAX
+    render stays differentiable)."""
+    offsets = supersample_offsets(s)
+    if offsets == [(0.0, 0.0)]:
+        return render(scene)
+    total = None
+    for o in offsets:
+        image = render(shifted(scene, o))
+        total = image if total is None else total + image
+    return total / len(offsets)
