@@ -1,4 +1,4 @@
-"""The `hairjax` command line: render, compare, fit, info, bench."""
+"""The `hairjax` command line: render, compare, fit, sweep, info, bench."""
 
 from __future__ import annotations
 
@@ -109,6 +109,42 @@ def _fit(args) -> int:
     return 0
 
 
+def _sweep(args) -> int:
+    import dataclasses
+
+    from ._scene_file import default_scene_path, load_scene
+    from ._sweep import KNOBS, PATHS, QUICK_KNOBS, SweepError, load_points, run_sweep
+    from ._sweep_report import write_report
+
+    table = QUICK_KNOBS if args.quick else KNOBS
+    names = [k.strip() for k in args.knobs.split(",") if k.strip()] if args.knobs else list(table)
+    unknown = [k for k in names if k not in KNOBS]
+    if unknown:
+        raise SweepError(f"unknown knob {unknown[0]!r}; knobs: {', '.join(KNOBS)}")
+    paths = [p.strip() for p in args.paths.split(",") if p.strip()]
+    if any(p not in PATHS for p in paths) or not paths:
+        raise SweepError(f"--paths takes a comma list of {', '.join(PATHS)}, got {args.paths!r}")
+    scene = load_scene(args.scene or default_scene_path())
+    if args.size:
+        scene = scene.replace(camera=dataclasses.replace(scene.camera, width=args.size,
+                                                         height=args.size))
+    try:
+        points = run_sweep(scene, args.out, knobs={k: table[k] for k in names}, paths=paths,
+                           repeats=args.repeats, restart=args.restart, progress=sys.stderr.isatty())
+    except KeyboardInterrupt:
+        print(f"interrupted: {len(load_points(args.out))} points kept in {args.out}; "
+              "run the same command again to resume", file=sys.stderr)
+        return 130
+    import json
+
+    config = json.loads((args.out / "sweep.json").read_text())
+    files = write_report(args.out, points, config)
+    print((args.out / "summary.md").read_text().split("## All points")[0].rstrip())
+    for f in files.values():
+        print(f"wrote {f}")
+    return 0
+
+
 def _info(args) -> int:
     from ._io import format_info, hair_info, load_hair
 
@@ -156,6 +192,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, help="render the first scene with the fitted parameters")
     p.set_defaults(func=_fit)
 
+    p = sub.add_parser("sweep", help="error against run time, one quality knob at a time")
+    p.add_argument("scene", nargs="?", type=Path, help="scene TOML file (default: built-in)")
+    p.add_argument("--out", type=Path, default=Path("out/sweep"),
+                   help="folder for points.jsonl, sweep.csv, pareto.png, summary.md (resumable)")
+    p.add_argument("--knobs", help="comma list among maps, map_resolution, bins, width, "
+                                   "supersampling (default: all)")
+    p.add_argument("--paths", default="jax,gl", help="jax, gl or both (default)")
+    p.add_argument("--repeats", type=int, default=3, help="timed renders per point (median)")
+    p.add_argument("--size", type=int, help="render at SIZE × SIZE instead of the scene's size")
+    p.add_argument("--quick", action="store_true", help="a few values per knob")
+    p.add_argument("--restart", action="store_true", help="discard finished points in --out")
+    p.set_defaults(func=_sweep)
+
     p = sub.add_parser("info", help="summarise a hair file (.hair, .tfx, .ply)")
     p.add_argument("file", type=Path)
     p.set_defaults(func=_info)
@@ -194,7 +243,7 @@ def main(argv=None) -> int:
     from .gl import GLError, GLUnavailable
 
     args = build_parser().parse_args(argv)
-    if args.command in ("render", "bench", "compare", "fit"):
+    if args.command in ("render", "bench", "compare", "fit", "sweep"):
         _enable_compilation_cache()
     try:
         return args.func(args)

@@ -1,0 +1,312 @@
+"""Error against run time: one quality knob at a time, both renderers (issue 5, §1).
+
+`run_sweep(scene, out)` renders the scene at every value of every knob, with the JAX path
+and the GL path, and measures each image against that path's converged reference: exact
+shadows, exact ordering, the finest supersampling swept. Each finished point is appended
+to `points.jsonl` at once, so an interrupted sweep resumes where it stopped; the report
+(`hairjax/_sweep_report.py`) is built from that file.
+
+Knobs (each point changes one; the others keep the scene's settings):
+- `maps`: number of opacity maps N; `map_resolution`: their size in texels;
+- `bins`: visibility bins, and `exact` (a full depth sort);
+- `width`: ribbons f× as wide with opacity a/f (the same opacity per unit length until a/f
+  reaches 1), against the reference at f = 1;
+- `supersampling`: s × s renders on sub-pixel offsets, averaged (`hairjax.supersample`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import os
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from ._files import atomic_path, write_json
+from ._scene import Ordering, Scene
+from ._supersample import supersample
+
+__all__ = ["KNOBS", "QUICK_KNOBS", "PATHS", "SweepError", "run_sweep", "load_points", "knob_scene"]
+
+KNOBS: dict[str, tuple] = {
+    "maps": (1, 2, 4, 8, 16, 32, 64, 128, 256, 512),
+    "map_resolution": (64, 128, 256, 512, 1024, 2048),
+    "bins": (1, 4, 16, 64, 256, 1024, 4096, "exact"),
+    "width": (0.25, 0.5, 1.0, 2.0, 4.0),
+    "supersampling": (1, 2, 3, 4),
+}
+# A few values per knob, for a smoke test and the notebook's test run.
+QUICK_KNOBS: dict[str, tuple] = {
+    "maps": (1, 4, 16),
+    "map_resolution": (32, 64),
+    "bins": (1, 16, "exact"),
+    "width": (0.5, 1.0, 2.0),
+    "supersampling": (1, 2),
+}
+PATHS = ("jax", "gl")
+_SHADOW_KNOBS = ("maps", "map_resolution")
+
+
+class SweepError(ValueError):
+    """Bad sweep input, or an output folder that holds a different sweep."""
+
+
+def knob_scene(scene: Scene, knob: str, value) -> tuple[Scene, int]:
+    """The scene with one knob set, and the supersampling factor to render it with."""
+    if knob == "maps":
+        return scene.replace(shadows=dataclasses.replace(scene.shadows, maps=int(value))), 1
+    if knob == "map_resolution":
+        return scene.replace(shadows=dataclasses.replace(scene.shadows, resolution=int(value))), 1
+    if knob == "bins":
+        ordering = Ordering("exact") if value == "exact" else Ordering("bins", int(value))
+        return scene.replace(ordering=ordering), 1
+    if knob == "width":
+        f = float(value)
+        strands = scene.strands
+        return scene.replace(strands=strands.replace(width=strands.width * f,
+                                                     alpha=np.minimum(strands.alpha / f, 1.0))), 1
+    if knob == "supersampling":
+        return scene, int(value)
+    raise SweepError(f"unknown knob {knob!r}; knobs: {', '.join(KNOBS)}")
+
+
+def reference_scene(scene: Scene, knobs: dict) -> tuple[Scene, int]:
+    """Exact shadows (when the scene has shadows) at the scene's map resolution, exact
+    ordering, the finest supersampling swept.
+
+    The resolution stays the scene's: ribbons are w texels wide in the light's view
+    (docs/model.md §7), so a finer map draws thinner hair and Ω does not converge as the
+    resolution grows; the `map_resolution` knob shows how far it moves instead."""
+    shadows = (scene.shadows if scene.shadows.method == "none"
+               else dataclasses.replace(scene.shadows, method="exact"))
+    s = max(knobs.get("supersampling", (1,)))
+    return scene.replace(shadows=shadows, ordering=Ordering("exact")), int(s)
+
+
+def _renderer(path: str) -> Callable[[Scene], tuple[np.ndarray, np.ndarray | None]]:
+    """A function rendering a scene with one path to (image [H, W, 4], Ω per point)."""
+    if path == "jax":
+        import jax
+
+        from ._render import forget, geometry_stage, render
+
+        def run(scene):
+            forget(scene)  # time the whole render, not a cached geometry stage
+            image = np.asarray(jax.block_until_ready(render(scene)))
+            omega = geometry_stage(scene).omega
+            forget(scene)  # the sweep renders hundreds of scenes: keep no geometry alive
+            return image, None if omega is None else np.asarray(omega)
+
+        return run
+    if path == "gl":
+        from .gl import render_gl
+
+        def run(scene):
+            result = render_gl(scene)
+            return result.image, result.omega
+
+        return run
+    raise SweepError(f"unknown path {path!r}; paths: {', '.join(PATHS)}")
+
+
+def _measure(run, scene: Scene, s: int, repeats: int):
+    """(image, Ω, median seconds, all seconds): one untimed warm-up (compilation, shader
+    builds), then `repeats` timed renders."""
+    omega = {}
+
+    def image_of(sc):
+        image, om = run(sc)
+        omega.setdefault("first", om)
+        return image
+
+    image = supersample(image_of, scene, s)
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        supersample(lambda sc: run(sc)[0], scene, s)
+        times.append(time.perf_counter() - start)
+    return np.asarray(image), omega["first"], float(np.median(times)), times
+
+
+def _errors(image: np.ndarray, omega, reference: dict, kappa: float) -> dict:
+    rgb, ref = image[..., :3].astype(np.float64), reference["image"][..., :3]
+    diff = rgb - ref
+    rmse = float(np.sqrt(np.mean(diff**2)))
+    out = {"rmse": rmse, "max_abs": float(np.abs(diff).max()),
+           "rel_rmse": rmse / reference["peak"], "tau_rmse": None, "tau_max": None}
+    if omega is not None and reference["omega"] is not None:
+        dtau = np.exp(-kappa * np.asarray(omega, np.float64)) - np.exp(-kappa * reference["omega"])
+        out["tau_rmse"] = float(np.sqrt(np.mean(dtau**2)))
+        out["tau_max"] = float(np.abs(dtau).max())
+    return out
+
+
+def scene_digest(scene: Scene) -> str:
+    """A hash of everything that changes the image, to tell one sweep's folder from another's."""
+    h = hashlib.sha256()
+    s = scene.strands
+    for a in (s.points, s.offsets, s.alpha, s.width, s.color):
+        if a is not None:
+            h.update(np.ascontiguousarray(a).tobytes())
+    h.update(repr((scene.camera, scene.light, scene.shading_model, scene.shadows, scene.ordering,
+                   scene.occluder, scene.background)).encode())
+    h.update(np.asarray([np.asarray(x, np.float64).ravel() for x in
+                         (scene.params.kd, scene.params.ks, scene.params.ambient)]).tobytes())
+    h.update(np.asarray([scene.params.shininess, scene.params.kappa], np.float64).tobytes())
+    return h.hexdigest()[:16]
+
+
+def load_points(out: Path) -> list[dict]:
+    """The finished points of the sweep in `out` (a line cut short by an interruption is
+    ignored: it is redone on resume)."""
+    path = Path(out) / "points.jsonl"
+    if not path.exists():
+        return []
+    points = []
+    for line in path.read_text().splitlines():
+        try:
+            points.append(json.loads(line))
+        except json.JSONDecodeError:
+            continue  # fires only for a last line cut short by a kill
+    return points
+
+
+def _append(out: Path, point: dict) -> None:
+    with open(Path(out) / "points.jsonl", "a") as f:
+        f.write(json.dumps(point) + "\n")
+        f.flush()
+        os.fsync(f.fileno())
+
+
+def _rewrite(out: Path, points: list[dict]) -> None:
+    with atomic_path(Path(out) / "points.jsonl", ".jsonl") as tmp:
+        Path(tmp).write_text("".join(json.dumps(p) + "\n" for p in points))
+
+
+def _check_config(out: Path, config: dict, restart: bool) -> None:
+    path = out / "sweep.json"
+    if path.exists() and not restart:
+        old = json.loads(path.read_text())
+        same = {k: old.get(k) for k in ("scene_digest", "repeats", "reference")}
+        if same != {k: config[k] for k in same}:
+            raise SweepError(f"{out} holds a sweep of other settings ({old.get('scene')}, "
+                             f"repeats {old.get('repeats')}); choose another --out or pass --restart")
+    if restart:
+        for name in ("points.jsonl", *[f"reference_{p}.npz" for p in PATHS]):
+            (out / name).unlink(missing_ok=True)
+    write_json(path, config)
+
+
+def _reference(out: Path, path: str, run, scene: Scene, knobs: dict, repeats: int) -> dict:
+    """The path's converged reference, rendered once and kept in `out`."""
+    file = out / f"reference_{path}.npz"
+    if file.exists():
+        data = np.load(file)
+        omega = data["omega"] if data["omega"].size else None
+        return {"image": data["image"], "omega": omega, "peak": float(data["peak"]),
+                "time_s": float(data["time_s"])}
+    ref_scene, s = reference_scene(scene, knobs)
+    image, omega, median, _ = _measure(run, ref_scene, s, repeats)
+    image = image.astype(np.float64)
+    # The peak normalises the relative RMSE; a black reference would make every error
+    # infinite, so it fires only for an empty scene, which is refused.
+    peak = float(image[..., :3].max())
+    if not peak > 0:
+        raise SweepError("the reference image is black: nothing to measure errors against")
+    omega = None if omega is None else np.asarray(omega, np.float64)
+    with atomic_path(file, ".npz") as tmp:
+        with open(tmp, "wb") as f:
+            np.savez(f, image=image, omega=np.zeros(0) if omega is None else omega, peak=peak,
+                     time_s=median)
+    return {"image": image, "omega": omega, "peak": peak, "time_s": median}
+
+
+def run_sweep(scene: Scene, out, *, knobs: dict | None = None, paths: Sequence[str] = PATHS,
+              repeats: int = 3, restart: bool = False, progress: bool = True) -> list[dict]:
+    """Sweep `knobs` (name → values; default `KNOBS`) for `paths` and return all points.
+
+    A point is a dict: path, knob, value, rmse, max_abs, rel_rmse (RMSE over the reference's
+    peak), tau_rmse and tau_max (per-point τ = exp(−κΩ) against the reference's, None
+    without shadows), time_s (median of `repeats`), times. Points already in `out` are
+    kept, not redone."""
+    knobs = dict(KNOBS if knobs is None else knobs)
+    for k in knobs:
+        if k not in KNOBS:
+            raise SweepError(f"unknown knob {k!r}; knobs: {', '.join(KNOBS)}")
+    for p in paths:
+        if p not in PATHS:
+            raise SweepError(f"unknown path {p!r}; paths: {', '.join(PATHS)}")
+    if repeats < 1:
+        raise SweepError(f"repeats must be at least 1, got {repeats}")
+    if scene.shadows.method == "none":
+        # A scene without shadows has no shadow knobs to turn.
+        knobs = {k: v for k, v in knobs.items() if k not in _SHADOW_KNOBS}
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    config = {"scene": scene.name, "scene_digest": scene_digest(scene), "repeats": repeats,
+              "reference": {"shadows": ("none" if scene.shadows.method == "none"
+                                        else f"exact at {scene.shadows.resolution}²"),
+                            "ordering": "exact",
+                            "supersampling": int(max(knobs.get("supersampling", (1,))))},
+              "knobs": {k: list(v) for k, v in knobs.items()}, "paths": list(paths),
+              "size": [scene.camera.width, scene.camera.height]}
+    _check_config(out, config, restart)
+
+    finished = load_points(out)
+    _rewrite(out, finished)  # drops a line cut short, so the next append starts a fresh line
+    done = {(p["path"], p["knob"], json.dumps(p["value"])) for p in finished}
+    todo = [(path, knob, value) for path in paths for knob, values in knobs.items()
+            for value in values if (path, knob, json.dumps(value)) not in done]
+    kappa = float(np.asarray(scene.params.kappa))
+    with _progress(progress, len(todo), len(done)) as advance:
+        runs = {}
+        references = {}
+        for path, knob, value in todo:
+            if path not in runs:
+                runs[path] = _renderer(path)
+                advance(f"{path} reference")
+                references[path] = _reference(out, path, runs[path], scene, knobs, repeats)
+            advance(f"{path} {knob} = {value}")
+            variant, s = knob_scene(scene, knob, value)
+            image, omega, median, times = _measure(runs[path], variant, s, repeats)
+            point = {"path": path, "knob": knob, "value": value, "time_s": median, "times": times,
+                     **_errors(image, omega, references[path], kappa)}
+            _append(out, point)
+            advance(None)
+    return load_points(out)
+
+
+class _progress:
+    """A rich progress bar over the sweep's points (plain lines when output is no terminal)."""
+
+    def __init__(self, enabled: bool, total: int, done: int):
+        self.enabled, self.total, self.done = enabled, total, done
+
+    def __enter__(self):
+        if not self.enabled:
+            return lambda label: None
+        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+        self.bar = Progress(TextColumn("{task.description:<28}"), BarColumn(), MofNCompleteColumn(),
+                            TimeElapsedColumn())
+        self.bar.start()
+        if self.done:
+            self.bar.console.print(f"resuming: {self.done} points already done")
+        task = self.bar.add_task("sweep", total=self.total)
+
+        def advance(label):
+            if label is None:
+                self.bar.advance(task)
+            else:
+                self.bar.update(task, description=label)
+
+        return advance
+
+    def __exit__(self, *exc):
+        if self.enabled:
+            self.bar.stop()
+        return False

@@ -1,0 +1,160 @@
+"""`hairjax sweep` (hairjax/_sweep.py, _sweep_report.py): points, resuming, the report."""
+
+import json
+
+import numpy as np
+import pytest
+from helpers import small_furball_scene
+
+import hairjax._sweep as sweep_mod
+from hairjax import cli
+from hairjax._sweep import SweepError, knob_scene, load_points, run_sweep
+from hairjax._sweep_report import cheapest, summary_markdown, write_report
+
+KNOBS = {"bins": (1, "exact"), "maps": (2, 8)}
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return small_furball_scene(strands=60, size=24, maps=4, resolution=16)
+
+
+def test_points_and_their_errors(scene, tmp_path, gl):
+    points = run_sweep(scene, tmp_path, knobs=KNOBS, repeats=1, progress=False)
+    assert {(p["path"], p["knob"], str(p["value"])) for p in points} == {
+        (path, k, str(v)) for path in ("jax", "gl") for k, vs in KNOBS.items() for v in vs}
+    for p in points:
+        assert p["time_s"] > 0 and len(p["times"]) == 1
+        assert np.isfinite(p["rmse"]) and p["max_abs"] >= p["rmse"] >= 0
+        assert p["tau_rmse"] is not None and p["tau_max"] >= p["tau_rmse"]
+    # The scene's opacity maps against the exact reference: a real, non-zero error.
+    assert all(p["tau_max"] > 1e-3 for p in points)
+    # Each path is measured against its own reference, rendered once and kept.
+    assert (tmp_path / "reference_jax.npz").exists() and (tmp_path / "reference_gl.npz").exists()
+
+
+def test_a_point_with_the_reference_settings_has_no_error(scene, tmp_path):
+    exact = scene.replace(shadows=scene.shadows.__class__("exact", 4, 16))
+    points = run_sweep(exact, tmp_path, knobs={"bins": ("exact", 4)}, paths=("jax",), repeats=1,
+                       progress=False)
+    by_value = {p["value"]: p for p in points}
+    assert by_value["exact"]["rmse"] == 0.0 and by_value["exact"]["tau_max"] == 0.0
+    assert by_value[4]["rmse"] > 0.0  # four bins do change the order
+
+
+def test_resume_redoes_nothing_and_drops_a_cut_line(scene, tmp_path, monkeypatch):
+    knobs = {"bins": (1, 4, "exact")}
+    run_sweep(scene, tmp_path, knobs=knobs, paths=("jax",), repeats=1, progress=False)
+    lines = (tmp_path / "points.jsonl").read_text().splitlines()
+    # Simulate a kill while the last point was being written.
+    (tmp_path / "points.jsonl").write_text("\n".join(lines[:2]) + "\n" + lines[2][:15])
+    assert len(load_points(tmp_path)) == 2
+    calls = []
+    original = sweep_mod._measure
+    monkeypatch.setattr(sweep_mod, "_measure", lambda *a: calls.append(a[1]) or original(*a))
+    points = run_sweep(scene, tmp_path, knobs=knobs, paths=("jax",), repeats=1, progress=False)
+    assert len(calls) == 1 and len(points) == 3  # only the cut point, reference kept on disk
+    assert sorted(str(p["value"]) for p in points) == ["1", "4", "exact"]
+
+
+def test_interrupted_sweep_keeps_finished_points(scene, tmp_path, monkeypatch):
+    original = sweep_mod._measure
+    count = {"n": 0}
+
+    def flaky(*args):
+        count["n"] += 1
+        if count["n"] == 3:  # the reference, one point, then Ctrl-C
+            raise KeyboardInterrupt
+        return original(*args)
+
+    monkeypatch.setattr(sweep_mod, "_measure", flaky)
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(scene, tmp_path, knobs={"bins": (1, 4, 16)}, paths=("jax",), repeats=1, progress=False)
+    assert [p["value"] for p in load_points(tmp_path)] == [1]
+    monkeypatch.setattr(sweep_mod, "_measure", original)
+    points = run_sweep(scene, tmp_path, knobs={"bins": (1, 4, 16)}, paths=("jax",), repeats=1,
+                       progress=False)
+    assert [p["value"] for p in points] == [1, 4, 16]
+
+
+def test_folder_of_another_sweep_is_refused(scene, tmp_path):
+    run_sweep(scene, tmp_path, knobs={"bins": (1,)}, paths=("jax",), repeats=1, progress=False)
+    other = scene.replace(params=scene.params.__class__(kd=0.9, ks=0.1, shininess=5.0, kappa=1.0))
+    with pytest.raises(SweepError, match="other settings"):
+        run_sweep(other, tmp_path, knobs={"bins": (1,)}, paths=("jax",), repeats=1, progress=False)
+    points = run_sweep(other, tmp_path, knobs={"bins": (4,)}, paths=("jax",), repeats=1,
+                       progress=False, restart=True)
+    assert [p["value"] for p in points] == [4]
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(knobs={"gamma": (1,)}), "unknown knob"),
+    (dict(paths=("vulkan",)), "unknown path"),
+    (dict(repeats=0), "repeats"),
+])
+def test_bad_arguments(scene, tmp_path, kwargs, message):
+    with pytest.raises(SweepError, match=message):
+        run_sweep(scene, tmp_path, **{"knobs": {"bins": (1,)}, **kwargs})
+
+
+def test_no_shadow_knobs_without_shadows(tmp_path):
+    plain = small_furball_scene(strands=30, size=16, shadows="none")
+    points = run_sweep(plain, tmp_path, knobs={"maps": (1, 2), "bins": (1,)}, paths=("jax",),
+                       repeats=1, progress=False)
+    assert [(p["knob"], p["tau_rmse"]) for p in points] == [("bins", None)]
+
+
+def test_width_knob_keeps_opacity_per_length(scene):
+    wide, s = knob_scene(scene, "width", 2.0)
+    assert s == 1
+    np.testing.assert_allclose(wide.strands.width, 2 * scene.strands.width)
+    np.testing.assert_allclose(wide.strands.alpha, scene.strands.alpha / 2)
+    thin, _ = knob_scene(scene, "width", 0.5)
+    np.testing.assert_allclose(thin.strands.alpha, np.minimum(2 * scene.strands.alpha, 1.0))
+    assert knob_scene(scene, "supersampling", 3) == (scene, 3)
+
+
+POINTS = [
+    {"path": "jax", "knob": "maps", "value": 4, "time_s": 1.0, "rel_rmse": 0.02, "rmse": 0.02},
+    {"path": "jax", "knob": "maps", "value": 16, "time_s": 2.0, "rel_rmse": 0.005, "rmse": 0.005},
+    {"path": "jax", "knob": "bins", "value": 64, "time_s": 1.5, "rel_rmse": 0.009, "rmse": 0.009},
+    {"path": "jax", "knob": "bins", "value": "exact", "time_s": 3.0, "rel_rmse": 5e-4, "rmse": 5e-4},
+]
+CONFIG = {"scene": "s", "size": [8, 8], "repeats": 1, "paths": ["jax"],
+          "knobs": {"maps": [4, 16], "bins": [64, "exact"]},
+          "reference": {"shadows": "exact", "ordering": "exact", "supersampling": 1}}
+
+
+def test_cheapest_settings():
+    assert cheapest(POINTS, 1e-2, "jax")["value"] == 64  # 1.5 s beats maps = 16 at 2 s
+    assert cheapest(POINTS, 1e-2, "jax", "maps")["value"] == 16
+    assert cheapest(POINTS, 1e-3, "jax")["value"] == "exact"
+    assert cheapest(POINTS, 1e-3, "jax", "maps") is None
+    text = summary_markdown(POINTS, CONFIG)
+    assert "| jax | bins = 64 (1.5 s) | 16 (2 s) | 64 (1.5 s) |" in text
+    assert "| jax | bins = exact (3 s) | not reached | exact (3 s) |" in text
+
+
+def test_report_files(tmp_path):
+    files = write_report(tmp_path, POINTS, CONFIG)
+    rows = files["csv"].read_text().splitlines()
+    assert rows[0].startswith("path,knob,value,time_s") and len(rows) == 1 + len(POINTS)
+    assert files["plot"].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "## Cheapest settings reaching 1.0% relative RMSE" in files["summary"].read_text()
+
+
+def test_cli_sweep(tmp_path, capsys):
+    toml = tmp_path / "tiny.toml"
+    toml.write_text('name = "tiny"\n[hair]\nsource = "furball"\nstrands = 40\npoints = 5\n'
+                    "[camera]\nwidth = 16\nheight = 16\n"
+                    '[shadows]\nmethod = "opacity-maps"\nmaps = 4\nresolution = 16\n')
+    out = tmp_path / "sweep"
+    args = [str(toml), "--out", str(out), "--paths", "jax", "--knobs", "bins", "--quick", "--repeats", "1"]
+    assert cli.main(["sweep", *args]) == 0
+    printed = capsys.readouterr().out
+    assert "Cheapest settings reaching 1.0%" in printed and "wrote" in printed
+    config = json.loads((out / "sweep.json").read_text())
+    assert config["knobs"] == {"bins": [1, 16, "exact"]} and config["paths"] == ["jax"]
+    assert len(load_points(out)) == 3 and (out / "pareto.png").exists()
+    assert cli.main(["sweep", *args[:5], "--knobs", "gamma"]) == 2
+    assert "unknown knob 'gamma'" in capsys.readouterr().err
