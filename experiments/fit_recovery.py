@@ -80,6 +80,9 @@ def main(argv=None) -> int:
         scenes = {k: SCENES[k] for k in args.scenes.split(",")}
 
     rows = []
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    partial = args.out.with_suffix(".partial.csv")  # every finished fit, for a run cut short
+    partial.unlink(missing_ok=True)
     for scene_name, make in scenes.items():
         scene = resized(make(), args.size)
         for k, truth in enumerate(hidden_sets(args.sets, args.seed)):
@@ -104,16 +107,21 @@ def main(argv=None) -> int:
                                      undetermined=" ".join([*r.undetermined, *weak]),
                                      **{f"err_{n}": errors[n] for n in PARAMS},
                                      **{f"true_{n}": float(np.mean(getattr(truth, n))) for n in PARAMS}))
+                    with open(partial, "a", newline="") as f:
+                        writer = csv.DictWriter(f, fieldnames=list(rows[-1]))
+                        if len(rows) == 1:
+                            writer.writeheader()
+                        writer.writerow(rows[-1])
                     print(f"{scene_name} set {k:2d} noise {noise:g} {solver}: {r.termination}, "
                           f"{r.steps} steps, errors " + " ".join(f"{n} {errors[n]:.2e}" for n in PARAMS)
                           + (f", undetermined: {', '.join(r.undetermined)}" if r.undetermined else ""),
                           flush=True)
 
-    args.out.parent.mkdir(parents=True, exist_ok=True)
     with open(args.out, "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)
+    partial.unlink()
     print(f"\nwrote {args.out}\n")
     print(f"{'scene':<8} {'noise':>5} {'solver':<20} " + " ".join(f"{n + ' med/worst':>22}" for n in PARAMS)
           + "  bound")
