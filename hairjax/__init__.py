@@ -57,9 +57,9 @@ from ._scene_file import load_scene as load_scene
 from ._shading import ShadingParams as ShadingParams
 from ._shading import kajiya_kay as kajiya_kay
 from ._sources import furball as furball
-from ._supersample import supersample as supersample
 from ._sources import scalp as scalp
 from ._strands import Strands as Strands
+from ._supersample import supersample as supersample
 
 try:
     __version__ = version("hairjax")

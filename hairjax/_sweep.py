@@ -229,7 +229,8 @@ def run_sweep(scene: Scene, out, *, knobs: dict | None = None, paths: Sequence[s
               repeats: int = 3, restart: bool = False, progress: bool = True) -> list[dict]:
     """Sweep `knobs` (name → values; default `KNOBS`) for `paths` and return all points.
 
-    A point is a dict: path, knob, value, rmse, max_abs, rel_rmse (RMSE over the reference's
+    A point is a dict: path, knob, value, and either `skipped` (why the renderer refused
+    the setting) or rmse, max_abs, rel_rmse (RMSE over the reference's
     peak), tau_rmse and tau_max (per-point τ = exp(−κΩ) against the reference's, None
     without shadows), time_s (median of `repeats`), times. Points already in `out` are
     kept, not redone."""
@@ -272,7 +273,14 @@ def run_sweep(scene: Scene, out, *, knobs: dict | None = None, paths: Sequence[s
                 references[path] = _reference(out, path, runs[path], scene, knobs, repeats)
             advance(f"{path} {knob} = {value}")
             variant, s = knob_scene(scene, knob, value)
-            image, omega, median, times = _measure(runs[path], variant, s, repeats)
+            try:
+                image, omega, median, times = _measure(runs[path], variant, s, repeats)
+            except ValueError as err:
+                # A setting the renderer refuses (e.g. JAX's cap on opacity-map memory) is
+                # recorded as skipped, with the reason, and the sweep goes on.
+                _append(out, {"path": path, "knob": knob, "value": value, "skipped": str(err)})
+                advance(None)
+                continue
             point = {"path": path, "knob": knob, "value": value, "time_s": median, "times": times,
                      **_errors(image, omega, references[path], kappa)}
             _append(out, point)

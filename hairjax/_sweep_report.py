@@ -20,9 +20,13 @@ _COLUMNS = ("path", "knob", "value", "time_s", "rmse", "rel_rmse", "max_abs", "t
 
 def cheapest(points: list[dict], threshold: float, path: str, knob: str | None = None) -> dict | None:
     """The fastest point of `path` (and `knob`) whose relative RMSE is at most `threshold`."""
-    ok = [p for p in points if p["path"] == path and (knob is None or p["knob"] == knob)
+    ok = [p for p in _measured(points) if p["path"] == path and (knob is None or p["knob"] == knob)
           and p["rel_rmse"] <= threshold]
     return min(ok, key=lambda p: p["time_s"], default=None)
+
+
+def _measured(points: list[dict]) -> list[dict]:
+    return [p for p in points if "skipped" not in p]
 
 
 def _fmt(x) -> str:
@@ -60,8 +64,13 @@ def summary_markdown(points: list[dict], config: dict) -> str:
                     cells.append(f"{c['value']} ({c['time_s']:.3g} s)")
             lines.append(f"| {path} | " + " | ".join(cells) + " |")
         lines.append("")
+    skipped = [p for p in points if "skipped" in p]
+    if skipped:
+        lines += ["## Settings a renderer refused", ""]
+        lines += [f"- {p['path']}, {p['knob']} = {p['value']}: {p['skipped']}" for p in skipped]
+        lines.append("")
     lines += ["## All points", "", "| " + " | ".join(_COLUMNS) + " |", "|---" * len(_COLUMNS) + "|"]
-    for p in _sorted(points, config):
+    for p in _sorted(_measured(points), config):
         lines.append("| " + " | ".join(_fmt(p.get(c)) if c != "value" else str(p["value"])
                                        for c in _COLUMNS) + " |")
     return "\n".join(lines) + "\n"
@@ -93,7 +102,7 @@ def pareto_plot(points: list[dict], config: dict, path) -> Path:
     floor = 1e-7  # a point equal to its reference (RMSE 0) is drawn at this floor on log axes
     for p_name in config["paths"]:
         for knob in config["knobs"]:
-            pts = [p for p in _sorted(points, config) if p["path"] == p_name and p["knob"] == knob]
+            pts = [p for p in _sorted(_measured(points), config) if p["path"] == p_name and p["knob"] == knob]
             if not pts:
                 continue
             x = [p["time_s"] for p in pts]
@@ -124,7 +133,7 @@ def write_report(out, points: list[dict], config: dict) -> dict[str, Path]:
     buf = io.StringIO()
     writer = csv.DictWriter(buf, fieldnames=_COLUMNS, extrasaction="ignore", lineterminator="\n")
     writer.writeheader()
-    for p in _sorted(points, config):
+    for p in _sorted(_measured(points), config):
         writer.writerow({k: ("" if p.get(k) is None else p.get(k)) for k in _COLUMNS})
     files = {"csv": out / "sweep.csv", "plot": out / "pareto.png", "summary": out / "summary.md"}
     for key, text in (("csv", buf.getvalue()), ("summary", summary_markdown(points, config))):

@@ -158,3 +158,22 @@ def test_cli_sweep(tmp_path, capsys):
     assert len(load_points(out)) == 3 and (out / "pareto.png").exists()
     assert cli.main(["sweep", *args[:5], "--knobs", "gamma"]) == 2
     assert "unknown knob 'gamma'" in capsys.readouterr().err
+
+
+def test_a_refused_setting_is_recorded_and_the_sweep_goes_on(scene, tmp_path, monkeypatch):
+    original = sweep_mod._measure
+
+    def refuse_four(run, variant, s, repeats):
+        if variant.ordering.bins == 4 and variant.ordering.method == "bins":
+            raise ValueError("4 bins exceed the test's budget")
+        return original(run, variant, s, repeats)
+
+    monkeypatch.setattr(sweep_mod, "_measure", refuse_four)
+    points = run_sweep(scene, tmp_path, knobs={"bins": (1, 4, 16)}, paths=("jax",), repeats=1,
+                       progress=False)
+    assert [p["value"] for p in points] == [1, 4, 16]
+    assert points[1]["skipped"] == "4 bins exceed the test's budget" and "rmse" not in points[1]
+    config = json.loads((tmp_path / "sweep.json").read_text())
+    files = write_report(tmp_path, points, config)
+    assert "- jax, bins = 4: 4 bins exceed the test's budget" in files["summary"].read_text()
+    assert len(files["csv"].read_text().splitlines()) == 3  # header and the two measured points
