@@ -108,8 +108,14 @@ class Geometry(eqx.Module):
 _SETUP_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-def prepare(scene: Scene) -> Setup:
-    """The NumPy geometry set-up of `scene`, cached per scene object."""
+def prepare(scene: Scene, *, order=None) -> Setup:
+    """The NumPy geometry set-up of `scene`, cached per scene object.
+
+    `order`: a draw order to use instead of the scene's (see `visibility_order`); such a
+    set-up is computed afresh, not cached."""
+    if order is not None:
+        with jax.ensure_compile_time_eval():
+            return _prepare(scene, order)
     cached = _SETUP_CACHE.get(scene)
     if cached is None:
         # The set-up depends on concrete geometry only: evaluate it eagerly even when
@@ -120,25 +126,48 @@ def prepare(scene: Scene) -> Setup:
     return cached
 
 
-def visibility_order(scene: Scene):
+def visibility_order(scene: Scene, order=None):
     """Camera projection and the segments' draw order (docs/model.md §2, §4), shared by
     the JAX and GL renderers.
 
     Returns `(view, xy [P, 2], depth [P], segments [E, 2], order)`; `order` lists the
     drawable segments (both ends beyond the near plane), the first drawn first.
+
+    `order` (optional): segment indices, the first drawn first, to use instead of sorting
+    for this camera — e.g. an order computed for an earlier view and reused (kim-2003 §3,
+    Fig. 8). Segments in it that are not drawable from this camera are skipped; segments
+    not in it are not drawn. Indices must be distinct and in [0, E).
     """
     cam = scene.camera
     view = camera_view(cam)
     xy, depth = view.project(scene.strands.points)
     segments = scene.strands.segments()
     # Segments with an end nearer than the near plane (or behind the eye) are not drawn.
-    drawable = np.flatnonzero((depth[segments[:, 0]] > cam.near) & (depth[segments[:, 1]] > cam.near))
+    drawable_mask = (depth[segments[:, 0]] > cam.near) & (depth[segments[:, 1]] > cam.near)
+    if order is not None:
+        order = _given_order(order, len(segments))
+        return view, xy, depth, segments, order[drawable_mask[order]]
+    drawable = np.flatnonzero(drawable_mask)
     order = drawable[draw_order(segment_depth(depth, segments[drawable]),
                                 scene.ordering.method, scene.ordering.bins)]
     return view, xy, depth, segments, order
 
 
-def _prepare(scene: Scene) -> Setup:
+def _given_order(order, n_segments: int) -> np.ndarray:
+    """`order` checked: a 1-D array of distinct segment indices in [0, n_segments)."""
+    order = np.asarray(order)
+    if order.ndim != 1 or (order.size and not np.issubdtype(order.dtype, np.integer)):
+        raise ValueError(f"order must be a 1-D array of segment indices, got shape {order.shape} "
+                         f"and dtype {order.dtype}")
+    order = order.astype(np.int64)
+    if order.size and (order.min() < 0 or order.max() >= n_segments):
+        raise ValueError(f"order has segment indices outside [0, {n_segments})")
+    if order.size and np.bincount(order, minlength=n_segments).max() > 1:
+        raise ValueError("order lists a segment more than once")
+    return order
+
+
+def _prepare(scene: Scene, order=None) -> Setup:
     timings = {}
     clock = time.perf_counter()
 
@@ -150,7 +179,7 @@ def _prepare(scene: Scene) -> Setup:
 
     strands, cam = scene.strands, scene.camera
     points = strands.points
-    view, xy, depth, segments, order = visibility_order(scene)
+    view, xy, depth, segments, order = visibility_order(scene, order)
     seg_strand = strands.strand_of_point[segments[:, 0]]
     lap("project+order")
 
@@ -170,6 +199,7 @@ def _prepare(scene: Scene) -> Setup:
         hit_depth, normal, hit_point = sphere_hits(view, scene.occluder)
         opaque = np.isfinite(hit_depth)
         to_l = to_light(light, hit_point[opaque])
+        # Lambert's max(N·L, 0) (§9): the clip fires on the sphere's unlit side.
         lambert = np.clip(np.sum(normal[opaque] * to_l, axis=1), 0.0, None)
         backdrop[opaque] = np.asarray(scene.occluder.color) * light_rgb * lambert[:, None]
         # kim-2003 §3: depth test on, hair does not write depth.
@@ -220,12 +250,14 @@ def sphere_hits(view: View, occluder):
     b = np.sum(oc * direction, axis=1)
     c = np.sum(oc * oc, axis=1) - occluder.radius**2
     disc = b * b - c
+    # Fires for rays that miss the sphere (disc < 0): sqrt(0), not NaN; `hit` drops them.
     root = np.sqrt(np.where(disc >= 0, disc, 0.0))
     # The nearer intersection in front of the eye; the farther one when the eye is inside.
     t = np.where(-b - root > 0, -b - root, -b + root)
     hit = (disc >= 0) & (t > 0)
     point = origin + t[:, None] * direction
     depth = np.where(hit, (point - view.origin) @ view.forward, np.inf)
+    # _unit's zero branch cannot fire here: hits lie at the radius, misses farther out.
     normal = _unit(point - centre)
     return depth, normal, point
 
@@ -267,13 +299,20 @@ def _omega(scene: Scene, shadow: ShadowSetup, alpha, dtype):
 _GEOMETRY_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-def geometry_stage(scene: Scene, alpha: Float[Array, " S"] | None = None) -> Geometry:
+def geometry_stage(scene: Scene, alpha: Float[Array, " S"] | None = None, *,
+                   order=None) -> Geometry:
     """Compositing weights and Ω for `scene`, differentiable in the per-strand `alpha`.
 
     **Arguments:** `scene`; `alpha` (`[S]`, default the scene's strand opacities) — may be
     a traced JAX array, e.g. under `jax.grad`. With the default, the result is computed
-    once per scene (eagerly, even under a trace) and cached.
+    once per scene (eagerly, even under a trace) and cached. `order`: a draw order to use
+    instead of the scene's (`visibility_order`); then nothing is cached.
     """
+    if order is not None:
+        if alpha is None:
+            with jax.ensure_compile_time_eval():
+                return _geometry_stage(scene, scene.strands.alpha, order)
+        return _geometry_stage(scene, alpha, order)
     if alpha is None:
         cached = _GEOMETRY_CACHE.get(scene)
         if cached is None:
@@ -284,8 +323,8 @@ def geometry_stage(scene: Scene, alpha: Float[Array, " S"] | None = None) -> Geo
     return _geometry_stage(scene, alpha)
 
 
-def _geometry_stage(scene: Scene, alpha) -> Geometry:
-    setup = prepare(scene)
+def _geometry_stage(scene: Scene, alpha, order=None) -> Geometry:
+    setup = prepare(scene, order=order)
     dtype = jnp.result_type(float)
     alpha = jnp.asarray(alpha, dtype=dtype)
     hw = scene.camera.width * scene.camera.height
@@ -338,7 +377,7 @@ def shading_stage(geometry: Geometry, params: ShadingParams) -> Float[Array, "H 
 
 
 def render(scene: Scene, params: ShadingParams | None = None,
-           alpha: Float[Array, " S"] | None = None) -> Float[Array, "H W 4"]:
+           alpha: Float[Array, " S"] | None = None, *, order=None) -> Float[Array, "H W 4"]:
     """Render `scene` to linear RGBA `[H, W, 4]`.
 
     Differentiable in `params` (default `scene.params`) and in the per-strand `alpha`
@@ -346,10 +385,12 @@ def render(scene: Scene, params: ShadingParams | None = None,
     `jax.jit(lambda p: render(scene, p))` (the geometry then enters the compiled function
     as constants; for repeated calls, `shading_stage(geometry_stage(scene), p)` passes it
     as arguments instead). With the default `alpha`, both earlier stages are cached per
-    scene, so a new `params` re-runs only the shading stage.
+    scene, so a new `params` re-runs only the shading stage. `order`: segment indices to
+    draw in, instead of sorting for this camera (e.g. an order reused from an earlier
+    view, kim-2003 Fig. 8; see `visibility_order`); the earlier stages then run afresh.
     """
     params = scene.params if params is None else params
-    return shading_stage(geometry_stage(scene, alpha), params)
+    return shading_stage(geometry_stage(scene, alpha, order=order), params)
 
 
 def forget(scene: Scene) -> None:

@@ -135,3 +135,18 @@ def test_slice_clipping_draws_less_and_changes_nothing(gl, tmp_path, monkeypatch
     np.testing.assert_array_equal(clipped.omega, full.omega)
     np.testing.assert_array_equal(clipped.image, full.image)
     assert n_clipped < n_full / 2
+
+
+def test_render_gl_takes_a_given_draw_order(gl, tmp_path):
+    """`render_gl(..., order=…)`: the scene's own order gives the identical image; the
+    order of the same scene sorted otherwise gives that scene's image."""
+    from hairjax._render import visibility_order
+    from hairjax.gl import render_gl
+
+    scene = small_scene(tmp_path)
+    plain = render_gl(scene).image
+    np.testing.assert_array_equal(render_gl(scene, order=visibility_order(scene)[4]).image, plain)
+    unsorted = scene.replace(ordering=hj.Ordering("none"))
+    reused = render_gl(scene, order=visibility_order(unsorted)[4]).image
+    np.testing.assert_array_equal(reused, render_gl(unsorted).image)
+    assert np.abs(reused - plain).max() > 1e-3  # the order was used

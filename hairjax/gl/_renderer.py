@@ -56,6 +56,7 @@ def _view_uniforms(prefix: str, view) -> dict:
     return {f"{prefix}.origin": _vec(view.origin), f"{prefix}.forward": _vec(view.forward),
             f"{prefix}.right": _vec(view.right), f"{prefix}.up": _vec(view.up),
             f"{prefix}.focal": float(view.focal), f"{prefix}.center": (float(view.cx), float(view.cy)),
+            # Fires for orthographic (directional-light) views: near = −inf, unused there.
             f"{prefix}.near": float(view.near) if np.isfinite(view.near) else -1e30,
             f"{prefix}.perspective": bool(view.perspective)}
 
@@ -87,7 +88,7 @@ class _Strands:
     def index_buffer(self, segment_ids: np.ndarray):
         """Endpoints of the given segments, in order, for GL_LINES."""
         pairs = self.segments[segment_ids].astype("u4")
-        return self.ctx.buffer(pairs.tobytes() if pairs.size else b"\0" * 8)
+        return self.ctx.buffer(pairs.tobytes() if pairs.size else b"\0" * 8)  # no segments: GL needs ≥ 1 byte
 
     def release(self):
         for b in (self.position, self.tangent, self.color, self.alpha, self.width, self.omega):
@@ -95,13 +96,16 @@ class _Strands:
 
 
 def render_gl(scene: Scene, params: ShadingParams | None = None, *,
-              clip_slices: bool = True, omega: np.ndarray | None = None) -> GLResult:
+              clip_slices: bool = True, omega: np.ndarray | None = None,
+              order: np.ndarray | None = None) -> GLResult:
     """Render `scene` with OpenGL.
 
     **Arguments:** `params` (default `scene.params`); `clip_slices`: draw into each
     opacity map only the segments whose depth range meets its slice (kim-2003 §4.2); off
     draws all of them into every map (the basic algorithm) — the same image, for timing;
-    `omega`: use this Ω per point (`[P]`) instead of computing the shadows.
+    `omega`: use this Ω per point (`[P]`) instead of computing the shadows; `order`: draw
+    the camera pass in this segment order instead of sorting (`visibility_order`, e.g. an
+    order reused from an earlier view).
     """
     params = scene.params if params is None else params
     ctx = get_context()
@@ -130,7 +134,7 @@ def render_gl(scene: Scene, params: ShadingParams | None = None, *,
             else:
                 omega = _exact_opacity(ctx, progs, scene, strands, frame)
             lap("shadows")
-        image = _camera_pass(ctx, progs, scene, params, strands)
+        image = _camera_pass(ctx, progs, scene, params, strands, order)
         lap("camera pass")
         return GLResult(image, omega, timings)
     finally:
@@ -148,14 +152,15 @@ def _light_uniforms(scene: Scene) -> dict:
             "light_rgb": _vec(light.color)}
 
 
-def _camera_pass(ctx, progs, scene: Scene, params: ShadingParams, strands) -> np.ndarray:
+def _camera_pass(ctx, progs, scene: Scene, params: ShadingParams, strands, order=None) -> np.ndarray:
     import moderngl
 
     cam = scene.camera
     w, h = cam.width, cam.height
-    view, _, depth, _, order = visibility_order(scene)
+    view, _, depth, _, order = visibility_order(scene, order)
     # Depths map to [0, 1) for the depth test: anything drawn lies in (near, depth_far).
-    depth_far = 2.0 * float(max(np.max(depth, initial=1.0), cam.near, 1e-30))
+    # No floor at 1 unit (was initial=1.0): depth/far is stored in 2⁻²⁴ steps, tiny scenes lost digits.
+    depth_far = 2.0 * float(max(np.max(depth, initial=0.0), cam.near))
     if scene.occluder is not None:
         c = np.asarray(scene.occluder.center) - view.origin
         depth_far = max(depth_far, 2.0 * (float(c @ view.forward) + scene.occluder.radius))
@@ -230,6 +235,7 @@ def _opacity_maps(ctx, progs, scene, strands, frame: LightFrame, clip_slices: bo
     z = frame.depth
     u0 = np.clip(np.floor(frame.slice_coordinate(np.minimum(z[segs[:, 0]], z[segs[:, 1]]), n)), 0, n)
     u1 = np.clip(np.floor(frame.slice_coordinate(np.maximum(z[segs[:, 0]], z[segs[:, 1]]), n)), 0, n)
+    # The clips fire at D_N (slice N, drawn in no pass: such a segment gets no span) and by rounding.
     u0, u1 = u0.astype(np.int64), np.minimum(u1.astype(np.int64), n - 1)
     if clip_slices:
         spans = np.maximum(u1 - u0 + 1, 0)
@@ -248,7 +254,7 @@ def _opacity_maps(ctx, progs, scene, strands, frame: LightFrame, clip_slices: bo
     seen = np.flatnonzero(frame.seen)
     by_plane = seen[np.argsort(plane[seen], kind="stable")]
     plane_starts = np.searchsorted(plane[by_plane], np.arange(n + 1))
-    id_buf = ctx.buffer(by_plane.astype("u4").tobytes() if by_plane.size else b"\0" * 4)
+    id_buf = ctx.buffer(by_plane.astype("u4").tobytes() if by_plane.size else b"\0" * 4)  # no point seen
     omega_buf = ctx.buffer(np.zeros(strands.count, "f4").tobytes())
 
     current = ctx.texture((r, r), 1, dtype="f4")
@@ -335,7 +341,7 @@ def _exact_opacity(ctx, progs, scene, strands, frame: LightFrame):
         offsets_np = (np.cumsum(n_per_texel) - n_per_texel).astype("u4")
         total = int(n_per_texel.sum())
         offsets = ctx.buffer(offsets_np.tobytes())
-        entries = ctx.buffer(reserve=max(8 * total, 8))
+        entries = ctx.buffer(reserve=max(8 * total, 8))  # fires without light-space fragments
         buffers += [offsets, entries]
         offsets.bind_to_storage_buffer(2)
         entries.bind_to_storage_buffer(3)
@@ -345,7 +351,7 @@ def _exact_opacity(ctx, progs, scene, strands, frame: LightFrame):
         ctx.memory_barrier()
         check(ctx, "exact opacity: fill pass")
         seen = np.flatnonzero(frame.seen).astype("u4")
-        ids = ctx.buffer(seen.tobytes() if seen.size else b"\0" * 4)
+        ids = ctx.buffer(seen.tobytes() if seen.size else b"\0" * 4)  # fires when no point is seen
         omega_buf = ctx.buffer(np.zeros(strands.count, "f4").tobytes())
         buffers += [ids, omega_buf]
         comp = progs["omega_exact"]
