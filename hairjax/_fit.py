@@ -240,15 +240,20 @@ def _image(terms: _Terms, kd, ks, shininess, kappa, images=_kd_ks_images):
 
 
 def _solver(name: str, rtol: float, atol: float):
+    import lineax as lx
     import optimistix as optx
 
     name = _ALIASES.get(name, name)
     if name == "levenberg-marquardt":
         return optx.LevenbergMarquardt(rtol=rtol, atol=atol), True
+    # A parameter with no effect (p when Ks = 0) leaves a zero column in J: Gauss-Newton's
+    # and dogleg's default solve then returned NaN or never moved. Least squares through an
+    # SVD (well_posed=False) takes the minimum-norm step instead; LM's damping needs none.
+    rank_deficient = lx.AutoLinearSolver(well_posed=False)
     if name == "gauss-newton":
-        return optx.GaussNewton(rtol=rtol, atol=atol), True
+        return optx.GaussNewton(rtol=rtol, atol=atol, linear_solver=rank_deficient), True
     if name == "dogleg":
-        return optx.Dogleg(rtol=rtol, atol=atol), True
+        return optx.Dogleg(rtol=rtol, atol=atol, linear_solver=rank_deficient), True
     if name == "bfgs":
         return _bfgs(rtol, atol), False
     raise FitError(f"unknown solver {name!r}; choose from {', '.join(SOLVERS)} (or lm, gn)")
@@ -410,7 +415,7 @@ def fit(
     losses = [float(loss_of(z, terms))]
     done, result = terminate(y=z, state=state)
     steps = 0
-    last_finite = z
+    last_finite, diverged = z, False
     while not bool(done) and steps < max_steps:
         z, state, _ = step(y=z, state=state)
         steps += 1
@@ -420,14 +425,14 @@ def fit(
         if not np.isfinite(losses[-1]):
             # An undamped solver (Gauss-Newton) can overshoot into exp overflow: stop, and
             # return the last point where the image was finite.
-            z = last_finite
+            z, diverged = last_finite, True
             break
         last_finite = z
         done, result = terminate(y=z, state=state)
     if bool(done):
         termination = ("converged" if result == optx.RESULTS.successful
                        else f"stopped: {optx.RESULTS[result]}")
-    elif not np.isfinite(losses[-1]):
+    elif diverged:
         termination = "stopped: diverged (the loss became non-finite); kept the last finite point"
     else:
         termination = f"stopped: reached max_steps = {max_steps}"
@@ -436,7 +441,8 @@ def fit(
 
     std_error, undetermined = _standard_errors(residuals, z, unravel, terms, names)
     n_pixels = float(sum(np.count_nonzero(np.asarray(t.sqrt_weight)) for t in terms)) * 3
-    rmse = float(np.sqrt(2 * losses[-1] / max(n_pixels, 1.0)))
+    final_loss = float(loss_of(z, terms)) if diverged else losses[-1]  # at the returned point
+    rmse = float(np.sqrt(2 * final_loss / max(n_pixels, 1.0)))
     return FitResult(params=fitted, initial=init, fitted=names, loss=losses, steps=steps,
                      time_s=elapsed, geometry_s=geometry_s, termination=termination,
                      std_error=std_error, undetermined=undetermined, rmse=rmse)

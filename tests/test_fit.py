@@ -76,6 +76,19 @@ def test_shininess_undetermined_without_specular(scene):
     assert np.isfinite(float(r.params.shininess)) and all(np.isfinite(r.loss))
 
 
+@pytest.mark.parametrize("solver", ["gauss-newton", "dogleg", "levenberg-marquardt"])
+def test_a_parameter_without_effect_does_not_stop_the_solvers(scene, solver):
+    """Ks held at 0: p has no effect, J has a zero column. Gauss-Newton's and dogleg's
+    default solve returned NaN (GN) or never moved (dogleg); with a least-squares solve all
+    three reach the other parameters."""
+    truth = hj.ShadingParams(kd=(0.3, 0.5, 0.2), ks=0.0, shininess=25.0, kappa=2.5, ambient=0.05)
+    target = np.asarray(hj.render(scene, truth))
+    start = hj.ShadingParams(kd=0.5, ks=0.0, shininess=10.0, kappa=1.0, ambient=0.05)
+    r = hj.fit(scene, target, fit=("kd", "shininess", "kappa"), init=start, solver=solver)
+    assert r.termination == "converged" and "shininess" in r.undetermined
+    assert rel(r.params.kd, truth.kd) < 1e-3 and rel(r.params.kappa, truth.kappa) < 1e-3
+
+
 def test_kappa_undetermined_when_everything_is_in_shadow(scene):
     dark = hj.ShadingParams(kd=TRUE.kd, ks=TRUE.ks, shininess=TRUE.shininess, kappa=1e4,
                             ambient=TRUE.ambient)
@@ -251,4 +264,5 @@ def test_divergence_ends_cleanly(scene, target, monkeypatch):
     assert not np.isfinite(r.loss[-1])  # the step that overflowed is recorded
     # ... but the result is the last finite point, and nothing is claimed about it.
     assert np.isfinite(float(r.params.kappa)) and float(r.params.kappa) <= 5.0
+    assert np.isfinite(r.rmse)  # the RMSE of the returned point, not of the overflowed step
     assert r.undetermined == () or all(r.std_error[n] is None for n in r.undetermined)
