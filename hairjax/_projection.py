@@ -67,11 +67,13 @@ class View:
 
 def _basis(forward: np.ndarray, up_hint: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     right = np.cross(forward, up_hint)
-    if np.linalg.norm(right) < 1e-9:
+    # Relative to |up| as in Camera's check (an absolute 1e-9 turned up = (0, 1e-10, 0) by 90°).
+    if np.linalg.norm(right) <= 1e-12 * np.linalg.norm(up_hint):
         # Fires when the up hint is parallel to forward (a light straight along y):
         # any perpendicular works for a light's map, so take another axis.
         right = np.cross(forward, np.array([1.0, 0.0, 0.0]))
         if np.linalg.norm(right) < 1e-9:
+            # Unreachable: Camera rejects up ∥ forward, and a light's forward ∥ y is not ∥ x.
             right = np.cross(forward, np.array([0.0, 0.0, 1.0]))
     right /= np.linalg.norm(right)
     return right, np.cross(right, forward)
@@ -119,6 +121,7 @@ def light_view(light, points: np.ndarray, resolution: int, margin: int) -> View:
         axis = np.array([0.0, -1.0, 0.0])
     forward = axis / np.linalg.norm(axis)
     right, up = _basis(forward, np.array([0.0, 1.0, 0.0]))
+    # The max fires with the light at the hair's centre (the fallback above): near ≈ 1e-303.
     near = NEAR_FRACTION * max(np.linalg.norm(centre - origin), 1e-300)
     rel = points - origin
     depth = rel @ forward
@@ -126,9 +129,10 @@ def light_view(light, points: np.ndarray, resolution: int, margin: int) -> View:
     tan_max = np.tan(np.radians(80.0))
     if front.any():
         lateral = np.maximum(np.abs(rel[front] @ right), np.abs(rel[front] @ up)) / depth[front]
+        # 1e-6 fires when every point in front lies on the axis; tan_max for points beyond ±80°.
         tan_half = min(max(lateral.max(), 1e-6), tan_max)
     else:
-        tan_half = tan_max
+        tan_half = tan_max  # fires when no point is in front of the light
     focal = (usable / 2) / tan_half
     return View(origin, forward, right, up, resolution, resolution, float(focal),
                 resolution / 2, resolution / 2, True, float(near))

@@ -97,7 +97,7 @@ def rasterize(xy0: np.ndarray, xy1: np.ndarray, z0: np.ndarray, z1: np.ndarray,
     columns = np.where(length > 0, np.maximum(hi - lo + 1, 0), 0).astype(np.int64)
     # Rows per column: pixel centres in an open interval of length 2·reach/|u_major| ≤
     # 2·reach·√2 around the line; an interval of length ℓ holds at most ⌈ℓ⌉ + 1 of them.
-    rows = int(np.ceil(2 * float(reach.max(initial=0.0)) * np.sqrt(2))) + 1
+    rows = int(np.ceil(2 * float(reach.max(initial=0.0)) * np.sqrt(2))) + 1  # initial: no segments
 
     # Per segment, what the kernel needs (float64 here; the kernel casts).
     seg_data = np.stack([xy0[:, 0], xy0[:, 1], delta[:, 0], delta[:, 1], length, width,
@@ -119,7 +119,7 @@ def rasterize(xy0: np.ndarray, xy1: np.ndarray, z0: np.ndarray, z1: np.ndarray,
         keep = np.flatnonzero(cov > 0)
         parts.append((pixel[keep], seg[keep // rows].astype(np.int32), cov[keep], t[keep],
                       depth[keep]))
-    if not parts:
+    if not parts:  # fires when no segment has a column (none, all zero-length or off-screen)
         empty_i, empty_f = np.zeros(0, np.int32), np.zeros(0, jnp.result_type(float))
         return Fragments(empty_i, empty_i, empty_f, empty_f, empty_f)
     return Fragments(*(np.concatenate(p) for p in zip(*parts)))

@@ -61,6 +61,7 @@ class ShadowSetup:
 
 def map_margin(width: np.ndarray) -> int:
     """Texels kept free at the map border: the widest ribbon's reach plus the filter."""
+    # initial=1.0 fires only without strands (empty width): the margin of width 1.
     return int(np.ceil(0.5 * float(np.max(width, initial=1.0)) + PIXEL_HALF_EXTENT)) + SHADOW_FILTER_RADIUS
 
 
@@ -95,6 +96,7 @@ def light_frame(points, segments, width, light, resolution: int) -> LightFrame:
         # Point light: points behind its near plane get no shadow and cast none.
         seen = depth > view.near
     drawable = np.flatnonzero(seen[segments[:, 0]] & seen[segments[:, 1]])
+    # The else fires when no point is in front of a point light: nothing casts or gets shadow.
     zmin = float(depth[seen].min()) if seen.any() else 0.0
     zmax = float(depth[seen].max()) if seen.any() else 0.0
     span = zmax - zmin
@@ -119,14 +121,16 @@ def shadow_setup(points, segments, seg_strand, width, light, method: str, maps: 
     frags = rasterize(xy[s0], xy[s1], depth[s0], depth[s1], width[seg_strand[seg_ids]],
                       resolution, resolution, view.perspective)
 
-    tx = np.floor(xy[:, 0]).astype(np.int64)
-    ty = np.floor(xy[:, 1]).astype(np.int64)
+    # Clip fires for a light at the hair's centre (near ≈ 1e-303: xy ~1e300, no int64); outside stays outside.
+    tx = np.floor(np.clip(xy[:, 0], -1, resolution)).astype(np.int64)
+    ty = np.floor(np.clip(xy[:, 1], -1, resolution)).astype(np.int64)
     inside = seen & (tx >= 0) & (tx < resolution) & (ty >= 0) & (ty < resolution)
     common = dict(view=view, frag_strand=seg_strand[seg_ids[frags.segment]],
                   frag_coverage=frags.coverage)
 
     if method == "opacity-maps":
         # A fragment in [D_j, D_{j+1}) counts towards planes j + 1 … N (strictly nearer).
+        # The clip fires only through rounding (a depth ulps below D₀ → slice 0); D_N gives N.
         j = np.clip(np.floor(frame.slice_coordinate(frags.depth, maps)), 0, maps).astype(np.int64)
         plane, f = point_planes(frame, maps)
         return ShadowSetup(method=method, frag_cell=(j * resolution**2 + frags.pixel).astype(np.int32),
@@ -136,6 +140,7 @@ def shadow_setup(points, segments, seg_strand, width, light, method: str, maps: 
 
     # exact: fragments sorted by one float key, texel + depth fraction / 2.
     def key(texel, z):
+        # The clip fires for depths outside [D₀, D_N]: unseen points (masked below), rounding.
         return texel + 0.5 * np.clip((z - zmin) / span, 0.0, 1.0)
 
     frag_key = key(frags.pixel.astype(np.float64), frags.depth)
@@ -148,6 +153,7 @@ def shadow_setup(points, segments, seg_strand, width, light, method: str, maps: 
     ox, oy = np.meshgrid(offs, offs)  # all (2r + 1)² offsets
     nx = tx[:, None] + ox.ravel()[None, :]
     ny = ty[:, None] + oy.ravel()[None, :]
+    # Fails for neighbours outside the map (points beyond ±80°) and unseen points: weight 0.
     valid = (nx >= 0) & (nx < resolution) & (ny >= 0) & (ny < resolution) & seen[:, None]
     texel = np.where(valid, ny * resolution + nx, 0).astype(np.float64)
     start = np.searchsorted(frag_key, texel, side="left")
@@ -165,6 +171,7 @@ def shadow_setup(points, segments, seg_strand, width, light, method: str, maps: 
 def point_planes(frame: LightFrame, maps: int) -> tuple[np.ndarray, np.ndarray]:
     """Each point's plane i (its slice, clamped to 0 … N − 1) and weight f ∈ [0, 1]."""
     u = frame.slice_coordinate(frame.depth, maps)
+    # The clips fire at D_N (u = N: plane N − 1, f = 1) and for unseen points (u < 0: 0, 0).
     plane = np.clip(np.floor(u), 0, maps - 1).astype(np.int64)
     return plane, np.clip(u - plane, 0.0, 1.0)
 
@@ -193,7 +200,7 @@ def point_opacity(maps: Float[Array, "n1 r r"], plane: Int[Array, " p"], f: Floa
                   texel: Int[Array, " p"]) -> Float[Array, " p"]:
     """Ω at points: linear interpolation between the two planes around each point."""
     flat = maps.reshape(maps.shape[0], -1)
-    safe = jnp.maximum(texel, 0)
+    safe = jnp.maximum(texel, 0)  # fires for texel −1 (outside): any valid index, dropped below
     omega = (1 - f) * flat[plane, safe] + f * flat[plane + 1, safe]
     # Fires for points outside the light's map (behind a point light): no shadow.
     return jnp.where(texel >= 0, omega, 0.0)
@@ -202,7 +209,7 @@ def point_opacity(maps: Float[Array, "n1 r r"], plane: Int[Array, " p"], f: Floa
 def exact_opacity(frag_alpha: Float[Array, " f"], frag_first, index: Int[Array, "p k"],
                   weight: Float[Array, "p k"]) -> Float[Array, " p"]:
     """Ω̄(z) at each point's own depth from per-texel prefix sums (N → ∞)."""
-    if frag_alpha.shape[0] == 0:
+    if frag_alpha.shape[0] == 0:  # fires when no segment reaches the light's raster: Ω = 0
         return jnp.zeros(index.shape[0], frag_alpha.dtype)
     prefix = segmented_scan(frag_alpha, frag_first, jnp.add)
     return jnp.sum(weight * prefix[index], axis=1)

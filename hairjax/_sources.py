@@ -87,7 +87,7 @@ def scalp(
     # Uniform on the spherical cap y ∈ [1 - 2·coverage, 1] (Archimedes: uniform in y).
     y = rng.uniform(1 - 2 * coverage, 1, strands)
     phi = rng.uniform(0, 2 * np.pi, strands)
-    r = np.sqrt(np.clip(1 - y * y, 0, None))
+    r = np.sqrt(np.clip(1 - y * y, 0, None))  # never fires: |y| ≤ 1 gives fl(y²) ≤ 1
     normals = np.stack([r * np.cos(phi), y, r * np.sin(phi)], axis=1)
     seg = length / (points - 1) * rng.uniform(1 - length_jitter, 1 + length_jitter, strands)
     pts = _grow(normals * radius, normals, seg, points, gravity, (0.0, 0.0, 0.0))

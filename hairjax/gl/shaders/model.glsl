@@ -38,13 +38,13 @@ float fragment_depth(float z0, float z1, float t, bool perspective) {
     return 1.0 / ((1.0 - t) / z0 + t / z1);
 }
 
-// ‖x‖, 0 for vectors shorter than SAFE_NORM_EPS (T ∥ L in ‖T × L‖, zero tangents).
+// ‖x‖; fires for zero vectors (T ∥ L in ‖T × L‖, zero tangents): SAFE_NORM_EPS² is 0 in float32.
 float safe_norm(vec3 x) {
     float sq = dot(x, x);
     return sq > SAFE_NORM_EPS * SAFE_NORM_EPS ? sqrt(sq) : 0.0;
 }
 
-// §8: max(b, 0)^p, exactly 0 at or below SPECULAR_BASE_EPS.
+// §8: max(b, 0)^p; fires at b ≤ SPECULAR_BASE_EPS (the cone's far side): exactly 0, no log(b ≤ 0).
 float specular_power(float b, float p) {
     return b > SPECULAR_BASE_EPS ? exp(p * log(b)) : 0.0;
 }
@@ -71,7 +71,7 @@ vec3 shade_point(Shading s, vec3 T, vec3 L, vec3 V, vec3 base, vec3 light_rgb, f
     return s.ambient * base + tau * light_rgb * (diffuse * base + specular);
 }
 
-// §7: the slice of depth z, (z − D₀)·N/span clamped to [0, N].
+// §7: the slice of depth z, (z − D₀)·N/span clamped to [0, N] (fires by float32 rounding at D₀, D_N).
 int slice_of(float z, float zmin, float span, int maps) {
     return int(clamp(floor((z - zmin) * float(maps) / span), 0.0, float(maps)));
 }

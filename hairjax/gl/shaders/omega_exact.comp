@@ -26,6 +26,7 @@ void main() {
     for (int dy = -SHADOW_FILTER_RADIUS; dy <= SHADOW_FILTER_RADIUS; ++dy) {
         for (int dx = -SHADOW_FILTER_RADIUS; dx <= SHADOW_FILTER_RADIUS; ++dx) {
             ivec2 t = texel + ivec2(dx, dy);
+            // Texels outside the map count 0: fires for points beyond the ±80° of a point light.
             if (any(lessThan(t, ivec2(0))) || any(greaterThanEqual(t, ivec2(resolution)))) continue;
             uint k = uint(t.y * resolution + t.x);
             for (uint e = offsets[k]; e < offsets[k] + counts[k]; ++e) {

@@ -45,6 +45,7 @@ void main() {
         omega[id] = 0.0;  // outside the map: no shadow (as in JAX)
         return;
     }
+    // The clamp fires by rounding: z is recomputed here in float32, the plane came from NumPy.
     float f = clamp((q.z - zmin) * float(maps) / span - float(plane), 0.0, 1.0);
     omega[id] = (1.0 - f) * box(prev_map, texel) + f * box(cur_map, texel);
 }

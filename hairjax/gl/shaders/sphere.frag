@@ -25,9 +25,10 @@ void main() {
     float root = sqrt(disc);
     // The nearer intersection in front of the eye; the farther one when the eye is inside.
     float t = (-b - root > 0.0) ? -b - root : -b + root;
-    if (!(t > 0.0)) discard;
+    if (!(t > 0.0)) discard;  // fires when the sphere lies behind the eye
     vec3 hit = view.origin + t * dir;
     vec3 n = normalize(hit - center);
+    // Unguarded: a point light on the sphere gives normalize(0), undefined (llvmpipe: 0 after max).
     vec3 L = point_light ? normalize(light_vector - hit) : light_vector;
     frag_color = vec4(albedo * light_rgb * max(dot(n, L), 0.0), 1.0);
     gl_FragDepth = dot(hit - view.origin, view.forward) / depth_far;
