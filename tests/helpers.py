@@ -11,7 +11,18 @@ from hairjax._raster import rasterize
 from hairjax._render import sphere_hits, visibility_order
 from hairjax._shadows import light_frame
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+REPO = Path(__file__).resolve().parents[1]
+DATA = REPO.parent / "shared" / "data"
+
+
+def load_experiment(name: str):
+    """The module experiments/NAME.py (experiments/ is not a package)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(name, REPO / "experiments" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def small_furball_scene(strands=40, size=48, shadows="opacity-maps", maps=8, resolution=32,

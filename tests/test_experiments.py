@@ -3,13 +3,10 @@
 from __future__ import annotations
 
 import csv
-import importlib.util
 import math
-from pathlib import Path
 
 import pytest
-
-REPO = Path(__file__).resolve().parents[1]
+from helpers import load_experiment
 
 TINY_SCENE = """\
 name = "tiny"
@@ -30,36 +27,19 @@ resolution = 32
 """
 
 
-def _load(name: str):
-    spec = importlib.util.spec_from_file_location(name, REPO / "experiments" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-@pytest.fixture
-def gl_context():
-    from hairjax.gl import GLUnavailable, get_context
-
-    try:
-        return get_context()
-    except GLUnavailable as err:
-        pytest.skip(f"GL unavailable: {err}")
-
-
 def test_fit_slope():
-    maps_vs_time = _load("maps_vs_time")
+    maps_vs_time = load_experiment("maps_vs_time")
     maps = [1, 2, 4, 8, 16, 32, 64]
     assert maps_vs_time.fit_slope(maps, [0.5 * n for n in maps]) == pytest.approx(1.0)
     assert maps_vs_time.fit_slope(maps, [n ** 0.5 for n in maps]) == pytest.approx(0.5)
     assert math.isnan(maps_vs_time.fit_slope([1, 16], [1.0, 2.0]))  # one point >= 16
 
 
-def test_maps_vs_time_tiny(tmp_path, capsys, gl_context):
+def test_maps_vs_time_tiny(tmp_path, capsys, gl):
     scene = tmp_path / "tiny.toml"
     scene.write_text(TINY_SCENE)
     out = tmp_path / "out"
-    status = _load("maps_vs_time").main(
+    status = load_experiment("maps_vs_time").main(
         ["--scene", str(scene), "--maps", "1,4", "--repeats", "1", "--out", str(out)])
     assert status == 0
     printed = capsys.readouterr().out

@@ -1,19 +1,14 @@
 """experiments/fit_recovery.py runs end to end (its figures are in BENCHMARKS/notes)."""
 
 import csv
-import importlib.util
-from pathlib import Path
 
 import pytest
-
-ROOT = Path(__file__).resolve().parents[1]
+from helpers import load_experiment
 
 
 @pytest.mark.slow
 def test_fit_recovery_quick(gl, tmp_path, capsys):
-    spec = importlib.util.spec_from_file_location("fit_recovery", ROOT / "experiments" / "fit_recovery.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module = load_experiment("fit_recovery")
     out = tmp_path / "r.csv"
     assert module.main(["--quick", "--out", str(out)]) == 0
     with open(out) as f:

@@ -3,25 +3,15 @@
 from __future__ import annotations
 
 import csv
-import importlib.util
 import math
-from pathlib import Path
 
 import numpy as np
-
-REPO = Path(__file__).resolve().parents[1]
-
-
-def _load(name: str):
-    spec = importlib.util.spec_from_file_location(name, REPO / "experiments" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+from helpers import load_experiment
 
 
 def test_order_reuse_quick(tmp_path, capsys):
     out = tmp_path / "out"
-    assert _load("order_reuse").main(["--quick", "--no-gl", "--out", str(out)]) == 0
+    assert load_experiment("order_reuse").main(["--quick", "--no-gl", "--out", str(out)]) == 0
     printed = capsys.readouterr().out
     with open(out / "order_reuse.csv", newline="") as f:
         rows = list(csv.DictReader(f))
@@ -43,7 +33,7 @@ def test_order_reuse_quick(tmp_path, capsys):
 def test_turned_camera_keeps_distance_height_and_target():
     import hairjax as hj
 
-    module = _load("order_reuse")
+    module = load_experiment("order_reuse")
     scene = hj.Scene(hj.furball(10, 3, seed=0),
                      camera=hj.Camera(eye=(1.0, 0.5, 4.0), target=(1.0, -0.1, 0.0)))
     view = module.turned(scene, 90.0)
@@ -54,7 +44,7 @@ def test_turned_camera_keeps_distance_height_and_target():
 
 
 def test_image_difference_by_hand():
-    module = _load("order_reuse")
+    module = load_experiment("order_reuse")
     a = np.zeros((2, 2, 4))
     b = np.zeros((2, 2, 4))
     b[0, 0, 1] = 0.2   # one channel of one pixel

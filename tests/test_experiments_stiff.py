@@ -4,22 +4,13 @@ beyond what hairjax.fit guarantees)."""
 from __future__ import annotations
 
 import csv
-import importlib.util
 import math
-from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[1]
-
-
-def _load(name: str):
-    spec = importlib.util.spec_from_file_location(name, REPO / "experiments" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+from helpers import load_experiment
 
 
 def test_stiff_fits_quick(tmp_path, capsys):
-    module = _load("stiff_fits")
+    module = load_experiment("stiff_fits")
     out = tmp_path / "out"
     assert module.main(["--quick", "--out", str(out)]) == 0
     printed = capsys.readouterr().out
@@ -44,7 +35,7 @@ def test_stiff_fits_quick(tmp_path, capsys):
 
 def test_judge_statuses():
     """The status rules of the docstring, on hand-made results."""
-    judge = _load("stiff_fits").judge
+    judge = load_experiment("stiff_fits").judge
     fitted = ("kd", "ks", "shininess", "kappa")
     good = dict(kd=1e-4, ks=2e-3, shininess=5e-3, kappa=1e-5)
     assert judge("converged", good, fitted, (), (), 1e-2) == ("converged", False, 5e-3)
@@ -72,7 +63,7 @@ def test_judge_statuses():
 def test_parameter_errors_absolute_at_zero_truth():
     import hairjax as hj
 
-    errors = _load("stiff_fits").parameter_errors
+    errors = load_experiment("stiff_fits").parameter_errors
     truth = hj.ShadingParams(kd=(0.5, 0.25, 0.2), ks=0.0, shininess=100.0, kappa=2.0)
     fitted = hj.ShadingParams(kd=(0.5, 0.5, 0.2), ks=0.003, shininess=101.0, kappa=2.0)
     e = errors(fitted, truth)
