@@ -21,7 +21,6 @@ Writes DIR/maps_vs_time.csv and DIR/maps_vs_time.png, and prints a table.
 from __future__ import annotations
 
 import argparse
-import csv
 import dataclasses
 import math
 import statistics
@@ -170,13 +169,9 @@ def main(argv=None) -> int:
               for key in ("clipped_s", "unclipped_s", "clipped_shadows_s", "unclipped_shadows_s")}
 
     args.out.mkdir(parents=True, exist_ok=True)
-    csv_path = args.out / "maps_vs_time.csv"
-    with open(csv_path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=CSV_COLUMNS)
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: (f"{r[k]:.6f}" if isinstance(r[k], float) else r[k])
-                        for k in CSV_COLUMNS})
+    from hairjax._files import write_csv
+
+    csv_path = write_csv(args.out / "maps_vs_time.csv", CSV_COLUMNS, rows, float_format=".6f")
     png_path = args.out / "maps_vs_time.png"
     _plot(rows, slopes, png_path, title)
 

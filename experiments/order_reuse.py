@@ -28,7 +28,6 @@ DIR/order_reuse_timings.csv and DIR/order_reuse.png, and prints both tables.
 from __future__ import annotations
 
 import argparse
-import csv
 import dataclasses
 import statistics
 import sys
@@ -151,17 +150,6 @@ def _plot(rows, path: Path, title: str) -> None:
     plt.close(fig)
 
 
-def _write_csv(path: Path, columns, rows) -> None:
-    from hairjax._files import atomic_path
-
-    with atomic_path(path, ".csv") as tmp:
-        with open(tmp, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=columns)
-            w.writeheader()
-            for r in rows:
-                w.writerow({k: (f"{r[k]:.6g}" if isinstance(r[k], float) else r[k]) for k in columns})
-
-
 def _fmt_s(s: float) -> str:
     return "–" if not np.isfinite(s) else (f"{s * 1e3:.1f} ms" if s < 1 else f"{s:.2f} s")
 
@@ -240,8 +228,10 @@ def main(argv=None) -> int:
     csv_path = args.out / "order_reuse.csv"
     timings_path = args.out / "order_reuse_timings.csv"
     png_path = args.out / "order_reuse.png"
-    _write_csv(csv_path, CSV_COLUMNS, rows)
-    _write_csv(timings_path, TIMING_COLUMNS, timing_rows)
+    from hairjax._files import write_csv
+
+    write_csv(csv_path, CSV_COLUMNS, rows, float_format=".6g")
+    write_csv(timings_path, TIMING_COLUMNS, timing_rows, float_format=".6g")
     _plot(rows, png_path, "Stale (0°) vs fresh visibility order — " + "; ".join(titles))
 
     print()

@@ -28,7 +28,7 @@ from contextlib import redirect_stdout
 from pathlib import Path
 
 import hairjax as hj
-from hairjax._files import atomic_path
+from hairjax._files import write_text
 from hairjax._ordering import draw_order, segment_depth
 from hairjax._projection import camera_view
 from hairjax._sweep import KNOBS, QUICK_KNOBS, load_points, run_sweep
@@ -207,8 +207,7 @@ Ks ≈ 0 and starts two orders of magnitude off.
 
 {stiff_table.strip()}
 """
-    with atomic_path(docs / "results.md", ".md") as tmp:
-        Path(tmp).write_text(text)
+    write_text(docs / "results.md", text)
     print(f"wrote {docs / 'results.md'} ({len(load_points(out / 'sweep'))} sweep points)")
     return 0
 

@@ -42,7 +42,6 @@ the table.
 from __future__ import annotations
 
 import argparse
-import csv
 import statistics
 import sys
 import time
@@ -239,25 +238,6 @@ def table(rows, cases, solvers, header: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _write_csv(path: Path, rows) -> None:
-    from hairjax._files import atomic_path
-
-    with atomic_path(path, ".csv") as tmp:
-        with open(tmp, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=CSV_COLUMNS)
-            w.writeheader()
-            for r in rows:
-                w.writerow({k: (f"{r[k]:.6g}" if isinstance(r[k], float) else r[k])
-                            for k in CSV_COLUMNS})
-
-
-def _write_text(path: Path, text: str) -> None:
-    from hairjax._files import atomic_path
-
-    with atomic_path(path, path.suffix) as tmp:
-        Path(tmp).write_text(text)
-
-
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--cases", default=",".join(c.name for c in CASES),
@@ -319,8 +299,10 @@ def main(argv=None) -> int:
 
     text = table(rows, [c.name for c in cases], solvers, header)
     csv_path, md_path = args.out / "stiff_fits.csv", args.out / "stiff_fits.md"
-    _write_csv(csv_path, rows)
-    _write_text(md_path, text)
+    from hairjax._files import write_csv, write_text
+
+    write_csv(csv_path, CSV_COLUMNS, rows, float_format=".6g")
+    write_text(md_path, text)
     print()
     print(text)
     print(f"wrote {csv_path}\nwrote {md_path}\ntotal {time.perf_counter() - started:.1f} s")

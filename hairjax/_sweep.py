@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._files import atomic_path, write_json
+from ._files import atomic_path, write_json, write_text
 from ._scene import Ordering, Scene
 from ._supersample import supersample
 
@@ -183,8 +183,7 @@ def _append(out: Path, point: dict) -> None:
 
 
 def _rewrite(out: Path, points: list[dict]) -> None:
-    with atomic_path(Path(out) / "points.jsonl", ".jsonl") as tmp:
-        Path(tmp).write_text("".join(json.dumps(p) + "\n" for p in points))
+    write_text(Path(out) / "points.jsonl", "".join(json.dumps(p) + "\n" for p in points))
 
 
 def _check_config(out: Path, config: dict, restart: bool) -> None:

@@ -5,12 +5,10 @@ Everything here reads the points `run_sweep` stored; nothing renders.
 
 from __future__ import annotations
 
-import csv
-import io
 import json
 from pathlib import Path
 
-from ._files import atomic_path
+from ._files import atomic_path, write_csv, write_text
 
 __all__ = ["write_report", "summary_markdown", "cheapest", "pareto_plot", "THRESHOLDS"]
 
@@ -130,14 +128,8 @@ def pareto_plot(points: list[dict], config: dict, path) -> Path:
 def write_report(out, points: list[dict], config: dict) -> dict[str, Path]:
     """Write sweep.csv, pareto.png and summary.md into `out`; return their paths."""
     out = Path(out)
-    buf = io.StringIO()
-    writer = csv.DictWriter(buf, fieldnames=_COLUMNS, extrasaction="ignore", lineterminator="\n")
-    writer.writeheader()
-    for p in _sorted(_measured(points), config):
-        writer.writerow({k: ("" if p.get(k) is None else p.get(k)) for k in _COLUMNS})
     files = {"csv": out / "sweep.csv", "plot": out / "pareto.png", "summary": out / "summary.md"}
-    for key, text in (("csv", buf.getvalue()), ("summary", summary_markdown(points, config))):
-        with atomic_path(files[key]) as tmp:
-            Path(tmp).write_text(text)
+    write_csv(files["csv"], _COLUMNS, _sorted(_measured(points), config))
+    write_text(files["summary"], summary_markdown(points, config))
     pareto_plot(points, config, files["plot"])
     return files

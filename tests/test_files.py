@@ -5,7 +5,7 @@ import os
 
 import pytest
 
-from hairjax._files import atomic_path, write_json
+from hairjax._files import atomic_path, write_csv, write_json, write_text
 
 
 def test_failed_block_leaves_nothing(tmp_path):
@@ -32,3 +32,16 @@ def test_plain_write_permissions(tmp_path):
     umask = os.umask(0)
     os.umask(umask)
     assert path.stat().st_mode & 0o777 == 0o666 & ~umask
+
+
+def test_write_csv_formats_and_ignores(tmp_path):
+    rows = [{"a": 1, "b": 0.123456789, "c": None, "extra": "dropped"}, {"a": "x", "b": 2.0, "c": "y"}]
+    path = write_csv(tmp_path / "t.csv", ("a", "b", "c"), rows, float_format=".3g")
+    assert path.read_text() == "a,b,c\n1,0.123,\nx,2,y\n"
+    assert write_csv(tmp_path / "u.csv", ("b",), rows).read_text() == "b\n0.123456789\n2.0\n"
+
+
+def test_write_text_replaces_atomically(tmp_path):
+    target = write_text(tmp_path / "t.md", "first\n")
+    assert write_text(target, "second\n").read_text() == "second\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["t.md"]  # no temporary left behind
