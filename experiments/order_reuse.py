@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import statistics
 import sys
 import time
 from pathlib import Path
@@ -76,18 +75,10 @@ def image_difference(a: np.ndarray, b: np.ndarray) -> dict:
                 frac_visible=float(np.mean(d.max(axis=-1) > VISIBLE)))
 
 
-def _median_time(fn, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
-
-
 def _timings(name, scene, repeats: int, gl: bool) -> dict:
     import jax
 
+    from hairjax._compare import median_time
     from hairjax._ordering import draw_order, segment_depth
     from hairjax._render import forget, render, visibility_order
 
@@ -98,17 +89,15 @@ def _timings(name, scene, repeats: int, gl: bool) -> dict:
         forget(scene)
         jax.block_until_ready(render(scene))
 
-    full_render()  # warm-up: compilation
     row = dict(scene=name, segments=len(order),
-               order_s=_median_time(lambda: visibility_order(scene), repeats),
-               sort_s=_median_time(lambda: draw_order(segment_depth(depth, seg), scene.ordering.method,
-                                                      scene.ordering.bins), repeats),
-               render_jax_s=_median_time(full_render, repeats), render_gl_s=float("nan"))
+               order_s=median_time(lambda: visibility_order(scene), repeats),
+               sort_s=median_time(lambda: draw_order(segment_depth(depth, seg), scene.ordering.method,
+                                                     scene.ordering.bins), repeats),
+               render_jax_s=median_time(full_render, repeats), render_gl_s=float("nan"))
     if gl:
         from hairjax.gl import render_gl
 
-        render_gl(scene)
-        row["render_gl_s"] = _median_time(lambda: render_gl(scene), repeats)
+        row["render_gl_s"] = median_time(lambda: render_gl(scene), repeats)
     return row
 
 

@@ -21,13 +21,13 @@ import importlib.util
 import io
 import json
 import shutil
-import statistics
 import sys
 import time
 from contextlib import redirect_stdout
 from pathlib import Path
 
 import hairjax as hj
+from hairjax._compare import median_time
 from hairjax._files import write_text
 from hairjax._ordering import draw_order, segment_depth
 from hairjax._projection import camera_view
@@ -80,14 +80,9 @@ def ordering_throughput(strand_counts, points: int, repeats: int) -> list[dict]:
         strands = hj.furball(n, points, seed=0)
         _, depth = camera_view(camera).project(strands.points)
         segments = strands.segments()
-        draw_order(segment_depth(depth, segments), "bins", 256)  # warm-up
-        runs = []
-        for _ in range(repeats):
-            t0 = time.perf_counter()
-            draw_order(segment_depth(depth, segments), "bins", 256)
-            runs.append(time.perf_counter() - t0)
-        rate = len(segments) / statistics.median(runs)
-        rows.append({"strands": n, "segments": len(segments), "median_ms": 1e3 * statistics.median(runs),
+        median = median_time(lambda: draw_order(segment_depth(depth, segments), "bins", 256), repeats)
+        rate = len(segments) / median
+        rows.append({"strands": n, "segments": len(segments), "median_ms": 1e3 * median,
                      "M segments/s": rate / 1e6, "× kim-2003": rate / KIM_2003_LINES_PER_S})
     return rows
 

@@ -30,7 +30,8 @@ def image_stats(a: np.ndarray, b: np.ndarray) -> dict:
     }
 
 
-def _median_time(fn, repeats: int) -> float:
+def median_time(fn, repeats: int) -> float:
+    """Median wall time of `repeats` calls of `fn`, after one untimed call."""
     fn()  # warm-up: compilation, shader builds, caches
     times = []
     for _ in range(repeats):
@@ -63,8 +64,8 @@ def compare(scene: Scene, repeats: int = 3) -> dict:
         "size": [scene.camera.width, scene.camera.height],
         **stats,
         "tau_max_abs": tau_diff,
-        "jax_s": _median_time(jax_full, repeats),
-        "gl_s": _median_time(lambda: render_gl(scene), repeats),
+        "jax_s": median_time(jax_full, repeats),
+        "gl_s": median_time(lambda: render_gl(scene), repeats),
         "repeats": repeats,
     }
 
