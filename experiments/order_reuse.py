@@ -70,9 +70,12 @@ def turned(scene, degrees: float):
 
 
 def image_difference(a: np.ndarray, b: np.ndarray) -> dict:
-    d = np.abs(np.asarray(a, np.float64)[..., :3] - np.asarray(b, np.float64)[..., :3])
-    return dict(rmse=float(np.sqrt(np.mean(d**2))), max_abs=float(d.max()),
-                frac_visible=float(np.mean(d.max(axis=-1) > VISIBLE)))
+    from hairjax._compare import image_stats
+
+    a, b = np.asarray(a, np.float64)[..., :3], np.asarray(b, np.float64)[..., :3]
+    stats = image_stats(a, b)
+    return dict(rmse=stats["rmse"], max_abs=stats["max_abs"],
+                frac_visible=float(np.mean(np.abs(a - b).max(axis=-1) > VISIBLE)))
 
 
 def _timings(name, scene, repeats: int, gl: bool) -> dict:

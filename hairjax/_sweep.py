@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ._compare import image_stats
 from ._files import atomic_path, write_json, write_text
 from ._scene import Ordering, Scene
 from ._supersample import supersample
@@ -133,11 +134,9 @@ def _measure(run, scene: Scene, s: int, repeats: int):
 
 
 def _errors(image: np.ndarray, omega, reference: dict, kappa: float) -> dict:
-    rgb, ref = image[..., :3].astype(np.float64), reference["image"][..., :3]
-    diff = rgb - ref
-    rmse = float(np.sqrt(np.mean(diff**2)))
-    out = {"rmse": rmse, "max_abs": float(np.abs(diff).max()),
-           "rel_rmse": rmse / reference["peak"], "tau_rmse": None, "tau_max": None}
+    stats = image_stats(image[..., :3], reference["image"][..., :3])
+    out = {"rmse": stats["rmse"], "max_abs": stats["max_abs"],
+           "rel_rmse": stats["rmse"] / reference["peak"], "tau_rmse": None, "tau_max": None}
     if omega is not None and reference["omega"] is not None:
         dtau = np.exp(-kappa * np.asarray(omega, np.float64)) - np.exp(-kappa * reference["omega"])
         out["tau_rmse"] = float(np.sqrt(np.mean(dtau**2)))
