@@ -299,21 +299,25 @@ def _bfgs(rtol: float, atol: float):
         def update_hessian(self, y, y_eval, f_info, f_eval_info, count):
             g = f_eval_info.grad
             s, dg = y_eval - y, g - f_info.grad
-            eye = jnp.eye(y.size, dtype=y.dtype)
-            g_norm = jnp.linalg.norm(g)
             sy, yy = s @ dg, dg @ dg
-            # Fires when sᵀy is not positive beyond rounding (the curvature condition fails,
-            # and the update would make H indefinite): keep H.
+            # Fires when sᵀy is not positive beyond rounding (on the first step s = 0, or the
+            # curvature condition fails and the update would make H indefinite): keep H.
             ok = sy > jnp.finfo(sy.dtype).eps * jnp.linalg.norm(s) * jnp.sqrt(yy)
             sy_safe = jnp.where(ok, sy, 1.0)  # fires with `ok` false: the value is unused
-            h = jnp.where(count == 0, jnp.where(g_norm > 0, g_norm, 1.0) * eye,
-                          jnp.where(count == 1, (yy / sy_safe) * eye, f_info.hessian.as_matrix()))
+            g_norm = jnp.linalg.norm(g)
+            g_norm = jnp.where(g_norm > 0, g_norm, 1.0)  # fires for a start at a stationary point
+            # H before this update: ‖g‖·I on the first step (a unit first step), (yᵀy/sᵀy)·I at
+            # the first (s, y) pair, else the running approximation.
+            previous = f_info.hessian.as_matrix()
+            scale = jnp.where(count == 0, g_norm, yy / sy_safe)
+            h = jnp.where(count <= 1, scale * jnp.eye(y.size, dtype=y.dtype), previous)
             hs = h @ s
             shs = s @ hs
             # shs > 0 whenever ok (h is positive definite and s ≠ 0); guarded all the same.
-            shs_safe = jnp.where(ok & (shs > 0), shs, 1.0)
+            update = ok & (shs > 0)
+            shs_safe = jnp.where(update, shs, 1.0)
             updated = h + jnp.outer(dg, dg) / sy_safe - jnp.outer(hs, hs) / shs_safe
-            h = jnp.where(ok & (shs > 0), updated, jnp.where(count == 1, f_info.hessian.as_matrix(), h))
+            h = jnp.where(update, updated, jnp.where(count == 0, h, previous))
             info = optx.FunctionInfo.EvalGradHessian(f_eval_info.f, g, operator(h))
             return info, count + jnp.where((count == 0) | ok, 1, 0)
 
@@ -448,12 +452,6 @@ def fit(
                      std_error=std_error, undetermined=undetermined, rmse=rmse)
 
 
-def _jacobian(residuals, z, terms) -> tuple[np.ndarray, np.ndarray]:
-    """The residuals' Jacobian in z and the residuals, in float64 NumPy."""
-    jac = jax.jacfwd(residuals)(z, terms)
-    return np.asarray(jac, dtype=np.float64), np.asarray(residuals(z, terms), dtype=np.float64)
-
-
 def _standard_errors(residuals, flat, unravel, terms, names):
     """Standard errors from σ²(JᵀJ)⁻¹ in z, mapped to the parameters by the transforms'
     derivatives (delta method).
@@ -462,7 +460,8 @@ def _standard_errors(residuals, flat, unravel, terms, names):
     1e-10·λ_max (numerically singular) or below m·1e-12: moving along it by one unit (an
     e-fold of shininess or κ) changes the m residuals by under 1e-6 RMS, below float32
     resolution of an image. Parameters with weight in such a direction get no error."""
-    jac, r = _jacobian(residuals, flat, terms)
+    jac = np.asarray(jax.jacfwd(residuals)(flat, terms), dtype=np.float64)
+    r = np.asarray(residuals(flat, terms), dtype=np.float64)
     m, n = jac.shape
     if not (np.all(np.isfinite(jac)) and np.all(np.isfinite(r))):
         # Fires at a point where the image or its derivatives overflow: nothing is known.
