@@ -14,6 +14,8 @@ SHADOW_FILTER_RADIUS = 1
 # Below this base the Kajiya-Kay specular power is exactly 0 (value and gradients), so
 # pow(0, p) and log(0) never appear. 1e-12^p is < 1e-6 already for p ≥ 0.5, the smallest
 # shininess we support, so the cut is below float32 resolution of any visible highlight.
+# (The base b is carried as its gap 1 − b, whose float32 resolution at b ≈ 0 is 2^-24:
+# there the cut acts at b ≤ 0, as coarse as b's own rounding near 0.)
 SPECULAR_BASE_EPS = 1e-12
 
 # Vectors shorter than this are treated as zero by safe normalisation (zero-length

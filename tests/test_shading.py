@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from hairjax import ShadingParams, kajiya_kay
-from hairjax._shading import specular_power
+from hairjax._shading import kajiya_kay_terms, specular_power
 
 PARAMS = ShadingParams(kd=(0.5, 0.25, 1.0), ks=2.0, shininess=3.0)
 
@@ -64,13 +64,15 @@ def test_sine_is_exact_near_zero():
 
 
 def test_power_finite_at_zero_base_and_large_exponent():
+    # specular_power takes the gap 1 − b (kajiya_kay_terms' second value).
     for base in (0.0, 1e-300, 0.5, 1.0):
         for p in (0.5, 1.0, 1e4):
             val, grads = jax.value_and_grad(specular_power, argnums=(0, 1))(
-                jnp.asarray(base), jnp.asarray(p))
+                jnp.asarray(1.0 - base), jnp.asarray(p))
             assert np.isfinite(val) and all(np.isfinite(g) for g in grads)
-    assert specular_power(jnp.asarray(0.0), jnp.asarray(3.0)) == 0.0
-    assert specular_power(jnp.asarray(-0.3), jnp.asarray(3.0)) == 0.0
+    assert specular_power(jnp.asarray(1.0), jnp.asarray(3.0)) == 0.0  # b = 0
+    assert specular_power(jnp.asarray(1.3), jnp.asarray(3.0)) == 0.0  # b = −0.3
+    assert specular_power(jnp.asarray(0.0), jnp.asarray(1e4)) == 1.0  # b = 1
     np.testing.assert_allclose(specular_power(jnp.asarray(0.5), jnp.asarray(3.0)), 0.125)
 
 
@@ -87,16 +89,72 @@ def test_gradients_finite_for_tangent_parallel_to_light_and_view():
         assert np.all(np.isfinite(leaf))
 
 
+def test_terms_and_power_equal_max_b_0_to_the_p():
+    """specular_power(kajiya_kay_terms(...)[1], p) = max(b, 0)^p with b from its definition
+    (docs/model.md §8), for random unit vectors (b all over [−1, 1]) and both models; and
+    the gap equals 1 − b (float64: agreement to rounding)."""
+    rng = np.random.default_rng(3)
+    vecs = rng.normal(size=(3, 500, 3))
+    vecs /= np.linalg.norm(vecs, axis=-1, keepdims=True)
+    t, light, eye = vecs
+    tl, tv = np.sum(t * light, -1), np.sum(t * eye, -1)
+    sl, sv = (np.linalg.norm(np.cross(t, x), axis=-1) for x in (light, eye))
+    p = 7.5
+    for model, b in (("kajiya-kay", tl * tv + sl * sv), ("kajiya-kay-mirror", sl * sv - tl * tv)):
+        _, gap = jax.vmap(kajiya_kay_terms, in_axes=(0, 0, 0, None))(t, light, eye, model)
+        np.testing.assert_allclose(gap, 1 - b, rtol=0, atol=1e-15)
+        power = jax.vmap(specular_power, in_axes=(0, None))(gap, jnp.asarray(p))
+        # b^p's condition number is p: 1e-15 absolute in b, ≤ p·1e-15/b relative.
+        np.testing.assert_allclose(power, np.maximum(b, 0) ** p, rtol=1e-12, atol=1e-15)
+        assert np.any(b < 0) and np.any(b > 0.9)
+
+
+@pytest.mark.parametrize("model", ["kajiya-kay", "kajiya-kay-mirror"])
+def test_gradients_finite_at_the_peak_and_beyond(model):
+    """At b = 1 exactly (s = 0: T ⟂ L and T ⟂ V; L = V, or V the reflection of L in the
+    plane normal to T; T ∥ L ∥ ±V) and at b ≤ 0 (b = −1, 0, −⅔), b^p and its gradients in T, L, V
+    and p are finite, in float64 and float32; b^p = 1 at the peak, exactly 0 beyond."""
+    T, L, Z = unit(0, 1, 0), unit(1, 0, 0), unit(0, 0, 1)
+    a, a_mirror = unit(1, 2, 2), unit(1, -2, 2)  # T·a = ⅔ = −T·a_mirror
+    if model == "kajiya-kay":  # b = cos(θ_L − θ_V)
+        peak = [(T, L, Z), (T, a, a), (T, T, T)]
+        beyond = [(T, T, -T), (T, L, T), (T, a, -T)]
+    else:  # b = −cos(θ_L + θ_V)
+        peak = [(T, L, Z), (T, a, a_mirror), (T, T, -T)]
+        beyond = [(T, T, T), (T, L, T), (T, a, T)]
+
+    def power(t, light, eye, p):
+        return specular_power(kajiya_kay_terms(t, light, eye, model)[1], p)
+
+    for dtype in ("float64", "float32"):
+        with jax.enable_x64(dtype == "float64"):
+            f = jax.value_and_grad(power, argnums=(0, 1, 2, 3))
+            for vecs, expected in ((peak, 1.0), (beyond, 0.0)):
+                for t, light, eye in vecs:
+                    args = [jnp.asarray(np.asarray(x), dtype) for x in (t, light, eye)]
+                    for p in (0.5, 1e4):
+                        value, grads = f(*args, jnp.asarray(p, dtype))
+                        if expected == 1.0:
+                            np.testing.assert_allclose(value, 1.0, rtol=1e-6)
+                        else:
+                            assert float(value) == 0.0
+                        for g in grads:
+                            assert np.all(np.isfinite(np.asarray(g))), (dtype, t, light, eye, p)
+
+
 def test_specular_power_gradient_matches_finite_differences():
     b, p = 0.73, 17.0
-    g_b, g_p = jax.grad(specular_power, argnums=(0, 1))(jnp.asarray(b), jnp.asarray(p))
+    gap = 1 - b
+    g_gap, g_p = jax.grad(specular_power, argnums=(0, 1))(jnp.asarray(gap), jnp.asarray(p))
     eps = 1e-7  # ≈ √eps_float64 · scale
-    fd_b = (specular_power(b + eps, p) - specular_power(b - eps, p)) / (2 * eps)
-    fd_p = (specular_power(b, p + eps) - specular_power(b, p - eps)) / (2 * eps)
+    fd_gap = (specular_power(gap + eps, p) - specular_power(gap - eps, p)) / (2 * eps)
+    fd_p = (specular_power(gap, p + eps) - specular_power(gap, p - eps)) / (2 * eps)
     # Central differences: truncation O(eps²), roundoff O(1e-16/eps) = 1e-9 relative.
-    np.testing.assert_allclose(g_b, fd_b, rtol=1e-7)
+    np.testing.assert_allclose(g_gap, fd_gap, rtol=1e-7)
     np.testing.assert_allclose(g_p, fd_p, rtol=1e-7)
-    np.testing.assert_allclose(g_b, p * b ** (p - 1), rtol=1e-12)
+    # d(b^p)/d(gap) = −d(b^p)/db = −p·b^(p−1); d/dp = b^p·log b.
+    np.testing.assert_allclose(g_gap, -p * b ** (p - 1), rtol=1e-12)
+    np.testing.assert_allclose(g_p, b**p * np.log(b), rtol=1e-12)
 
 
 def test_scalar_parameters_broadcast_to_rgb():

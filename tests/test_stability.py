@@ -55,6 +55,7 @@ inputs that make it fire and the guarded result checked against the model's valu
 | _vectors: safe_norm double-where                | safe_norm_at_zero                           |
 | _vectors: safe_normalize (unused by renderer)   | safe_normalize_of_zero                      |
 | _shading: specular_power double-where           | specular_power_at_and_below_the_cut         |
+| _shading: kajiya_kay_terms double-where, b ≤ 0  | kajiya_kay_gap_on_the_far_side              |
 | _shadows: map_margin initial=1.0                | map_margin_without_strands                  |
 | _shadows: light_frame span fallback             | light_sees_all_points_at_one_depth          |
 | _shadows: light_frame, no point seen            | no_point_in_front_of_a_point_light          |
@@ -861,27 +862,67 @@ def test_guard_safe_normalize_of_zero():
 
 @pytest.mark.parametrize("dtype", ["float64", "float32"])
 def test_guard_specular_power_at_and_below_the_cut(dtype):
-    """_shading.specular_power's double-where: for b ≤ SPECULAR_BASE_EPS (b < 0 on the
-    cone's far side, b = 0 with p = 0.5 where d(b^p)/db = ∞, log 0 = −∞ in d/dp) the value
-    and both gradients are exactly 0; just above the cut, b^p by hand, and the jump at the
-    cut is ≤ eps^0.5 = 1e-6 (the reason for the constant's value)."""
+    """_shading.specular_power's double-where: for b = 1 − gap ≤ SPECULAR_BASE_EPS (b < 0 on
+    the cone's far side, b = 0 with p = 0.5 where d(b^p)/db = ∞, log 0 = −∞ in d/dp) the
+    value and both gradients are exactly 0; just above the cut, b^p by hand. The jump at the
+    cut: ≤ eps^0.5 = 1e-6 in float64 (the reason for the constant's value); in float32 the
+    smallest base above it is 2⁻²⁴ (1 − gap with gap's resolution at 1), a jump of 2.4e-4 —
+    within b^0.5's error from b's own absolute rounding (~u: b ≈ 0 is a cancelling sum)."""
     from hairjax._constants import SPECULAR_BASE_EPS
     from hairjax._shading import specular_power
 
     with precision(dtype):
         f = jax.value_and_grad(specular_power, argnums=(0, 1))
-        for b in (-0.3, 0.0, 1e-13, SPECULAR_BASE_EPS):
+        one = np.dtype(dtype).type(1.0)
+        # Gaps whose b = 1 − gap (exact: Sterbenz) is −0.3, 0, 1e-13, ≤ SPECULAR_BASE_EPS.
+        at_cut = one - np.dtype(dtype).type(SPECULAR_BASE_EPS)
+        at_cut = at_cut if one - at_cut <= SPECULAR_BASE_EPS else np.nextafter(at_cut, 2 * one)
+        for gap in (one + np.dtype(dtype).type(0.3), one, one - np.dtype(dtype).type(1e-13), at_cut):
+            assert one - gap <= SPECULAR_BASE_EPS
             for p in (0.5, 1e4):
-                value, (gb, gp) = f(jnp.asarray(b), jnp.asarray(p))
-                assert float(value) == 0.0 and float(gb) == 0.0 and float(gp) == 0.0
-        b = 2 * SPECULAR_BASE_EPS
-        value, (gb, gp) = f(jnp.asarray(b), jnp.asarray(0.5))
+                value, (gg, gp) = f(jnp.asarray(gap), jnp.asarray(p))
+                assert float(value) == 0.0 and float(gg) == 0.0 and float(gp) == 0.0
+        gap = min(one - np.dtype(dtype).type(2 * SPECULAR_BASE_EPS), np.nextafter(one, 0 * one))
+        b = float(one - gap)  # 2e-12 in float64, 2⁻²⁴ in float32
+        assert b > SPECULAR_BASE_EPS
+        value, (gg, gp) = f(jnp.asarray(gap), jnp.asarray(0.5))
         u = unit_roundoff(np.dtype(dtype))
-        # exp(p·log b): log b and the product carry a few ulps, times |p·log b| ≈ 13.5.
+        # exp(p·log1p(−gap)): log1p and the product carry a few ulps, times |p·log b| ≤ 13.5.
         np.testing.assert_allclose(float(value), np.sqrt(b), rtol=64 * u)
-        np.testing.assert_allclose(float(gb), 0.5 / np.sqrt(b), rtol=64 * u)
+        np.testing.assert_allclose(float(gg), -0.5 / np.sqrt(b), rtol=64 * u)
         np.testing.assert_allclose(float(gp), np.sqrt(b) * np.log(b), rtol=64 * u)
         assert np.sqrt(SPECULAR_BASE_EPS) <= 1e-6
+        assert float(value) <= np.sqrt(max(2 * SPECULAR_BASE_EPS, 2 * u)) * (1 + 64 * u)
+
+
+@pytest.mark.parametrize("dtype", ["float64", "float32"])
+def test_guard_kajiya_kay_gap_on_the_far_side(dtype):
+    """_shading.kajiya_kay_terms' double-where: where b ≤ 0 the gap is 1 − b, not
+    s²/(1 + b), which is 0/0 at b = −1 (kajiya-kay: T ∥ L, V = −T; mirror: T ∥ L ∥ V) — and
+    its gradient NaN. There, and at b = 0 (T ⟂ L, T ∥ V) and b = −0.75: gap = 1 − b by hand,
+    b^p = 0 and every gradient (T, L, V, p) exactly 0."""
+    from hairjax._shading import kajiya_kay_terms, specular_power
+
+    x, y = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
+    w = np.array([0.6614378, 0.75, 0.0])  # T·w = 0.75 for T = y (w unit to 1e-8; exact b)
+    cases = [("kajiya-kay", x, x, -x, -1.0), ("kajiya-kay-mirror", x, x, x, -1.0),
+             ("kajiya-kay", x, y, x, 0.0), ("kajiya-kay", y, w, -y, -0.75),
+             ("kajiya-kay-mirror", y, w, y, -0.75)]
+    with precision(dtype):
+        for model, t, light, eye, b in cases:
+            t, light, eye = (jnp.asarray(a) for a in (t, light, eye))
+
+            def power(t, light, eye, p, model=model):
+                return specular_power(kajiya_kay_terms(t, light, eye, model)[1], p)
+
+            _, gap = kajiya_kay_terms(t, light, eye, model)
+            assert float(gap) == 1.0 - b, (model, float(gap), b)
+            value, grads = jax.value_and_grad(power, argnums=(0, 1, 2, 3))(t, light, eye, jnp.asarray(1e4))
+            assert float(value) == 0.0
+            assert all(np.all(np.asarray(g) == 0.0) for g in grads), (model, grads)
+            grad_gap = jax.grad(lambda t, light, eye, model=model: kajiya_kay_terms(
+                t, light, eye, model)[1], argnums=(0, 1, 2))(t, light, eye)
+            assert finite(grad_gap)
 
 
 def test_guard_light_sees_all_points_at_one_depth():
