@@ -19,6 +19,7 @@ The cases (issue 5 §2's list) and what they add:
 | case                            | test_…                                  | scene: own assertions          |
 |---------------------------------|-----------------------------------------|--------------------------------|
 | shininess 0.5 … 10⁴             | shininess_extremes                      | mixed, flat (b ≈ 1 at centre)  |
+| b^p near its peak at p = 10⁴    | highlight_accuracy_at_p_1e4             | vs float64: ~sqrt(2p)·u bound  |
 | κ 0 … 10³                       | kappa_extremes                          | mixed                          |
 | opacity 10⁻⁶ … 1                | opacity_extremes                        | mixed: alpha ≤ n·a; a = 1 → 1  |
 | width 0.25 … 8 px               | widths_quarter_and_eight_pixels         | mixed: a·coverage by hand      |
@@ -38,8 +39,12 @@ resolved depth to 4e-4 (hair just in front of the occluder vanished): fixed in
 gl/_renderer.py. (2) A point light at the hair's bounding-box centre raised a RuntimeWarning
 (texel cast of ~1e300): fixed in _shadows.shadow_setup. (3) A camera up of length < 1e-9
 (or within 1e-9 rad of forward, which Camera accepts) turned the image by 90°: fixed in
-_projection._basis. (4) At p = 10⁴ and b ≈ 1, float32 (GL and JAX alike) errs by 2.4e-4:
-xfail, see FLOAT32_POWER.
+_projection._basis. (4) At p = 10⁴ and b ≈ 1, float32 (GL and JAX alike) erred by 2.4e-4
+on `flat` (b^p has condition number p in b, and b was rounded): fixed in
+_shading.kajiya_kay_terms / specular_power and model.glsl, which carry the gap
+1 − b = s²/(1 + b), s = sin(θ_L ∓ θ_V), and take b^p = exp(p·log1p(−gap)) (GLSL with its
+own log1p: llvmpipe's log is inaccurate just below 1); now < 1e-6 there, ≤ 3e-5 relative
+near any peak (test_highlight_accuracy_at_p_1e4, against 2.7e-3 before).
 
 Every guard (double-where, clamp, safe norm, fallback) and the test that reaches it — with
 inputs that make it fire and the guarded result checked against the model's value:
@@ -83,6 +88,8 @@ inputs that make it fire and the guarded result checked against the model's valu
 | model.glsl: fragment_depth z0 == z1             | test_all_points_at_one_depth[gl]            |
 | model.glsl: safe_norm                           | test_tangents_parallel_to_light_and_view[gl]|
 | model.glsl: specular_power                      | test_shininess_extremes[mixed-0.5-gl]       |
+| model.glsl: kajiya_kay_gap, b ≤ 0               | glsl_kajiya_kay_gap_and_log1p               |
+| model.glsl: log1p_accurate, x ∉ (−½, 1)         | glsl_kajiya_kay_gap_and_log1p               |
 | model.glsl: slice_of clamp                      | test_all_points_at_one_depth[gl] (maps)     |
 | ribbon.geom: zero-length segments               | test_zero_length_segments_…_points[gl]      |
 | strand.vert: safe_normalize                     | test_point_light_at_a_strand_point[gl]      |
@@ -492,19 +499,155 @@ def coverage_by_hand(d: float, w: float) -> float:
 @pytest.mark.parametrize("case", ["mixed", "flat"])
 def test_shininess_extremes(request, backend, shininess, case):
     """p = 0.5 (b^p steep at b = 0) and p = 10⁴ (a needle highlight; in `flat` the light
-    sits next to the eye, so b ≈ 1 around the centre and the float32 rounding of b matters)."""
-    if backend == "gl" and case == "flat" and shininess == 1e4:
-        request.applymarker(pytest.mark.xfail(strict=True, reason=FLOAT32_POWER))
+    sits next to the eye, so b ≈ 1 around the centre and the float32 rounding of b matters:
+    see test_highlight_accuracy_at_p_1e4)."""
     check(backend, request, case, dict(DEFAULT, shininess=shininess))
 
 
-# Not fixed here: the fix changes how both renderers evaluate docs/model.md §8's b^p.
-FLOAT32_POWER = (
-    "b^p is ill-conditioned in b (condition number p): b = (T·L)(T·V) + sin sin computed in "
-    "float32 from float32 unit vectors carries ~4u absolute error, so near b = 1 the highlight "
-    "errs by ~4pu relative — 2.4e-4 at p = 1e4 (JAX float32 is off from float64 by as much), "
-    "above the 1e-4 agreement. Evaluating 1 − b = s²/(1 + b), s = sin θ_L cos θ_V ∓ "
-    "cos θ_L sin θ_V, and b^p = exp(p·log1p(−(1 − b))) would cut it to ~sqrt(2p)·u.")
+def near_peak_directions(model: str, n: int, p: float, rng) -> tuple[np.ndarray, ...]:
+    """`n` float32 unit (T, L, V) around the highlight's peak: θ_L uniform in [0.05, π − 0.05],
+    θ_V = θ_L + δ (mirror: π − θ_L + δ) with p(1 − cos δ) ≤ 2, i.e. b^p ≥ e⁻², and L, V at
+    random azimuths about T (b depends on the angles only); the last rows have L = V (mirror:
+    V = L reflected in the plane normal to T), b = 1 up to the rounding to float32."""
+    t = rng.normal(size=(n, 3))
+    t /= np.linalg.norm(t, axis=1, keepdims=True)
+    e1 = rng.normal(size=(n, 3))
+    e1 -= np.sum(e1 * t, axis=1, keepdims=True) * t
+    e1 /= np.linalg.norm(e1, axis=1, keepdims=True)
+    e2 = np.cross(t, e1)
+    theta_l = rng.uniform(0.05, np.pi - 0.05, n)
+    delta = rng.uniform(-1.0, 1.0, n) * np.arccos(1 - 2 / p)
+    delta[-8:] = 0.0
+    theta_v = theta_l + delta if model == "kajiya-kay" else np.pi - theta_l + delta
+
+    def direction(theta, phi):
+        around = np.cos(phi)[:, None] * e1 + np.sin(phi)[:, None] * e2
+        return np.cos(theta)[:, None] * t + np.sin(theta)[:, None] * around
+
+    phi_l, phi_v = rng.uniform(0.0, 2 * np.pi, (2, n))
+    phi_v[-8:] = phi_l[-8:]
+    return tuple(x.astype(np.float32) for x in (t, direction(theta_l, phi_l), direction(theta_v, phi_v)))
+
+
+def highlight_by_angles(t, light, eye, model: str, p: float) -> np.ndarray:
+    """max(b, 0)^p in float64 for the directions of the (float32) vectors, from the angles:
+    b = cos Δ, Δ = θ_L − θ_V (kajiya-kay) or θ_L + θ_V − π (mirror: −cos(θ_L + θ_V)), so
+    1 − b = 2 sin²(Δ/2) without cancellation. The vectors are normalised first: the model is
+    defined for unit vectors, and their float32 norms 1 ± u would move b by O(u) — the very
+    error under test (float64 rendering sees unit vectors to 1e-16)."""
+    t, light, eye = (np.asarray(x, np.float64) for x in (t, light, eye))
+    t, light, eye = (x / np.linalg.norm(x, axis=1, keepdims=True) for x in (t, light, eye))
+
+    def angle(x):
+        return np.arctan2(np.linalg.norm(np.cross(t, x), axis=1), np.sum(t * x, axis=1))
+
+    delta = angle(light) - angle(eye) if model == "kajiya-kay" else angle(light) + angle(eye) - np.pi
+    gap = 2 * np.sin(delta / 2) ** 2
+    return np.where(gap < 1, np.exp(p * np.log1p(-np.minimum(gap, 1.0))), 0.0)
+
+
+GLSL_PROBE = """#version 450
+layout(local_size_x = 64) in;
+#include "hairjax_model"
+layout(std430, binding = 0) readonly buffer Inputs { float inp[]; };
+layout(std430, binding = 1) writeonly buffer Outputs { float outp[]; };
+uniform uint n;
+%s
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= n) return;
+%s
+}
+"""
+
+
+def run_glsl(gl, body: str, inputs: np.ndarray, outputs: int, uniforms: str = "", **values) -> np.ndarray:
+    """GLSL statements `body`, with model.glsl included, once per row i of `inputs` (`[n, k]`,
+    read as inp[k·i + j]); they write outp[outputs·i + j]. Returns `[n, outputs]` float32."""
+    from hairjax.gl._context import release
+    from hairjax.gl._programs import programs
+
+    programs(gl)  # registers the "hairjax_model" include
+    inputs = np.ascontiguousarray(inputs, np.float32)
+    n = len(inputs)
+    shader = gl.compute_shader(GLSL_PROBE % (uniforms, body))
+    src, dst = gl.buffer(inputs.tobytes()), gl.buffer(reserve=4 * outputs * n)
+    try:
+        src.bind_to_storage_buffer(0)
+        dst.bind_to_storage_buffer(1)
+        shader["n"] = n
+        for name, value in values.items():
+            shader[name] = value
+        shader.run((n + 63) // 64)
+        return np.frombuffer(dst.read(), np.float32).reshape(n, outputs).copy()
+    finally:
+        release(gl, shader, src, dst)
+
+
+def glsl_highlight(gl, t, light, eye, model: str, p: float) -> np.ndarray:
+    """model.glsl on rows (T, L, V): `[n, 2]` of (Ks·max(b, 0)^p from shade_point with Ks = 1
+    and nothing else, the renderer's path; kajiya_kay_gap)."""
+    from hairjax.gl._programs import SHADING_MODEL_IDS
+
+    body = """
+    vec3 T = vec3(inp[9u * i], inp[9u * i + 1u], inp[9u * i + 2u]);
+    vec3 L = vec3(inp[9u * i + 3u], inp[9u * i + 4u], inp[9u * i + 5u]);
+    vec3 V = vec3(inp[9u * i + 6u], inp[9u * i + 7u], inp[9u * i + 8u]);
+    Shading s = Shading(vec3(0.0), vec3(1.0), vec3(0.0), p, 0.0, model);
+    outp[2u * i] = shade_point(s, T, L, V, vec3(1.0), vec3(1.0), 1.0).x;
+    outp[2u * i + 1u] = kajiya_kay_gap(model, dot(T, L), dot(T, V), safe_norm(cross(T, L)),
+                                       safe_norm(cross(T, V)));"""
+    return run_glsl(gl, body, np.concatenate([t, light, eye], axis=1), 2,
+                    "uniform int model;\nuniform float p;", model=SHADING_MODEL_IDS[model], p=p)
+
+
+@pytest.mark.parametrize("model", ["kajiya-kay", "kajiya-kay-mirror"])
+@pytest.mark.parametrize("backend", ["float32", "gl"])
+def test_highlight_accuracy_at_p_1e4(request, backend, model):
+    """b^p at p = 10⁴ near its peak (b^p ≥ e⁻²), in float32 — kajiya_kay_terms +
+    specular_power in JAX, shade_point in GLSL — against the model in float64 at the same
+    float32 directions, to the bound below; and the old exp(p·log b), b rounded in float32,
+    fails that bound (the control: the gap 1 − b = s²/(1 + b) is what makes the difference).
+    The errors are printed (pytest -s).
+
+    The bound, u = 2⁻²⁴: with s = sin(θ_L ∓ θ_V), g = 1 − b = s²/(1 + b), x = p·g ≈ −ln b^p ≤ 2:
+    - cos θ = T·X errs by ≤ 3u, sin θ = ‖T × X‖ by ≤ 6u (3u the cross product, 2.5u the
+      norm), so s = sin θ_L cos θ_V ∓ cos θ_L sin θ_V by |δs| ≤ 6u(|cos θ_L| + |cos θ_V|) +
+      3u(sin θ_L + sin θ_V) + 2u ≤ (2√45 + 2)u < 16u (absolute: s → 0 at the peak);
+    - g then errs by 2|δs|/|s| relative, plus ~12u (the square, 1 + b, the division, the
+      inputs' norms 1 ± u scaling s² and 1 + b alike), and b^p = exp(p·log1p(−g)) by
+      p·δg plus a few u·(x + 1) (log1p, the product, exp: GLSL allows 3 + 2x ulps);
+    - p·g·2|δs|/|s| = 2x|δs|/|s| and |s| = sqrt(g(1 + b)) ≈ sqrt(2x/p) give
+      relative error ≤ 16u·sqrt(2p·x) + 64u ≤ 32u·sqrt(p) + 64u = 1.95e-4 (x ≤ 2, p = 10⁴).
+    Rounding b itself (the old formula) errs by p·|δb| with |δb| a few u: ~1e-3."""
+    from hairjax._shading import kajiya_kay_terms, specular_power
+
+    p = 1e4
+    u = unit_roundoff(np.float32)
+    bound = 32 * u * np.sqrt(p) + 64 * u
+    t, light, eye = near_peak_directions(model, 4096, p, np.random.default_rng(11))
+    exact = highlight_by_angles(t, light, eye, model, p)
+    assert exact.min() >= np.exp(-2.0) * (1 - 1e-9)
+    if backend == "gl":
+        got = glsl_highlight(request.getfixturevalue("gl"), t, light, eye, model, p)[:, 0]
+    else:
+        with precision("float32"):
+            power = jax.jit(jax.vmap(lambda a, b, c: specular_power(kajiya_kay_terms(a, b, c, model)[1],
+                                                                    jnp.float32(p))))
+            got = np.asarray(power(t, light, eye))
+        assert got.dtype == np.float32
+    err = np.max(np.abs(got.astype(np.float64) - exact) / exact)
+    # The control: b = (T·L)(T·V) ± sin sin rounded in float32, then exp(p·log b) in float32.
+    tl, tv = np.sum(t * light, axis=1), np.sum(t * eye, axis=1)
+    sl, sv = (np.linalg.norm(np.cross(t, x), axis=1) for x in (light, eye))
+    b = tl * tv + sl * sv if model == "kajiya-kay" else sl * sv - tl * tv
+    assert b.dtype == np.float32
+    old = np.exp(np.float32(p) * np.log(b))
+    old_err = np.max(np.abs(old.astype(np.float64) - exact) / exact)
+    print(f"\n{backend} {model}, p = 1e4, b^p ≥ e^-2: max relative error {err:.3g} "
+          f"(bound {bound:.3g}); old exp(p·log b) in float32: {old_err:.3g}")
+    assert err <= bound, (err, bound)
+    assert old_err > bound, (old_err, bound)
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
@@ -923,6 +1066,35 @@ def test_guard_kajiya_kay_gap_on_the_far_side(dtype):
             grad_gap = jax.grad(lambda t, light, eye, model=model: kajiya_kay_terms(
                 t, light, eye, model)[1], argnums=(0, 1, 2))(t, light, eye)
             assert finite(grad_gap)
+
+
+def test_guard_glsl_kajiya_kay_gap_and_log1p(gl):
+    """model.glsl: kajiya_kay_gap's b ≤ 0 branch on the cases of
+    test_guard_kajiya_kay_gap_on_the_far_side (b = −1, where s²/(1 + b) is 0/0; 0; −0.75):
+    gap = 1 − b by hand, and shade_point's Ks·b^p exactly 0 (specular_power's cut). And
+    log1p_accurate's branches: the atanh series for −½ < x < 1 (down to x below ulp(1)/2,
+    where 1 + x = 1) and log(1 + x) outside, each within 16u of float64 log1p (GLSL allows
+    division 2.5 ulps and log 3 ulps, 2⁻²¹ absolute on [0.5, 2]; llvmpipe: ≤ 3u), where
+    plain log(1 + x) is off by 10⁵ u and more near 0 (asserted: the reason for the function)."""
+    x, y = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
+    w = np.array([0.6614378, 0.75, 0.0])
+    for model, rows, b in (("kajiya-kay", [(x, x, -x), (x, y, x), (y, w, -y)], [-1.0, 0.0, -0.75]),
+                           ("kajiya-kay-mirror", [(x, x, x), (y, w, y)], [-1.0, -0.75])):
+        t, light, eye = (np.array(c, np.float32) for c in zip(*rows))
+        out = glsl_highlight(gl, t, light, eye, model, 1e4)
+        np.testing.assert_array_equal(out[:, 1], 1.0 - np.float32(b))
+        np.testing.assert_array_equal(out[:, 0], 0.0)
+        for p in (0.5, 1.0):
+            np.testing.assert_array_equal(glsl_highlight(gl, t, light, eye, model, p)[:, 0], 0.0)
+    xs = np.concatenate([-np.geomspace(1e-9, 0.49, 60), np.geomspace(1e-9, 0.99, 60),
+                         [-0.5, -0.75, -0.999, 1.0, 3.0, 1e3]]).astype(np.float32)
+    body = "    outp[2u * i] = log1p_accurate(inp[i]);\n    outp[2u * i + 1u] = log(1.0 + inp[i]);"
+    out = run_glsl(gl, body, xs[:, None], 2)
+    exact = np.log1p(xs.astype(np.float64))
+    rel = np.abs(out.astype(np.float64) - exact[:, None]) / np.abs(exact[:, None])
+    u = unit_roundoff(np.float32)
+    assert rel[:, 0].max() <= 16 * u, xs[np.argmax(rel[:, 0])]
+    assert rel[:, 1].max() >= 1e5 * u  # plain log(1 + x): 1 + x rounds away x's low bits
 
 
 def test_guard_light_sees_all_points_at_one_depth():

@@ -44,9 +44,37 @@ float safe_norm(vec3 x) {
     return sq > SAFE_NORM_EPS * SAFE_NORM_EPS ? sqrt(sq) : 0.0;
 }
 
-// §8: max(b, 0)^p; fires at b ≤ SPECULAR_BASE_EPS (the cone's far side): exactly 0, no log(b ≤ 0).
-float specular_power(float b, float p) {
-    return b > SPECULAR_BASE_EPS ? exp(p * log(b)) : 0.0;
+// log(1 + x) for x > −1, to a few ulps relative: GLSL has no log1p. Not the classic
+// log(u)·x/(u − 1), u = 1 + x (Goldberg 1991, Thm 4): it needs log(u) to ½ ulp, but GLSL
+// bounds log's error on [0.5, 2] only absolutely (2⁻²¹), and llvmpipe's log(u) just below 1
+// errs by ~ulp(1): 10⁵ ulps of log1p(−10⁻⁶), measured. So for −½ < x < 1 (|z| < ⅓):
+// log1p(x) = 2 atanh(z), z = x/(2 + x), by its odd series to z¹⁵ (truncation < z¹⁶/17·9/8
+// < 2·10⁻⁹ relative; x below ulp(1)/2 needs no special case: z = x/2 then). Fires for x ≤ −½
+// or x ≥ 1: there 1 + x is exact (Sterbenz) or |log(1 + x)| ≥ log 2, and plain log is accurate.
+float log1p_accurate(float x) {
+    if (x <= -0.5 || x >= 1.0) return log(1.0 + x);
+    float z = x / (2.0 + x);
+    float z2 = z * z;
+    float series = 1.0 + z2 * (1.0 / 3.0 + z2 * (1.0 / 5.0 + z2 * (1.0 / 7.0 + z2 * (1.0 / 9.0
+                 + z2 * (1.0 / 11.0 + z2 * (1.0 / 13.0 + z2 * (1.0 / 15.0)))))));
+    return 2.0 * z * series;
+}
+
+// §8: max(b, 0)^p from gap = 1 − b (kajiya_kay_gap); fires at b ≤ SPECULAR_BASE_EPS (the
+// cone's far side): exactly 0, no log1p(−gap ≤ −1).
+float specular_power(float gap, float p) {
+    return 1.0 - gap > SPECULAR_BASE_EPS ? exp(p * log1p_accurate(-gap)) : 0.0;
+}
+
+// §8: 1 − b without cancellation (b^p's condition number in b is p). θ_L, θ_V: the angles of
+// L and V to T. kajiya-kay: b = cos(θ_L − θ_V), mirror: b = −cos(θ_L + θ_V); both 1 − b =
+// s²/(1 + b) with s = sin(θ_L ∓ θ_V) = sin θ_L cos θ_V ∓ cos θ_L sin θ_V (as _shading.py).
+// Fires at b ≤ 0 (power 0 there): 1 − b ≥ 1 directly, so 1 + b → 0 at b = −1 never divides.
+float kajiya_kay_gap(int model, float tl, float tv, float sin_tl, float sin_tv) {
+    bool seed = model == SHADING_KAJIYA_KAY;
+    float b = seed ? tl * tv + sin_tl * sin_tv : sin_tl * sin_tv - tl * tv;
+    float s = seed ? sin_tl * tv - tl * sin_tv : sin_tl * tv + tl * sin_tv;
+    return b > 0.0 ? s * s / (1.0 + b) : 1.0 - b;
 }
 
 struct Shading {
@@ -64,10 +92,8 @@ vec3 shade_point(Shading s, vec3 T, vec3 L, vec3 V, vec3 base, vec3 light_rgb, f
     float tv = dot(T, V);
     float sin_tl = safe_norm(cross(T, L));
     float sin_tv = safe_norm(cross(T, V));
-    float b = (s.model == SHADING_KAJIYA_KAY) ? tl * tv + sin_tl * sin_tv
-                                              : sin_tl * sin_tv - tl * tv;
     vec3 diffuse = s.kd * sin_tl;
-    vec3 specular = s.ks * specular_power(b, s.shininess);
+    vec3 specular = s.ks * specular_power(kajiya_kay_gap(s.model, tl, tv, sin_tl, sin_tv), s.shininess);
     return s.ambient * base + tau * light_rgb * (diffuse * base + specular);
 }
 
