@@ -7,12 +7,15 @@ The image is linear in Kd, Ks and the ambient term:
 A = composite(c), K_d = composite(τ·light·sin(T, L)·c), K_s = composite(τ·light·b^p)
 (docs/model.md §6, §8). The geometry stage runs once per target; Kajiya-Kay's geometric
 terms once per target; K_d is recomputed per step only when κ is fitted, K_s only when κ or
-the shininess is, and otherwise a step is a handful of per-pixel multiply-adds.
+the shininess is, and otherwise a step is a handful of per-pixel multiply-adds. Being
+linear, the fitted gains are by default solved for (non-negative least squares) at every
+step, and the solver iterates on the shininess and κ only (variable projection).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import time
 from collections.abc import Callable, Sequence
 
@@ -239,6 +242,84 @@ def _image(terms: _Terms, kd, ks, shininess, kappa, images=_kd_ks_images):
     return terms.constant + kd[None, :] * kd_image + ks[None, :] * ks_image
 
 
+# Kd and Ks enter the image linearly (module docstring): with `separable`, `fit` solves
+# whichever of them are fitted by non-negative linear least squares at every step
+# (variable projection, Golub & Pereyra 1973) and the solver iterates on p and κ only.
+_LINEAR = ("kd", "ks")
+
+
+def _design(terms: _Terms, linear, scalar, params: ShadingParams, shininess, kappa):
+    """One target's least-squares problem in the linear unknowns: Φ `[HW·3, n]` (a column
+    per fitted Kd/Ks channel, or one for a grey value) and the right-hand side `[HW·3]`,
+    both weighted, so that the residuals are Φc − rhs."""
+    kd_image, ks_image = _kd_ks_images(terms, shininess, kappa)
+    fixed = terms.constant
+    columns = []
+    for name, image in (("kd", kd_image), ("ks", ks_image)):
+        if name not in linear:
+            fixed = fixed + getattr(params, name)[None, :] * image
+        elif name in scalar:
+            columns.append(image)
+        else:
+            columns.extend(image * jnp.eye(3, dtype=image.dtype)[None, c] for c in range(3))
+    sw = terms.sqrt_weight
+    phi = jnp.stack([(sw * c).ravel() for c in columns], axis=1)
+    return phi, (sw * (terms.target - fixed)).ravel()
+
+
+def _nnls(phi: jax.Array, rhs: jax.Array) -> jax.Array:
+    """argmin ‖Φc − rhs‖ over c ≥ 0 for a few columns (n ≤ 6), differentiable in Φ, rhs.
+
+    The optimum is the unconstrained least-squares solution on its own support, and it
+    is feasible; every other feasible support solution is a feasible point and costs no
+    less. So: solve on all 2ⁿ supports at once, keep the cheapest feasible one (the
+    empty support always is), then refine it twice against Φ itself (the normal
+    equations alone lose accuracy as cond(Φ)²)."""
+    n = phi.shape[1]
+    gram, proj = phi.T @ phi, phi.T @ rhs
+    diag = jnp.diagonal(gram)
+    # Fires for a column that is zero everywhere (a gain with no visible effect, e.g. Ks
+    # with the highlight outside every pixel): its coefficient stays 0.
+    live = diag > 0
+    scale = jnp.where(live, 1.0 / jnp.sqrt(jnp.where(live, diag, 1.0)), 0.0)
+    g = gram * jnp.outer(scale, scale)  # unit diagonal on live columns
+    h = proj * scale
+    supports = jnp.asarray(list(itertools.product((False, True), repeat=n))) & live[None, :]
+
+    def system(support):
+        both = support[:, None] & support[None, :]
+        # Columns off the support are pinned to 0 by an identity row. A tiny ridge on the
+        # support (n·ε of the unit diagonal) fires only when two columns are exactly
+        # collinear (e.g. one straight strand, where K_s ∝ K_d): the solve stays finite.
+        ridge = n * jnp.finfo(g.dtype).eps
+        return jnp.where(both, g, jnp.eye(n, dtype=g.dtype)) + jnp.diag(jnp.where(support, ridge, 0.0))
+
+    def solve(support):
+        c = jnp.linalg.solve(system(support), jnp.where(support, h, 0.0))
+        cost = 0.5 * c @ g @ c - h @ c
+        return c, jnp.where(jnp.all(c >= 0), cost, jnp.inf)
+
+    cs, costs = jax.vmap(solve)(supports)
+    best = jnp.argmin(costs)
+    support, c = supports[best], cs[best]
+    a = system(support)
+    for _ in range(2):  # iterative refinement with the residual taken in data space
+        r = rhs - phi @ (scale * c)
+        c = c + jnp.linalg.solve(a, jnp.where(support, scale * (phi.T @ r), 0.0))
+    # Fires when refinement nudges a coefficient at the bound below 0 by rounding.
+    return scale * jnp.maximum(c, 0.0)
+
+
+def _unpack_linear(c: jax.Array, linear, scalar) -> dict:
+    """The coefficient vector of `_design`'s columns as RGB Kd / Ks values."""
+    out, i = {}, 0
+    for name in linear:
+        k = 1 if name in scalar else 3
+        out[name] = jnp.broadcast_to(c[i:i + k], (3,))
+        i += k
+    return out
+
+
 def _solver(name: str, rtol: float, atol: float):
     import lineax as lx
     import optimistix as optx
@@ -251,7 +332,7 @@ def _solver(name: str, rtol: float, atol: float):
     # SVD (well_posed=False) takes the minimum-norm step instead; LM's damping needs none.
     rank_deficient = lx.AutoLinearSolver(well_posed=False)
     if name == "gauss-newton":
-        return optx.GaussNewton(rtol=rtol, atol=atol, linear_solver=rank_deficient), True
+        return _damped_gauss_newton(rtol, atol, rank_deficient), True
     if name == "dogleg":
         return optx.Dogleg(rtol=rtol, atol=atol, linear_solver=rank_deficient), True
     if name == "bfgs":
@@ -261,6 +342,24 @@ def _solver(name: str, rtol: float, atol: float):
 
 def _quiet(*args, **kwargs) -> None:
     """optimistix's `verbose` hook: `fit` reports progress itself."""
+
+
+def _damped_gauss_newton(rtol: float, atol: float, linear_solver):
+    """Gauss-Newton steps with Armijo backtracking (Nocedal & Wright 2006, §10.3, "damped
+    Gauss-Newton") instead of optimistix's full steps (`LearningRate(1.0)`). From a start
+    100 times too low a full step raised κ from 0.02 to 4e7 and the loss from 57 to 159:
+    every strand then lies in shadow, κ has no effect, and the solver "converged" there."""
+    import optimistix as optx
+
+    class _GaussNewton(optx.AbstractGaussNewton):
+        rtol: float
+        atol: float
+        descent: optx.AbstractDescent
+        norm: Callable = optx.max_norm
+        search: optx.AbstractSearch = optx.BacktrackingArmijo()
+        verbose: Callable = _quiet
+
+    return _GaussNewton(rtol=rtol, atol=atol, descent=optx.NewtonDescent(linear_solver=linear_solver))
 
 
 def _bfgs(rtol: float, atol: float):
@@ -335,6 +434,7 @@ def fit(
     weights=None,
     scalar: Sequence[str] = (),
     max_steps: int = 100,
+    separable: bool = True,
     rtol: float | None = None,
     atol: float | None = None,
     progress: Callable[[int, float, float], None] | None = None,
@@ -349,6 +449,10 @@ def fit(
     - `solver`: levenberg-marquardt (lm), gauss-newton, dogleg, or bfgs (on ½‖r‖²).
     - `masks`, `weights`: optional per-target `[H, W]` pixel masks and weights.
     - `scalar`: among kd, ks, those fitted as one grey value instead of RGB.
+    - `separable`: solve the fitted Kd, Ks by non-negative linear least squares at every
+      step (variable projection; the image is linear in them) so that the solver iterates
+      on shininess and κ only; a fit of gains alone is then one solve. False: the solver
+      iterates on every fitted parameter (docs/fitting.md).
     - `rtol`, `atol`: the solver's tolerances; default 1e-8 and 1e-10 in float64, 1e-5 and
       1e-7 in float32 (tighter than float32 resolves only adds steps that change nothing).
     - `progress(step, loss, elapsed_s)`: called after every step.
@@ -378,72 +482,72 @@ def fit(
     jax.block_until_ready(terms)
     geometry_s = time.perf_counter() - start
 
-    def to_z(params):
-        z = {}
-        for n in names:
-            x = jnp.maximum(jnp.asarray(getattr(params, n)), _FLOOR)
-            if n in scalar:
-                x = jnp.mean(x, keepdims=True)
-            z[n] = _TRANSFORMS[n][1](x)
-        return z
+    # The solver iterates on z over `solved`; the fitted gains in `linear` are solved for.
+    linear = tuple(n for n in _LINEAR if separable and n in names)
+    solved = tuple(n for n in names if n not in linear)
+    z, unravel = jax.flatten_util.ravel_pytree(_to_space(init, solved, scalar, _TRANSFORMS))
 
-    def to_params(z, base: ShadingParams) -> ShadingParams:
-        values = {n: getattr(base, n) for n in FITTABLE}
-        for n in names:
-            x = _TRANSFORMS[n][0](z[n])
-            values[n] = jnp.broadcast_to(x, (3,)) if n in ("kd", "ks") else x.reshape(())
-        return ShadingParams(kd=values["kd"], ks=values["ks"], shininess=values["shininess"],
-                             kappa=values["kappa"], ambient=base.ambient)
+    def point(z, args):
+        """The parameters at the solver's z (gains in `linear` solved) and the residuals."""
+        p = _from_space(unravel(z), init, _TRANSFORMS)
+        if not linear:
+            return p, _plain_residuals(p, args)
+        systems = [_design(t, linear, scalar, p, p.shininess, p.kappa) for t in args]
+        phi = jnp.concatenate([a for a, _ in systems])
+        rhs = jnp.concatenate([b for _, b in systems])
+        c = _nnls(phi, rhs)
+        return _replace(p, _unpack_linear(c, linear, scalar)), phi @ c - rhs
 
-    # The solvers see one flat vector z (the fitted values in `names` order).
-    z, unravel = jax.flatten_util.ravel_pytree(to_z(init))
-
-    def residuals(z, args):
-        p = to_params(unravel(z), init)
-        r = [t.sqrt_weight * (_image(t, p.kd, p.ks, p.shininess, p.kappa) - t.target) for t in args]
-        return jnp.concatenate([x.ravel() for x in r])
-
+    residuals = lambda z, args: point(z, args)[1]  # noqa: E731
     if least_squares:
         fn = lambda z, args: (residuals(z, args), None)  # noqa: E731
     else:
         fn = lambda z, args: (0.5 * jnp.sum(residuals(z, args) ** 2), None)  # noqa: E731
     fn = eqx.filter_jit(fn)
     loss_of = eqx.filter_jit(lambda z, args: 0.5 * jnp.sum(residuals(z, args) ** 2))
+    # loss[0] is the loss at `init` itself, its gains included (not at the solved gains).
+    losses = [float(eqx.filter_jit(_plain_loss)(init, terms))]
 
-    f_struct, aux_struct = jax.eval_shape(lambda: fn(z, terms))
-    options, tags = {}, frozenset()
-    step = eqx.filter_jit(eqx.Partial(opt.step, fn=fn, args=terms, options=options, tags=tags))
-    terminate = eqx.filter_jit(eqx.Partial(opt.terminate, fn=fn, args=terms, options=options,
-                                           tags=tags))
-    state = opt.init(fn, z, terms, options, f_struct, aux_struct, tags)
-    losses = [float(loss_of(z, terms))]
-    done, result = terminate(y=z, state=state)
-    steps = 0
-    last_finite, diverged = z, False
-    while not bool(done) and steps < max_steps:
-        z, state, _ = step(y=z, state=state)
-        steps += 1
+    steps, diverged, termination = 0, False, "converged"
+    if not solved:
+        # Only gains are fitted: one linear least-squares solve is the whole fit.
+        steps = 1
         losses.append(float(loss_of(z, terms)))
         if progress is not None:
             progress(steps, losses[-1], time.perf_counter() - start - geometry_s)
-        if not np.isfinite(losses[-1]):
-            # An undamped solver (Gauss-Newton) can overshoot into exp overflow: stop, and
-            # return the last point where the image was finite.
-            z, diverged = last_finite, True
-            break
-        last_finite = z
-        done, result = terminate(y=z, state=state)
-    if bool(done):
-        termination = ("converged" if result == optx.RESULTS.successful
-                       else f"stopped: {optx.RESULTS[result]}")
-    elif diverged:
-        termination = "stopped: diverged (the loss became non-finite); kept the last finite point"
     else:
-        termination = f"stopped: reached max_steps = {max_steps}"
-    fitted = to_params(unravel(z), init)
+        f_struct, aux_struct = jax.eval_shape(lambda: fn(z, terms))
+        options, tags = {}, frozenset()
+        step = eqx.filter_jit(eqx.Partial(opt.step, fn=fn, args=terms, options=options, tags=tags))
+        terminate = eqx.filter_jit(eqx.Partial(opt.terminate, fn=fn, args=terms, options=options,
+                                               tags=tags))
+        state = opt.init(fn, z, terms, options, f_struct, aux_struct, tags)
+        done, result = terminate(y=z, state=state)
+        last_finite = z
+        while not bool(done) and steps < max_steps:
+            z, state, _ = step(y=z, state=state)
+            steps += 1
+            losses.append(float(loss_of(z, terms)))
+            if progress is not None:
+                progress(steps, losses[-1], time.perf_counter() - start - geometry_s)
+            if not np.isfinite(losses[-1]):
+                # An undamped solver (Gauss-Newton) can overshoot into exp overflow: stop, and
+                # return the last point where the image was finite.
+                z, diverged = last_finite, True
+                break
+            last_finite = z
+            done, result = terminate(y=z, state=state)
+        if bool(done):
+            termination = ("converged" if result == optx.RESULTS.successful
+                           else f"stopped: {optx.RESULTS[result]}")
+        elif diverged:
+            termination = "stopped: diverged (the loss became non-finite); kept the last finite point"
+        else:
+            termination = f"stopped: reached max_steps = {max_steps}"
+    fitted = eqx.filter_jit(point)(z, terms)[0]
     elapsed = time.perf_counter() - start - geometry_s
 
-    std_error, undetermined = _standard_errors(residuals, z, unravel, terms, names)
+    std_error, undetermined = _standard_errors(terms, fitted, names, scalar)
     n_pixels = float(sum(np.count_nonzero(np.asarray(t.sqrt_weight)) for t in terms)) * 3
     final_loss = float(loss_of(z, terms)) if diverged else losses[-1]  # at the returned point
     rmse = float(np.sqrt(2 * final_loss / max(n_pixels, 1.0)))
@@ -452,16 +556,73 @@ def fit(
                      std_error=std_error, undetermined=undetermined, rmse=rmse)
 
 
-def _standard_errors(residuals, flat, unravel, terms, names):
-    """Standard errors from σ²(JᵀJ)⁻¹ in z, mapped to the parameters by the transforms'
-    derivatives (delta method).
+def _to_space(params: ShadingParams, names, scalar, transforms) -> dict:
+    """{name: the value of `params` in the space of `transforms`} for `names` (a grey Kd or
+    Ks as the mean of its channels). Values below _FLOOR are raised to it first."""
+    z = {}
+    for n in names:
+        x = jnp.maximum(jnp.asarray(getattr(params, n)), _FLOOR)
+        if n in scalar:
+            x = jnp.mean(x, keepdims=True)
+        z[n] = transforms[n][1](x)
+    return z
 
-    A direction of z is not determined by the data when its JᵀJ eigenvalue λ is below
+
+def _from_space(z: dict, base: ShadingParams, transforms) -> ShadingParams:
+    """`base` with the values in `z` mapped back through `transforms`."""
+    return _replace(base, {n: transforms[n][0](v) for n, v in z.items()})
+
+
+def _replace(base: ShadingParams, values: dict) -> ShadingParams:
+    """`base` with some of kd, ks (RGB, a single value broadcasts), shininess, κ replaced."""
+    v = {n: getattr(base, n) for n in FITTABLE}
+    for n, x in values.items():
+        v[n] = jnp.broadcast_to(x, (3,)) if n in _LINEAR else jnp.reshape(x, ())
+    return ShadingParams(kd=v["kd"], ks=v["ks"], shininess=v["shininess"], kappa=v["kappa"],
+                         ambient=base.ambient)
+
+
+def _plain_residuals(p: ShadingParams, terms) -> jax.Array:
+    """The weighted residuals of all targets at `p`, flat."""
+    r = [t.sqrt_weight * (_image(t, p.kd, p.ks, p.shininess, p.kappa) - t.target) for t in terms]
+    return jnp.concatenate([x.ravel() for x in r])
+
+
+def _plain_loss(p: ShadingParams, terms) -> jax.Array:
+    return 0.5 * jnp.sum(_plain_residuals(p, terms) ** 2)
+
+
+# Where the standard errors are taken: the gains themselves (0 is a valid value, where the
+# softplus z of the solver is not), log shininess and log κ (as the solver sees them).
+_ERROR_SPACE = {
+    "kd": (lambda x: x, lambda x: x),
+    "ks": (lambda x: x, lambda x: x),
+    "shininess": (jnp.exp, jnp.log),
+    "kappa": (jnp.exp, jnp.log),
+}
+
+
+def _standard_errors(terms, fitted: ShadingParams, names, scalar):
+    """Standard errors from σ²(JᵀJ)⁻¹, J taken in the gains Kd, Ks and in log p, log κ,
+    mapped to the parameters by the transforms' derivatives (delta method).
+
+    A direction is not determined by the data when its JᵀJ eigenvalue λ is below
     1e-10·λ_max (numerically singular) or below m·1e-12: moving along it by one unit (an
-    e-fold of shininess or κ) changes the m residuals by under 1e-6 RMS, below float32
-    resolution of an image. Parameters with weight in such a direction get no error."""
-    jac = np.asarray(jax.jacfwd(residuals)(flat, terms), dtype=np.float64)
-    r = np.asarray(residuals(flat, terms), dtype=np.float64)
+    e-fold of shininess or κ, a unit of gain) changes the m residuals by under 1e-6 RMS,
+    below float32 resolution of an image. Parameters with weight in such a direction get
+    no error."""
+    space = _to_space(fitted, names, scalar, _ERROR_SPACE)
+    for n in _LINEAR:  # the gains as fitted, a value at 0 included (no floor)
+        if n in space:
+            x = jnp.asarray(getattr(fitted, n))
+            space[n] = jnp.mean(x, keepdims=True) if n in scalar else x
+    flat, unravel = jax.flatten_util.ravel_pytree(space)
+
+    def residuals(u):
+        return _plain_residuals(_from_space(unravel(u), fitted, _ERROR_SPACE), terms)
+
+    jac = np.asarray(jax.jacfwd(residuals)(flat), dtype=np.float64)
+    r = np.asarray(residuals(flat), dtype=np.float64)
     m, n = jac.shape
     if not (np.all(np.isfinite(jac)) and np.all(np.isfinite(r))):
         # Fires at a point where the image or its derivatives overflow: nothing is known.
@@ -471,22 +632,22 @@ def _standard_errors(residuals, flat, unravel, terms, names):
     null = (evals <= 1e-10 * max(evals.max(initial=0.0), 1e-300)) | (evals <= m * 1e-12)
     sigma2 = float(r @ r) / max(m - n, 1)
     inv = (evecs[:, ~null] / evals[~null]) @ evecs[:, ~null].T
-    var_z = sigma2 * np.diag(inv)
+    var_u = sigma2 * np.diag(inv)
     in_null = (np.abs(evecs[:, null]) > 0.1).any(axis=1) if null.any() else np.zeros(n, bool)
-    z = unravel(flat)
+    u = unravel(flat)
     # Where each parameter's values sit in the flat vector (ravel_pytree orders a dict's
     # keys by name, not by `names`).
     index = unravel(jnp.arange(flat.size, dtype=flat.dtype))
     std, undetermined = {}, []
     for name in names:
-        size = int(np.size(z[name]))
+        size = int(np.size(u[name]))
         sl = np.asarray(index[name]).astype(int).ravel()
         if in_null[sl].any():
             std[name] = None
             undetermined.append(name)
             continue
-        forward = _TRANSFORMS[name][0]
-        dxdz = np.asarray(jax.vmap(jax.grad(lambda v: forward(v)))(jnp.ravel(z[name])))
-        se = np.abs(dxdz) * np.sqrt(np.maximum(var_z[sl], 0.0))
+        forward = _ERROR_SPACE[name][0]
+        dxdu = np.asarray(jax.vmap(jax.grad(lambda v: forward(v)))(jnp.ravel(u[name])))
+        se = np.abs(dxdu) * np.sqrt(np.maximum(var_u[sl], 0.0))
         std[name] = se if size > 1 else float(se[0])
     return std, tuple(undetermined)

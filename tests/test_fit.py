@@ -37,6 +37,67 @@ def test_noise_free_recovery(scene, target, solver):
     assert r.undetermined == () and r.time_s > 0
 
 
+def test_recovery_without_variable_projection(scene, target):
+    """separable=False: the solver iterates on all four parameters (the softplus gains
+    too) and reaches the same truth."""
+    r = hj.fit(scene, target, init=INIT, separable=False, max_steps=200)
+    assert r.termination == "converged" and r.undetermined == ()
+    for name in ("kd", "ks", "shininess", "kappa"):
+        assert rel(getattr(r.params, name), getattr(TRUE, name)) < 1e-3, name
+
+
+def test_gains_alone_are_one_linear_solve(scene, target):
+    """With p and κ held, the image is linear in Kd and Ks: the fit is a single solve that
+    lands on the truth to rounding, from a start far off."""
+    start = hj.ShadingParams(kd=5.0, ks=1e-4, shininess=TRUE.shininess, kappa=TRUE.kappa,
+                             ambient=TRUE.ambient)
+    r = hj.fit(scene, target, fit=("kd", "ks"), init=start)
+    assert r.steps == 1 and r.termination == "converged" and r.loss[1] < 1e-12 * r.loss[0]
+    assert rel(r.params.kd, TRUE.kd) < 1e-6 and rel(r.params.ks, TRUE.ks) < 1e-6
+
+
+@pytest.mark.parametrize("solver", ["levenberg-marquardt", "gauss-newton", "dogleg", "bfgs"])
+def test_zero_specular_fitted_comes_back_zero(scene, solver):
+    """Truth Ks = 0 with Ks fitted: the non-negative solve returns Ks = 0 exactly (the
+    softplus could only approach it), p is reported undetermined, the others recovered."""
+    truth = hj.ShadingParams(kd=(0.3, 0.5, 0.2), ks=0.0, shininess=25.0, kappa=2.5, ambient=0.05)
+    target = np.asarray(hj.render(scene, truth))
+    r = hj.fit(scene, target, init=INIT, solver=solver, max_steps=200)
+    assert r.termination == "converged" and "shininess" in r.undetermined
+    np.testing.assert_array_equal(np.asarray(r.params.ks), 0.0)
+    assert rel(r.params.kd, truth.kd) < 1e-3 and rel(r.params.kappa, truth.kappa) < 1e-3
+
+
+def test_nnls_matches_scipy():
+    """_nnls against scipy.optimize.nnls (an active-set solver, independent code) on random
+    problems with 1-6 columns, many with negative unconstrained solutions, a zero column and
+    two exactly collinear columns."""
+    import jax
+    from scipy.optimize import nnls
+
+    nnls_jit = jax.jit(fit_mod._nnls)  # one compile per column count
+    rng = np.random.default_rng(0)
+    for trial in range(60):
+        n = 1 + trial % 6
+        phi = rng.normal(size=(40, n))
+        if trial % 5 == 1 and n > 1:
+            phi[:, 1] = 0.0  # a gain with no effect
+        if trial % 5 == 2 and n > 1:
+            phi[:, 1] = 2.0 * phi[:, 0]  # exactly collinear: the solution is not unique
+        rhs = rng.normal(size=40)
+        got = np.asarray(nnls_jit(jnp.asarray(phi), jnp.asarray(rhs)))
+        want, _ = nnls(phi, rhs)
+        assert np.all(got >= 0)
+        # Compared by the residual norm (unique even where c is not); 1e-10: float64
+        # rounding of 40-row sums, far below the differences between supports.
+        np.testing.assert_allclose(np.linalg.norm(phi @ got - rhs), np.linalg.norm(phi @ want - rhs),
+                                   rtol=1e-10)
+        if trial % 5 != 2:
+            np.testing.assert_allclose(got, want, atol=1e-10)
+        else:
+            assert np.all(np.isfinite(got))
+
+
 def test_subset_and_scalar(scene, target):
     start = TRUE.__class__(kd=TRUE.kd, ks=0.1, shininess=TRUE.shininess, kappa=TRUE.kappa,
                            ambient=TRUE.ambient)
@@ -141,7 +202,9 @@ def test_standard_errors_equal_the_parameter_space_formula(scene, target):
 def test_bfgs_on_a_faint_highlight_in_float32():
     """Ks ≈ 0.02 with a sharp highlight, in float32 (as the CLI and experiments run). With
     optimistix's BFGS the updates were skipped (sᵀy < 1.2e-7) and it crawled 300 steps to
-    Ks channels 40 % off; with a scale-free skip test and a unit first step it converges."""
+    Ks channels 40 % off; with a scale-free skip test and a unit first step it converges.
+    (Without variable projection, separable=False, float32 BFGS in all four parameters
+    stalls or not on this target depending on last-digit rounding: docs/fitting.md.)"""
     import jax
 
     with jax.enable_x64(False):
@@ -246,12 +309,12 @@ def test_pruned_fit_image_within_the_stated_bound():
     assert np.abs(image - exact).max() <= FIT_TRANSMITTANCE_CUTOFF * brightest
 
 
-def test_divergence_ends_cleanly(scene, target, monkeypatch):
-    """A step into overflow stops the fit with a reason and the last finite point."""
+def _overflow_beyond_kappa_5(monkeypatch, scene):
+    """_image overflows for κ > 5 (as an undamped step into exp(z) can); a fit of κ alone
+    from 4 towards a target rendered at κ = 40: (target, start)."""
     original = fit_mod._image
 
     def overflowing(terms, kd, ks, shininess, kappa):
-        # Beyond κ = 5 the image overflows, as an undamped step into exp(z) can.
         return jnp.where(kappa > 5.0, jnp.inf, original(terms, kd, ks, shininess, kappa))
 
     monkeypatch.setattr(fit_mod, "_image", overflowing)
@@ -259,6 +322,17 @@ def test_divergence_ends_cleanly(scene, target, monkeypatch):
                              ambient=TRUE.ambient)
     far = np.asarray(hj.render(scene, hj.ShadingParams(kd=TRUE.kd, ks=TRUE.ks,
                                                         shininess=TRUE.shininess, kappa=40.0)))
+    return far, start
+
+
+def test_divergence_ends_cleanly(scene, monkeypatch):
+    """A solver that accepts every step (optimistix's plain Gauss-Newton: full steps, no
+    search) steps into overflow: the fit stops with a reason and the last finite point."""
+    import optimistix as optx
+
+    far, start = _overflow_beyond_kappa_5(monkeypatch, scene)
+    monkeypatch.setattr(fit_mod, "_solver", lambda name, rtol, atol: (
+        optx.GaussNewton(rtol=rtol, atol=atol), True))
     r = hj.fit(scene, far, fit=("kappa",), init=start, solver="gauss-newton")
     assert r.termination.startswith("stopped: diverged")
     assert not np.isfinite(r.loss[-1])  # the step that overflowed is recorded
@@ -266,3 +340,13 @@ def test_divergence_ends_cleanly(scene, target, monkeypatch):
     assert np.isfinite(float(r.params.kappa)) and float(r.params.kappa) <= 5.0
     assert np.isfinite(r.rmse)  # the RMSE of the returned point, not of the overflowed step
     assert r.undetermined == () or all(r.std_error[n] is None for n in r.undetermined)
+
+
+@pytest.mark.parametrize("solver", ["levenberg-marquardt", "gauss-newton", "dogleg", "bfgs"])
+def test_no_solver_accepts_a_step_into_overflow(scene, monkeypatch, solver):
+    """Trust regions (LM, dogleg) and Armijo backtracking (Gauss-Newton, BFGS) reject a
+    step whose loss is not finite: every recorded loss stays finite, κ stays ≤ 5."""
+    far, start = _overflow_beyond_kappa_5(monkeypatch, scene)
+    r = hj.fit(scene, far, fit=("kappa",), init=start, solver=solver, max_steps=30)
+    assert all(np.isfinite(r.loss)) and float(r.params.kappa) <= 5.0
+    assert "diverged" not in r.termination
