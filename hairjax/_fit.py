@@ -109,7 +109,7 @@ class _Terms(eqx.Module):
 
     geometry: object
     sin_tl: jax.Array
-    base: jax.Array
+    gap: jax.Array  # 1 − b per point (Kajiya-Kay, docs/model.md §8)
     lit_color: jax.Array  # light · c per point
     light: jax.Array
     omega: jax.Array | None
@@ -168,7 +168,7 @@ def _visible_fragments(geom):
 def _prepare_terms(scene: Scene, params: ShadingParams, names, target, sqrt_weight) -> _Terms:
     full = geometry_stage(scene)
     geom = _visible_fragments(full)
-    sin_tl, base = jax.vmap(kajiya_kay_terms, in_axes=(0, 0, 0, None))(
+    sin_tl, gap = jax.vmap(kajiya_kay_terms, in_axes=(0, 0, 0, None))(
         geom.tangent, geom.to_light, geom.to_eye, geom.model)
     light = geom.light_rgb[None, :]
     lit_color = light * geom.base_color
@@ -182,8 +182,8 @@ def _prepare_terms(scene: Scene, params: ShadingParams, names, target, sqrt_weig
         scale = 1.0 if tau is None else tau[:, None]
         kd_image = composite(geom, scale * sin_tl[:, None] * lit_color)
         if "shininess" not in names:
-            ks_image = composite(geom, scale * specular_power(base, params.shininess)[:, None] * light)
-    return _Terms(geom, sin_tl, base, lit_color, light, omega, constant, kd_image, ks_image,
+            ks_image = composite(geom, scale * specular_power(gap, params.shininess)[:, None] * light)
+    return _Terms(geom, sin_tl, gap, lit_color, light, omega, constant, kd_image, ks_image,
                   jnp.asarray(target), jnp.asarray(sqrt_weight))
 
 
@@ -192,9 +192,9 @@ def _point_terms(terms: _Terms, shininess, kappa):
     τ·sin·light·c, τ·b^p·light, ∂/∂κ of both (−Ω times them), ∂/∂p of the second."""
     tau = jnp.ones_like(terms.sin_tl) if terms.omega is None else jnp.exp(-kappa * terms.omega)
     omega = jnp.zeros_like(terms.sin_tl) if terms.omega is None else terms.omega
-    spec = specular_power(terms.base, shininess)
+    spec = specular_power(terms.gap, shininess)
     # d(b^p)/dp through the same guarded power: 0 where b ≤ SPECULAR_BASE_EPS, never NaN.
-    dspec = jax.vmap(jax.grad(specular_power, argnums=1), in_axes=(0, None))(terms.base, shininess)
+    dspec = jax.vmap(jax.grad(specular_power, argnums=1), in_axes=(0, None))(terms.gap, shininess)
     kd_col = (tau * terms.sin_tl)[:, None] * terms.lit_color
     ks_col = (tau * spec)[:, None] * terms.light
     dks_dp = (tau * dspec)[:, None] * terms.light
