@@ -15,13 +15,13 @@ step, and the solver iterates on the shininess and κ only (variable projection)
 from __future__ import annotations
 
 import dataclasses
+import functools
 import itertools
 import time
 from collections.abc import Callable, Sequence
 
 import equinox as eqx
 import jax
-import jax.flatten_util
 import jax.numpy as jnp
 import numpy as np
 
@@ -344,6 +344,8 @@ def _quiet(*args, **kwargs) -> None:
     """optimistix's `verbose` hook: `fit` reports progress itself."""
 
 
+# Cached, so that every fit gets the same solver class and its compiled steps are reused.
+@functools.cache
 def _damped_gauss_newton(rtol: float, atol: float, linear_solver):
     """Gauss-Newton steps with Armijo backtracking (Nocedal & Wright 2006, §10.3, "damped
     Gauss-Newton") instead of optimistix's full steps (`LearningRate(1.0)`). From a start
@@ -362,6 +364,7 @@ def _damped_gauss_newton(rtol: float, atol: float, linear_solver):
     return _GaussNewton(rtol=rtol, atol=atol, descent=optx.NewtonDescent(linear_solver=linear_solver))
 
 
+@functools.cache  # as _damped_gauss_newton
 def _bfgs(rtol: float, atol: float):
     """BFGS on ½‖r‖² over a flat z (docs/fitting.md, "BFGS"): optimistix's quasi-Newton
     step and Armijo backtracking, with the initial Hessian scaled as Nocedal & Wright
@@ -421,6 +424,90 @@ def _bfgs(rtol: float, atol: float):
             return info, count + jnp.where((count == 0) | ok, 1, 0)
 
     return _BFGS(rtol=rtol, atol=atol)
+
+
+class _Problem(eqx.Module):
+    """Everything a solver step needs besides z: the targets' terms and the held values
+    (arrays), and which names the solver searches and which gains are solved for (static).
+    The functions below are module-level and take it as `args`, so a compiled step is
+    reused by every fit with the same shapes and names."""
+
+    terms: list
+    init: ShadingParams
+    solved: tuple[str, ...] = eqx.field(static=True)
+    linear: tuple[str, ...] = eqx.field(static=True)
+    scalar: tuple[str, ...] = eqx.field(static=True)
+
+
+def _flatten(values: dict, names) -> jax.Array:
+    """The solver's flat z: the values in `names` order."""
+    parts = [jnp.ravel(values[n]) for n in names]
+    return jnp.concatenate(parts) if parts else jnp.zeros(0, dtype=jnp.result_type(float))
+
+
+def _unflatten(z: jax.Array, names, scalar) -> dict:
+    out, i = {}, 0
+    for n in names:
+        k = 3 if n in _LINEAR and n not in scalar else 1
+        out[n], i = z[i:i + k], i + k
+    return out
+
+
+def _point(z, problem: _Problem):
+    """The parameters at the solver's z (the gains in `problem.linear` solved for) and the
+    residuals there, flat."""
+    p = _from_space(_unflatten(z, problem.solved, problem.scalar), problem.init, _TRANSFORMS)
+    if not problem.linear:
+        return p, _plain_residuals(p, problem.terms)
+    systems = [_design(t, problem.linear, problem.scalar, p, p.shininess, p.kappa)
+               for t in problem.terms]
+    phi = jnp.concatenate([a for a, _ in systems])
+    rhs = jnp.concatenate([b for _, b in systems])
+    c = _nnls(phi, rhs)
+    return _replace(p, _unpack_linear(c, problem.linear, problem.scalar)), phi @ c - rhs
+
+
+def _loss(z, problem: _Problem):
+    return 0.5 * jnp.sum(_point(z, problem)[1] ** 2)
+
+
+def _residual_fn(z, problem: _Problem):
+    """optimistix's least-squares `fn`: (residuals, aux)."""
+    return _point(z, problem)[1], None
+
+
+def _loss_fn(z, problem: _Problem):
+    """optimistix's minimiser `fn` (BFGS): (½‖r‖², aux)."""
+    return _loss(z, problem), None
+
+
+_jit_point = eqx.filter_jit(_point)
+_jit_loss = eqx.filter_jit(_loss)
+
+
+@eqx.filter_jit
+def _jit_plain_loss(p: ShadingParams, terms):
+    return 0.5 * jnp.sum(_plain_residuals(p, terms) ** 2)
+
+
+# The solver's init, step and terminate, compiled once per solver, fn and shapes. (Within
+# `_init`, optimistix builds the state's static parts, e.g. a Jacobian's jaxpr compared by
+# identity; compiled, they come back from the cache, so later fits hit it too.)
+@eqx.filter_jit
+def _init(opt, fn, z, problem):
+    f_struct, aux_struct = jax.eval_shape(lambda: fn(z, problem))
+    return opt.init(fn, z, problem, {}, f_struct, aux_struct, frozenset())
+
+
+@eqx.filter_jit
+def _step(opt, fn, z, problem, state):
+    z, state, _ = opt.step(fn, z, problem, {}, state, frozenset())
+    return z, state
+
+
+@eqx.filter_jit
+def _terminate(opt, fn, z, problem, state):
+    return opt.terminate(fn, z, problem, {}, state, frozenset())
 
 
 def fit(
@@ -485,58 +572,36 @@ def fit(
     # The solver iterates on z over `solved`; the fitted gains in `linear` are solved for.
     linear = tuple(n for n in _LINEAR if separable and n in names)
     solved = tuple(n for n in names if n not in linear)
-    z, unravel = jax.flatten_util.ravel_pytree(_to_space(init, solved, scalar, _TRANSFORMS))
-
-    def point(z, args):
-        """The parameters at the solver's z (gains in `linear` solved) and the residuals."""
-        p = _from_space(unravel(z), init, _TRANSFORMS)
-        if not linear:
-            return p, _plain_residuals(p, args)
-        systems = [_design(t, linear, scalar, p, p.shininess, p.kappa) for t in args]
-        phi = jnp.concatenate([a for a, _ in systems])
-        rhs = jnp.concatenate([b for _, b in systems])
-        c = _nnls(phi, rhs)
-        return _replace(p, _unpack_linear(c, linear, scalar)), phi @ c - rhs
-
-    residuals = lambda z, args: point(z, args)[1]  # noqa: E731
-    if least_squares:
-        fn = lambda z, args: (residuals(z, args), None)  # noqa: E731
-    else:
-        fn = lambda z, args: (0.5 * jnp.sum(residuals(z, args) ** 2), None)  # noqa: E731
-    fn = eqx.filter_jit(fn)
-    loss_of = eqx.filter_jit(lambda z, args: 0.5 * jnp.sum(residuals(z, args) ** 2))
+    problem = _Problem(terms, init, solved, linear, tuple(scalar))
+    z = _flatten(_to_space(init, solved, scalar, _TRANSFORMS), solved)
+    fn = _residual_fn if least_squares else _loss_fn
     # loss[0] is the loss at `init` itself, its gains included (not at the solved gains).
-    losses = [float(eqx.filter_jit(_plain_loss)(init, terms))]
+    losses = [float(_jit_plain_loss(init, terms))]
 
     steps, diverged, termination = 0, False, "converged"
     if not solved:
         # Only gains are fitted: one linear least-squares solve is the whole fit.
         steps = 1
-        losses.append(float(loss_of(z, terms)))
+        losses.append(float(_jit_loss(z, problem)))
         if progress is not None:
             progress(steps, losses[-1], time.perf_counter() - start - geometry_s)
     else:
-        f_struct, aux_struct = jax.eval_shape(lambda: fn(z, terms))
-        options, tags = {}, frozenset()
-        step = eqx.filter_jit(eqx.Partial(opt.step, fn=fn, args=terms, options=options, tags=tags))
-        terminate = eqx.filter_jit(eqx.Partial(opt.terminate, fn=fn, args=terms, options=options,
-                                               tags=tags))
-        state = opt.init(fn, z, terms, options, f_struct, aux_struct, tags)
-        done, result = terminate(y=z, state=state)
+        state = _init(opt, fn, z, problem)
+        done, result = _terminate(opt, fn, z, problem, state)
         last_finite = z
         while not bool(done) and steps < max_steps:
-            z, state, _ = step(y=z, state=state)
+            z, state = _step(opt, fn, z, problem, state)
             steps += 1
-            losses.append(float(loss_of(z, terms)))
+            losses.append(float(_jit_loss(z, problem)))
             if progress is not None:
                 progress(steps, losses[-1], time.perf_counter() - start - geometry_s)
             if not np.isfinite(losses[-1]):
-                # An undamped solver (Gauss-Newton) can overshoot into exp overflow: stop, and
-                # return the last point where the image was finite.
+                # Fires for a solver that accepts every step (none of ours: trust regions and
+                # Armijo reject a non-finite loss): stop, return the last finite point.
                 z, diverged = last_finite, True
                 break
             last_finite = z
-            done, result = terminate(y=z, state=state)
+            done, result = _terminate(opt, fn, z, problem, state)
         if bool(done):
             termination = ("converged" if result == optx.RESULTS.successful
                            else f"stopped: {optx.RESULTS[result]}")
@@ -544,12 +609,12 @@ def fit(
             termination = "stopped: diverged (the loss became non-finite); kept the last finite point"
         else:
             termination = f"stopped: reached max_steps = {max_steps}"
-    fitted = eqx.filter_jit(point)(z, terms)[0]
+    fitted = _jit_point(z, problem)[0]
     elapsed = time.perf_counter() - start - geometry_s
 
     std_error, undetermined = _standard_errors(terms, fitted, names, scalar)
     n_pixels = float(sum(np.count_nonzero(np.asarray(t.sqrt_weight)) for t in terms)) * 3
-    final_loss = float(loss_of(z, terms)) if diverged else losses[-1]  # at the returned point
+    final_loss = float(_jit_loss(z, problem)) if diverged else losses[-1]  # at the returned point
     rmse = float(np.sqrt(2 * final_loss / max(n_pixels, 1.0)))
     return FitResult(params=fitted, initial=init, fitted=names, loss=losses, steps=steps,
                      time_s=elapsed, geometry_s=geometry_s, termination=termination,
@@ -588,10 +653,6 @@ def _plain_residuals(p: ShadingParams, terms) -> jax.Array:
     return jnp.concatenate([x.ravel() for x in r])
 
 
-def _plain_loss(p: ShadingParams, terms) -> jax.Array:
-    return 0.5 * jnp.sum(_plain_residuals(p, terms) ** 2)
-
-
 # Where the standard errors are taken: the gains themselves (0 is a valid value, where the
 # softplus z of the solver is not), log shininess and log κ (as the solver sees them).
 _ERROR_SPACE = {
@@ -600,6 +661,16 @@ _ERROR_SPACE = {
     "shininess": (jnp.exp, jnp.log),
     "kappa": (jnp.exp, jnp.log),
 }
+
+
+@eqx.filter_jit
+def _error_jacobian(u, fitted: ShadingParams, terms, names, scalar):
+    """J and r of the residuals in the standard errors' space (`_ERROR_SPACE`) at u."""
+
+    def residuals(u):
+        return _plain_residuals(_from_space(_unflatten(u, names, scalar), fitted, _ERROR_SPACE), terms)
+
+    return jax.jacfwd(residuals)(u), residuals(u)
 
 
 def _standard_errors(terms, fitted: ShadingParams, names, scalar):
@@ -616,13 +687,9 @@ def _standard_errors(terms, fitted: ShadingParams, names, scalar):
         if n in space:
             x = jnp.asarray(getattr(fitted, n))
             space[n] = jnp.mean(x, keepdims=True) if n in scalar else x
-    flat, unravel = jax.flatten_util.ravel_pytree(space)
-
-    def residuals(u):
-        return _plain_residuals(_from_space(unravel(u), fitted, _ERROR_SPACE), terms)
-
-    jac = np.asarray(jax.jacfwd(residuals)(flat), dtype=np.float64)
-    r = np.asarray(residuals(flat), dtype=np.float64)
+    flat = _flatten(space, names)
+    jac, r = _error_jacobian(flat, fitted, terms, tuple(names), tuple(scalar))
+    jac, r = np.asarray(jac, dtype=np.float64), np.asarray(r, dtype=np.float64)
     m, n = jac.shape
     if not (np.all(np.isfinite(jac)) and np.all(np.isfinite(r))):
         # Fires at a point where the image or its derivatives overflow: nothing is known.
@@ -634,20 +701,17 @@ def _standard_errors(terms, fitted: ShadingParams, names, scalar):
     inv = (evecs[:, ~null] / evals[~null]) @ evecs[:, ~null].T
     var_u = sigma2 * np.diag(inv)
     in_null = (np.abs(evecs[:, null]) > 0.1).any(axis=1) if null.any() else np.zeros(n, bool)
-    u = unravel(flat)
-    # Where each parameter's values sit in the flat vector (ravel_pytree orders a dict's
-    # keys by name, not by `names`).
-    index = unravel(jnp.arange(flat.size, dtype=flat.dtype))
-    std, undetermined = {}, []
+    u = _unflatten(flat, names, scalar)
+    std, undetermined, i = {}, [], 0
     for name in names:
         size = int(np.size(u[name]))
-        sl = np.asarray(index[name]).astype(int).ravel()
+        sl, i = slice(i, i + size), i + size
         if in_null[sl].any():
             std[name] = None
             undetermined.append(name)
             continue
         forward = _ERROR_SPACE[name][0]
-        dxdu = np.asarray(jax.vmap(jax.grad(lambda v: forward(v)))(jnp.ravel(u[name])))
+        dxdu = np.asarray(jax.vmap(jax.grad(lambda v: forward(v)))(u[name]))
         se = np.abs(dxdu) * np.sqrt(np.maximum(var_u[sl], 0.0))
         std[name] = se if size > 1 else float(se[0])
     return std, tuple(undetermined)

@@ -309,6 +309,31 @@ def test_pruned_fit_image_within_the_stated_bound():
     assert np.abs(image - exact).max() <= FIT_TRANSMITTANCE_CUTOFF * brightest
 
 
+@pytest.fixture
+def fresh_jit():
+    """The fit's steps are compiled once and reused across fits (hairjax/_fit.py); a test
+    that monkeypatches what they trace clears the caches before and after itself."""
+    import jax
+
+    jax.clear_caches()
+    yield
+    jax.clear_caches()
+
+
+# The two solvers built by hairjax's own (cached) factories; LM and dogleg are optimistix's.
+@pytest.mark.parametrize("solver", ["gauss-newton", "bfgs"])
+def test_a_second_fit_reuses_the_compiled_steps(scene, target, monkeypatch, fresh_jit, solver):
+    """A second fit of the same shapes and names (other values, another start) traces
+    nothing: counted by a wrapper around _nnls, which every step's trace calls."""
+    hj.fit(scene, target, init=INIT, solver=solver, max_steps=3)
+    calls = []
+    original = fit_mod._nnls
+    monkeypatch.setattr(fit_mod, "_nnls", lambda *a: calls.append(1) or original(*a))
+    other = hj.ShadingParams(kd=0.2, ks=0.5, shininess=30.0, kappa=1.5, ambient=0.05)
+    r = hj.fit(scene, 0.9 * target, init=other, solver=solver, max_steps=3)
+    assert r.steps >= 1 and calls == []
+
+
 def _overflow_beyond_kappa_5(monkeypatch, scene):
     """_image overflows for κ > 5 (as an undamped step into exp(z) can); a fit of κ alone
     from 4 towards a target rendered at κ = 40: (target, start)."""
@@ -325,7 +350,7 @@ def _overflow_beyond_kappa_5(monkeypatch, scene):
     return far, start
 
 
-def test_divergence_ends_cleanly(scene, monkeypatch):
+def test_divergence_ends_cleanly(scene, monkeypatch, fresh_jit):
     """A solver that accepts every step (optimistix's plain Gauss-Newton: full steps, no
     search) steps into overflow: the fit stops with a reason and the last finite point."""
     import optimistix as optx
@@ -343,7 +368,7 @@ def test_divergence_ends_cleanly(scene, monkeypatch):
 
 
 @pytest.mark.parametrize("solver", ["levenberg-marquardt", "gauss-newton", "dogleg", "bfgs"])
-def test_no_solver_accepts_a_step_into_overflow(scene, monkeypatch, solver):
+def test_no_solver_accepts_a_step_into_overflow(scene, monkeypatch, fresh_jit, solver):
     """Trust regions (LM, dogleg) and Armijo backtracking (Gauss-Newton, BFGS) reject a
     step whose loss is not finite: every recorded loss stays finite, κ stays ≤ 5."""
     far, start = _overflow_beyond_kappa_5(monkeypatch, scene)
