@@ -7,6 +7,7 @@ down once, in docs/model.md.
 
 from importlib.metadata import PackageNotFoundError, version
 
+from ._band import renderer_band as renderer_band
 from ._errors import HairFormatError as HairFormatError
 from ._errors import SceneError as SceneError
 from ._fit import FitError as FitError

@@ -8,25 +8,23 @@ import time
 import jax
 import numpy as np
 
+from ._band import PIXEL_TOL
 from ._render import forget, geometry_stage, render
 from ._scene import Scene
 
 __all__ = ["compare", "image_stats", "format_report"]
 
-# A pixel "differs" above this (the cross-check's per-pixel tolerance, see tests/test_gl.py).
-PIXEL_TOLERANCE = 1e-4
-
 
 def image_stats(a: np.ndarray, b: np.ndarray) -> dict:
     """Max abs difference, RMSE, PSNR (peak 1) and the share of pixels differing by more
-    than PIXEL_TOLERANCE in any channel, between two `[H, W, C]` images."""
+    than PIXEL_TOL in any channel, between two `[H, W, C]` images."""
     d = np.abs(np.asarray(a, np.float64) - np.asarray(b, np.float64))
     mse = float(np.mean(d**2))
     return {
         "max_abs": float(d.max(initial=0.0)),
         "rmse": mse**0.5,
         "psnr_db": float("inf") if mse == 0 else float(-10 * np.log10(mse)),
-        "share_over_1e-4": float(np.mean(d.max(axis=-1) > PIXEL_TOLERANCE)),
+        "share_over_1e-4": float(np.mean(d.max(axis=-1) > PIXEL_TOL)),
     }
 
 

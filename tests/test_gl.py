@@ -7,7 +7,8 @@ JAX here in float64, so a pixel or point within rounding distance of such a boun
 fall on different sides. Every difference above the tolerance must be explained by one,
 and those must be rare; a wrong shader must leave differences no boundary explains.
 
-Tolerances (the constants and the band helpers live in tests/helpers.py, shared with
+Tolerances (the constants and the bands live in hairjax/_band.py, with renderer_band, the
+pixels a fit to GL targets masks; tests/helpers.py passes them on to this file and
 tests/test_stability.py):
 - 1e-4 per pixel / per τ: float32 arithmetic on values ≤ 1 with ~10² operations per
   fragment and up to ~10³ fragments composited per pixel gives errors ~10⁻⁵ (measured
