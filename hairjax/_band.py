@@ -310,7 +310,7 @@ def renderer_band(scene: Scene, colour_bound: float = 1.0) -> np.ndarray:
     weights as drawn, ignoring that a toggled fragment also changes T behind it. Because
     Δτ holds for every κ, a point whose Ω may differ taints every pixel of its two
     segments where they weigh enough, so the band holds more than MAX_BAND where shadows
-    differ (3.4 % of the default scene at 224², docs/fitting.md); its camera part alone
+    differ (2.7 % of the default scene at 224², docs/fitting.md); its camera part alone
     stays within MAX_BAND (tests/test_gl.py).
 
     The geometry, JAX's Ω (from `geometry_stage`, which needs no shading parameters)
