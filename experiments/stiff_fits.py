@@ -159,7 +159,7 @@ def run_fit(scene, target, case: Case, solver: str, max_steps: int, tol: float, 
                expected_undetermined=" ".join(case.expect_undetermined),
                **{f"true_{n}": _mean(truth, n) for n in PARAMS},
                **{f"start_{n}": _mean(start, n) for n in PARAMS})
-    elapsed = []  # after each step; the first step's includes compiling it
+    elapsed = []  # after each step; a first fit's first step includes compiling it
     t0 = time.perf_counter()
     try:
         r = hj.fit(scene, target, fit=case.fit, init=start, solver=solver, max_steps=max_steps,
@@ -233,8 +233,9 @@ def table(rows, cases, solvers, header: str) -> str:
         step_text = f", {statistics.median(per_step):.0f} ms per step" if per_step else ""
         summary.append(f"{SHORT.get(s, s)}: {sum(r['failure'] for r in sel)} failure(s) of "
                        f"{len(sel)}, median time {median:.1f} s{step_text}")
-    lines += ["", "Cells: steps / time (`FitResult.time_s`: after the geometry stage, compiling "
-              "the step included) / worst relative error over the determined fitted parameters / "
+    lines += ["", "Cells: steps / time (`FitResult.time_s`: after the geometry stage; the first "
+              "fit of a solver and set of fitted names includes compiling its step, later ones "
+              "reuse it) / worst relative error over the determined fitted parameters / "
               "status. A failure is a reported convergence off the truth (`wrong`) or an "
               "exception (`error`); a stop with a stated reason is not one.", "",
               "Per solver: " + "; ".join(summary) + " (median of the steps after the first)."]
