@@ -1,5 +1,6 @@
 """hairjax.fit (issue 4): recovery, subsets, staging, degenerate cases, input errors."""
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -375,3 +376,23 @@ def test_no_solver_accepts_a_step_into_overflow(scene, monkeypatch, fresh_jit, s
     r = hj.fit(scene, far, fit=("kappa",), init=start, solver=solver, max_steps=30)
     assert all(np.isfinite(r.loss)) and float(r.params.kappa) <= 5.0
     assert "diverged" not in r.termination
+
+
+@pytest.mark.parametrize("solver", ["gauss-newton", "dogleg"])
+def test_a_weak_direction_is_not_dropped_from_the_step(solver):
+    """Linear least squares in float32 with 100k residuals and a column 1000 times weaker
+    than the other (a faint highlight's shininess beside κ). lineax's default SVD cutoff,
+    2·eps·max(m, n) = 2.4 % of the largest singular value, dropped the weak direction: the
+    solver never moved it and "converged". With the cutoff at _NULL_RATIO both solvers
+    solve it; its rounding floor is eps / 1e-3 ≈ 1e-4 relative."""
+    import optimistix as optx
+
+    rng = np.random.default_rng(0)
+    a = rng.normal(size=(100_000, 2)).astype(np.float32) * np.float32([1.0, 1e-3])
+    truth = np.float32([1.0, 2.0])
+    with jax.enable_x64(False):
+        b = jnp.asarray(a @ truth)
+        a = jnp.asarray(a)
+        opt, _ = fit_mod._solver(solver, 1e-6, 1e-8)
+        z = optx.least_squares(lambda z, _: a @ z - b, opt, jnp.zeros(2, jnp.float32), max_steps=20).value
+    assert rel(z, truth) < 1e-3, z
