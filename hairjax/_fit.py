@@ -60,6 +60,11 @@ _TRANSFORMS = {
 }
 # Smallest value a parameter starts from: the inverse transforms need x > 0.
 _FLOOR = 1e-6
+# How often `fit` starts a solver afresh when its tolerance test passed but the convergence
+# test (`_predicted_decrease`) did not; and after how many steps without a lower loss it
+# applies the convergence test itself (a trust region at the float32 floor rejects every step).
+_MAX_RESTARTS = 3
+_STALL_STEPS = 10
 # A direction of J whose singular value is below _NULL_RATIO of the largest is taken as
 # without effect, in the solvers' steps and in the standard errors alike: far above the
 # rounding of an SVD in float32 (~1e-7), far below any effect the data resolve.
@@ -72,6 +77,8 @@ class FitResult:
 
     `params`, `initial`: ShadingParams; `loss`: ½‖r‖² after each step (index 0: initial);
     `steps`, `time_s` (after the geometry stage), `termination` (why it stopped);
+    `restarts`: times the solver's tolerance test passed where Gauss-Newton still predicted a
+    decrease, and the solver was started afresh from its point (docs/fitting.md);
     `std_error`: name → standard error (array like the parameter) from (JᵀJ)⁻¹σ², or
     None where it is not defined; `undetermined`: names the data cannot determine;
     `rmse` over the fitted pixels; `geometry_s`: time of the geometry stages.
@@ -88,6 +95,7 @@ class FitResult:
     std_error: dict
     undetermined: tuple[str, ...]
     rmse: float
+    restarts: int = 0
 
     def to_json(self) -> dict:
         def value(p, name):
@@ -104,7 +112,7 @@ class FitResult:
             "undetermined": list(self.undetermined),
             "steps": self.steps, "time_s": self.time_s, "geometry_s": self.geometry_s,
             "loss": [float(x) for x in self.loss], "rmse": self.rmse,
-            "termination": self.termination,
+            "termination": self.termination, "restarts": self.restarts,
         }
 
 
@@ -488,6 +496,20 @@ def _loss_fn(z, problem: _Problem):
     return _loss(z, problem), None
 
 
+@eqx.filter_jit
+def _predicted_decrease(z, problem: _Problem):
+    """The loss a Gauss-Newton step from z would remove were the residuals linear:
+    ½‖U_kᵀ r‖², U_k the left singular vectors of J = ∂r/∂z above _NULL_RATIO (JΔ = −U_k U_kᵀ r
+    for the least-squares step Δ). It is 0 exactly at a stationary point, whatever the
+    solver's state; the solvers' own tests look at the last step's size instead, which a
+    poor curvature estimate (BFGS) or a shrunken trust region makes small far from one."""
+    r, jvp = jax.linearize(lambda z: _point(z, problem)[1], z)
+    jac = jax.vmap(jvp, out_axes=1)(jnp.eye(z.size, dtype=z.dtype))
+    u, sv, _ = jnp.linalg.svd(jac, full_matrices=False)
+    keep = sv > _NULL_RATIO * sv[0]
+    return 0.5 * jnp.sum(jnp.where(keep, u.T @ r, 0.0) ** 2)
+
+
 _jit_point = eqx.filter_jit(_point)
 _jit_loss = eqx.filter_jit(_loss)
 
@@ -585,7 +607,12 @@ def fit(
     # loss[0] is the loss at `init` itself, its gains included (not at the solved gains).
     losses = [float(_jit_plain_loss(init, terms))]
 
-    steps, diverged, termination = 0, False, "converged"
+    steps, diverged, termination, restarts = 0, False, "converged", 0
+
+    def stationary(z) -> bool:
+        # The convergence test: Gauss-Newton predicts no decrease beyond the tolerances.
+        return float(_predicted_decrease(z, problem)) <= rtol * float(_jit_loss(z, problem)) + atol
+
     if not solved:
         # Only gains are fitted: one linear least-squares solve is the whole fit.
         steps = 1
@@ -595,8 +622,23 @@ def fit(
     else:
         state = _init(opt, fn, z, problem)
         done, result = _terminate(opt, fn, z, problem, state)
-        last_finite = z
-        while not bool(done) and steps < max_steps:
+        last_finite, confirmed, unconfirmed = z, False, False
+        while True:
+            if bool(done):
+                if result != optx.RESULTS.successful:
+                    break
+                if stationary(z):
+                    confirmed = True
+                    break
+                if restarts == _MAX_RESTARTS:
+                    unconfirmed = True
+                    break
+                # The solver's test passed away from a stationary point (seen: BFGS with p
+                # still 4.5× off, its curvature estimate stale): start it afresh from here.
+                restarts += 1
+                state = _init(opt, fn, z, problem)
+            if steps >= max_steps:
+                break
             z, state = _step(opt, fn, z, problem, state)
             steps += 1
             losses.append(float(_jit_loss(z, problem)))
@@ -609,11 +651,22 @@ def fit(
                 break
             last_finite = z
             done, result = _terminate(opt, fn, z, problem, state)
-        if bool(done):
-            termination = ("converged" if result == optx.RESULTS.successful
-                           else f"stopped: {optx.RESULTS[result]}")
-        elif diverged:
+            # No lower loss in _STALL_STEPS steps (a trust region at the float32 floor rejects
+            # every step) and nothing left to gain: converged, whatever the solver's test says.
+            recent = losses[-_STALL_STEPS - 1:]
+            if (not bool(done) and steps % _STALL_STEPS == 0 and len(recent) > _STALL_STEPS
+                    and min(recent[1:]) >= recent[0] and stationary(z)):
+                confirmed = True
+                break
+        if diverged:
             termination = "stopped: diverged (the loss became non-finite); kept the last finite point"
+        elif confirmed:
+            termination = "converged"
+        elif unconfirmed:
+            termination = (f"stopped: the solver's tolerance test passed {restarts + 1} times where "
+                           "Gauss-Newton still predicts a decrease beyond the tolerances")
+        elif bool(done):
+            termination = f"stopped: {optx.RESULTS[result]}"
         else:
             termination = f"stopped: reached max_steps = {max_steps}"
     fitted = _jit_point(z, problem)[0]
@@ -625,7 +678,7 @@ def fit(
     rmse = float(np.sqrt(2 * final_loss / max(n_pixels, 1.0)))
     return FitResult(params=fitted, initial=init, fitted=names, loss=losses, steps=steps,
                      time_s=elapsed, geometry_s=geometry_s, termination=termination,
-                     std_error=std_error, undetermined=undetermined, rmse=rmse)
+                     std_error=std_error, undetermined=undetermined, rmse=rmse, restarts=restarts)
 
 
 def _to_space(params: ShadingParams, names, scalar, transforms) -> dict:

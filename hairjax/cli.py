@@ -99,7 +99,8 @@ def _fit(args) -> int:
               for i in range(4)]
     for row in [("parameter", "initial", "fitted", "std. error"), *rows]:
         print("  ".join(c.ljust(w) for c, w in zip(row, widths)))
-    print(f"{result.termination} after {result.steps} steps, {result.time_s:.2f} s "
+    restarted = f" ({result.restarts} restarts)" if result.restarts else ""
+    print(f"{result.termination} after {result.steps} steps{restarted}, {result.time_s:.2f} s "
           f"(+ {result.geometry_s:.2f} s geometry); RMSE {result.rmse:.4g}")
     if args.json:
         print(f"wrote {write_json(args.json, result.to_json())}")

@@ -396,3 +396,52 @@ def test_a_weak_direction_is_not_dropped_from_the_step(solver):
         opt, _ = fit_mod._solver(solver, 1e-6, 1e-8)
         z = optx.least_squares(lambda z, _: a @ z - b, opt, jnp.zeros(2, jnp.float32), max_steps=20).value
     assert rel(z, truth) < 1e-3, z
+
+
+def test_predicted_decrease_is_the_gauss_newton_step_of_the_residuals(scene, target):
+    """`_predicted_decrease` against ½‖J Δ‖², Δ = numpy's least-squares step, with J from
+    central differences of the residuals in float64 (truncation O(h²) ~ 1e-10 relative)."""
+    terms = [fit_mod._prepare_terms(scene, INIT, ("kd", "ks", "shininess", "kappa"),
+                                    *fit_mod._target_arrays(scene, target, None, None))]
+    problem = fit_mod._Problem(terms, INIT, ("shininess", "kappa"), ("kd", "ks"), ())
+    z = jnp.array([np.log(12.0), np.log(1.7)])
+    r = np.asarray(fit_mod._point(z, problem)[1])
+    h = 1e-5
+    cols = [(np.asarray(fit_mod._point(z + h * e, problem)[1])
+             - np.asarray(fit_mod._point(z - h * e, problem)[1])) / (2 * h) for e in jnp.eye(2)]
+    jac = np.stack(cols, axis=1)
+    step = np.linalg.lstsq(jac, -r, rcond=None)[0]
+    expected = 0.5 * np.sum((jac @ step) ** 2)
+    assert expected > 1e-6 * 0.5 * np.sum(r**2)  # far from the optimum: a real decrease
+    assert float(fit_mod._predicted_decrease(z, problem)) == pytest.approx(expected, rel=1e-6)
+
+
+def test_a_tolerance_test_passed_too_early_restarts_the_solver(scene, target, monkeypatch, fresh_jit):
+    """A solver whose own test passes at every point (as BFGS's did with a stale curvature
+    estimate, p still 4.5× off): `fit` restarts it while Gauss-Newton predicts a decrease,
+    _MAX_RESTARTS times, then stops and says why; at the optimum it accepts at once."""
+    import optimistix as optx
+
+    monkeypatch.setattr(fit_mod, "_terminate", lambda *args: (True, optx.RESULTS.successful))
+    r = hj.fit(scene, target, init=INIT)
+    assert r.restarts == fit_mod._MAX_RESTARTS and r.steps == fit_mod._MAX_RESTARTS
+    assert r.termination.startswith("stopped: the solver's tolerance test passed")
+    assert r.loss[-1] < r.loss[0]  # the restarts did step
+    r = hj.fit(scene, target, init=TRUE)
+    assert r.termination == "converged" and r.restarts == 0 and r.steps == 0
+
+
+@pytest.mark.parametrize("start, termination", [(TRUE, "converged"), (INIT, "stopped: reached max_steps")])
+def test_a_stalled_solver_converges_only_where_nothing_is_left(scene, target, monkeypatch, fresh_jit,
+                                                               start, termination):
+    """A solver that never moves and never says it is done (as LM at the float32 floor,
+    rejecting every step): at the optimum `fit` stops after _STALL_STEPS steps as converged;
+    far from it, it runs to max_steps and says so."""
+    monkeypatch.setattr(fit_mod, "_step", lambda opt, fn, z, problem, state: (z, state))
+    monkeypatch.setattr(fit_mod, "_terminate", lambda *args: (False, None))
+    r = hj.fit(scene, target, init=start, max_steps=3 * fit_mod._STALL_STEPS)
+    assert r.termination.startswith(termination)
+    if start is TRUE:  # tested every _STALL_STEPS steps, over losses after the start's
+        assert fit_mod._STALL_STEPS <= r.steps <= 2 * fit_mod._STALL_STEPS
+    else:
+        assert r.steps == 3 * fit_mod._STALL_STEPS
