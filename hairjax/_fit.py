@@ -61,10 +61,13 @@ _TRANSFORMS = {
 # Smallest value a parameter starts from: the inverse transforms need x > 0.
 _FLOOR = 1e-6
 # How often `fit` starts a solver afresh when its tolerance test passed but the convergence
-# test (`_predicted_decrease`) did not; and after how many steps without a lower loss it
+# test (`_stationarity`) did not; and after how many steps without a lower loss it
 # applies the convergence test itself (a trust region at the float32 floor rejects every step).
 _MAX_RESTARTS = 3
 _STALL_STEPS = 10
+# Where `fit` looks for a lower loss when it stops with every solved Ks at 0 (p then has no
+# effect): the shininess on a log grid over the range we support, 1.5× apart.
+_SHININESS_SCAN = tuple(float(p) for p in np.geomspace(0.5, 1e4, 25))
 # A direction of J whose singular value is below _NULL_RATIO of the largest is taken as
 # without effect, in the solvers' steps and in the standard errors alike: far above the
 # rounding of an SVD in float32 (~1e-7), far below any effect the data resolve.
@@ -497,17 +500,35 @@ def _loss_fn(z, problem: _Problem):
 
 
 @eqx.filter_jit
-def _predicted_decrease(z, problem: _Problem):
-    """The loss a Gauss-Newton step from z would remove were the residuals linear:
-    ½‖U_kᵀ r‖², U_k the left singular vectors of J = ∂r/∂z above _NULL_RATIO (JΔ = −U_k U_kᵀ r
-    for the least-squares step Δ). It is 0 exactly at a stationary point, whatever the
-    solver's state; the solvers' own tests look at the last step's size instead, which a
-    poor curvature estimate (BFGS) or a shrunken trust region makes small far from one."""
+def _stationarity(z, problem: _Problem):
+    """(decrease, effect) at z. `decrease`: the loss a Gauss-Newton step from z would remove
+    were the residuals linear, ½‖U_kᵀ r‖², U_k the left singular vectors of J = ∂r/∂z above
+    _NULL_RATIO (JΔ = −U_k U_kᵀ r for the least-squares step Δ). It is 0 exactly at a
+    stationary point, whatever the solver's state; the solvers' own tests look at the last
+    step's size instead, which a poor curvature estimate (BFGS) or a shrunken trust region
+    makes small far from one. `effect`: ‖∂r/∂z_i‖ per entry of z."""
     r, jvp = jax.linearize(lambda z: _point(z, problem)[1], z)
     jac = jax.vmap(jvp, out_axes=1)(jnp.eye(z.size, dtype=z.dtype))
     u, sv, _ = jnp.linalg.svd(jac, full_matrices=False)
     keep = sv > _NULL_RATIO * sv[0]
-    return 0.5 * jnp.sum(jnp.where(keep, u.T @ r, 0.0) ** 2)
+    return 0.5 * jnp.sum(jnp.where(keep, u.T @ r, 0.0) ** 2), jnp.linalg.norm(jac, axis=0)
+
+
+def _plateau_exit(z, problem: _Problem, effect, loss: float, rtol: float, atol: float):
+    """From a stationary z where the shininess has no effect (‖∂r/∂log p‖ below _NULL_RATIO
+    of the largest column of J: the solved Ks is 0, or the highlight is a needle nowhere
+    near a strand) — so every p is stationary and the solver can never leave — the z with
+    the shininess of `_SHININESS_SCAN` whose loss is lowest, if it beats `loss` beyond the
+    tolerances; else None (also when Ks is not solved for, or p not fitted)."""
+    if "ks" not in problem.linear or "shininess" not in problem.solved:
+        return None
+    i = problem.solved.index("shininess")  # scalar entries only precede it (gains are solved)
+    if not effect[i] <= _NULL_RATIO * effect.max():
+        return None
+    candidates = [z.at[i].set(np.log(p)) for p in _SHININESS_SCAN]
+    losses = [float(_jit_loss(c, problem)) for c in candidates]
+    best = int(np.nanargmin(losses))
+    return candidates[best] if losses[best] < loss - (rtol * loss + atol) else None
 
 
 _jit_point = eqx.filter_jit(_point)
@@ -609,9 +630,12 @@ def fit(
 
     steps, diverged, termination, restarts = 0, False, "converged", 0
 
-    def stationary(z) -> bool:
-        # The convergence test: Gauss-Newton predicts no decrease beyond the tolerances.
-        return float(_predicted_decrease(z, problem)) <= rtol * float(_jit_loss(z, problem)) + atol
+    def stationary(z):
+        """The convergence test (Gauss-Newton predicts no decrease beyond the tolerances),
+        the loss at z, and each entry's effect on the residuals."""
+        decrease, effect = _stationarity(z, problem)
+        loss = float(_jit_loss(z, problem))
+        return float(decrease) <= rtol * loss + atol, loss, np.asarray(effect)
 
     if not solved:
         # Only gains are fitted: one linear least-squares solve is the whole fit.
@@ -622,19 +646,32 @@ def fit(
     else:
         state = _init(opt, fn, z, problem)
         done, result = _terminate(opt, fn, z, problem, state)
-        last_finite, confirmed, unconfirmed = z, False, False
+        last_finite, confirmed, unconfirmed, stalled = z, False, False, False
         while True:
-            if bool(done):
-                if result != optx.RESULTS.successful:
-                    break
-                if stationary(z):
-                    confirmed = True
-                    break
-                if restarts == _MAX_RESTARTS:
-                    unconfirmed = True
-                    break
-                # The solver's test passed away from a stationary point (seen: BFGS with p
-                # still 4.5× off, its curvature estimate stale): start it afresh from here.
+            if bool(done) and result != optx.RESULTS.successful:
+                break
+            restart = False
+            if bool(done) or stalled:
+                settled, loss, effect = stationary(z)
+                if settled:
+                    # A stationary point, unless p has no effect there: then the best p on a
+                    # grid, if lower (seen: Gauss-Newton and dogleg from a start 100× off
+                    # stopped with Ks = 0, Kd 43 % off, and every p "optimal").
+                    lower = None if restarts == _MAX_RESTARTS else _plateau_exit(
+                        z, problem, effect, loss, rtol, atol)
+                    if lower is None:
+                        confirmed = True
+                        break
+                    z, restart = lower, True
+                elif bool(done):
+                    # The solver's test passed away from a stationary point (seen: BFGS with
+                    # p still 4.5× off, its curvature estimate stale): start it afresh here.
+                    if restarts == _MAX_RESTARTS:
+                        unconfirmed = True
+                        break
+                    restart = True
+                # (Stalled short of a stationary point: keep stepping.)
+            if restart:
                 restarts += 1
                 state = _init(opt, fn, z, problem)
             if steps >= max_steps:
@@ -652,12 +689,10 @@ def fit(
             last_finite = z
             done, result = _terminate(opt, fn, z, problem, state)
             # No lower loss in _STALL_STEPS steps (a trust region at the float32 floor rejects
-            # every step) and nothing left to gain: converged, whatever the solver's test says.
+            # every step): converged if the test above finds nothing left to gain.
             recent = losses[-_STALL_STEPS - 1:]
-            if (not bool(done) and steps % _STALL_STEPS == 0 and len(recent) > _STALL_STEPS
-                    and min(recent[1:]) >= recent[0] and stationary(z)):
-                confirmed = True
-                break
+            stalled = (steps % _STALL_STEPS == 0 and len(recent) > _STALL_STEPS
+                       and min(recent[1:]) >= recent[0])
         if diverged:
             termination = "stopped: diverged (the loss became non-finite); kept the last finite point"
         elif confirmed:

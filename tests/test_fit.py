@@ -399,8 +399,9 @@ def test_a_weak_direction_is_not_dropped_from_the_step(solver):
 
 
 def test_predicted_decrease_is_the_gauss_newton_step_of_the_residuals(scene, target):
-    """`_predicted_decrease` against ½‖J Δ‖², Δ = numpy's least-squares step, with J from
-    central differences of the residuals in float64 (truncation O(h²) ~ 1e-10 relative)."""
+    """`_stationarity` against ½‖J Δ‖², Δ = numpy's least-squares step, and the column
+    norms of J, with J from central differences of the residuals in float64 (truncation
+    O(h²) ~ 1e-10 relative)."""
     terms = [fit_mod._prepare_terms(scene, INIT, ("kd", "ks", "shininess", "kappa"),
                                     *fit_mod._target_arrays(scene, target, None, None))]
     problem = fit_mod._Problem(terms, INIT, ("shininess", "kappa"), ("kd", "ks"), ())
@@ -413,7 +414,9 @@ def test_predicted_decrease_is_the_gauss_newton_step_of_the_residuals(scene, tar
     step = np.linalg.lstsq(jac, -r, rcond=None)[0]
     expected = 0.5 * np.sum((jac @ step) ** 2)
     assert expected > 1e-6 * 0.5 * np.sum(r**2)  # far from the optimum: a real decrease
-    assert float(fit_mod._predicted_decrease(z, problem)) == pytest.approx(expected, rel=1e-6)
+    decrease, effect = fit_mod._stationarity(z, problem)
+    assert float(decrease) == pytest.approx(expected, rel=1e-6)
+    np.testing.assert_allclose(effect, np.linalg.norm(jac, axis=0), rtol=1e-6)
 
 
 def test_a_tolerance_test_passed_too_early_restarts_the_solver(scene, target, monkeypatch, fresh_jit):
@@ -445,3 +448,14 @@ def test_a_stalled_solver_converges_only_where_nothing_is_left(scene, target, mo
         assert fit_mod._STALL_STEPS <= r.steps <= 2 * fit_mod._STALL_STEPS
     else:
         assert r.steps == 3 * fit_mod._STALL_STEPS
+
+
+@pytest.mark.parametrize("solver", ["gauss-newton", "dogleg"])
+def test_a_fit_leaves_the_plateau_where_ks_is_zero(scene, target, solver):
+    """From p = 1e8 the highlight is nowhere: the solved Ks is 0, p has no effect, and the
+    solvers stop at a stationary point with Kd and κ fitted to the wrong image. `fit`
+    scans the shininess there and restarts from the best p."""
+    start = hj.ShadingParams(kd=0.5, ks=0.2, shininess=1e8, kappa=1.0, ambient=0.05)
+    r = hj.fit(scene, target, init=start, solver=solver)
+    assert r.termination == "converged" and r.restarts >= 1
+    assert all(rel(getattr(r.params, n), getattr(TRUE, n)) < 1e-3 for n in fit_mod.FITTABLE)
