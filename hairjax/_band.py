@@ -36,7 +36,8 @@ import numpy as np
 
 from ._constants import SHADOW_FILTER_RADIUS
 from ._raster import Fragments, rasterize
-from ._render import geometry_stage, sphere_hits, visibility_order
+from ._occluder import occluder_hits
+from ._render import geometry_stage, visibility_order
 from ._scene import Scene
 from ._shadows import light_frame
 
