@@ -35,8 +35,8 @@ import weakref
 import numpy as np
 
 from ._constants import SHADOW_FILTER_RADIUS
+from ._occluder import occluder_hits, silhouette_pixels
 from ._raster import Fragments, rasterize
-from ._occluder import occluder_hits
 from ._render import geometry_stage, visibility_order
 from ._scene import Scene
 from ._shadows import light_frame
@@ -48,6 +48,11 @@ PIXEL_TOL = 1e-4
 TAU_TOL = 1e-4
 SLICE_DELTA = 1e-4
 MAX_BAND = 1e-3
+# A mesh occluder's pixel centres within this many pixels of an edge where its coverage
+# jumps may fall on either side: llvmpipe snaps vertices to 1/256 pixel (8 sub-pixel
+# bits) before its edge test, moving an edge by up to 1/256·√2 ≈ 0.0055 px; 4/256 is
+# that with margin (measured: no occluder pixel outside it differs, tests/test_occluder.py).
+OCCLUDER_EDGE_DELTA = 4 / 256
 
 # `_risk` per scene object: the geometry does not change with the shading parameters or
 # colour_bound, so a fit's targets share one computation.
@@ -266,13 +271,9 @@ def _camera_risk(scene: Scene) -> dict:
     near_end = near_end[sort]
     always = np.zeros(hw, bool)
     if scene.occluder is not None:
-        # The sphere's silhouette, and hair fragments at the sphere's own depth.
-        origin, direction = view.pixel_rays()
-        oc = origin - np.asarray(scene.occluder.center)
-        b = np.sum(oc * direction, axis=1)
-        disc = b * b - (np.sum(oc * oc, axis=1) - scene.occluder.radius**2)
-        always |= np.abs(disc) < 1e-4 * scene.occluder.radius**2
-        hit, _, _ = sphere_hits(view, scene.occluder)
+        # The occluder's outline and jumps, and hair fragments at its own depth.
+        always |= silhouette_pixels(view, scene.occluder, OCCLUDER_EDGE_DELTA)
+        hit, _, _ = occluder_hits(view, scene.occluder)
         close = np.abs(frags.depth - hit[frags.pixel]) < 1e-5 * np.abs(hit[frags.pixel])
         always[frags.pixel[close]] = True
     return dict(camera=np.bincount(pixel, np.where(near_end, weights, 0.0), minlength=hw),

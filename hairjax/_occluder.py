@@ -29,7 +29,7 @@ from ._constants import OCCLUDER_SHADOW_BIAS
 from ._projection import View, light_view
 
 __all__ = ["occluder_hits", "sphere_hits", "mesh_hits", "vertex_normals", "occluder_extent",
-           "occluder_light_view", "occluder_visibility", "shadow_bias"]
+           "occluder_light_view", "occluder_visibility", "shadow_bias", "silhouette_pixels"]
 
 _CHUNK = 1 << 22  # (triangle, pixel) candidates per batch: bounds memory to ~1 GB
 
@@ -194,3 +194,61 @@ def occluder_visibility(view: View, depth_map: np.ndarray, points: np.ndarray) -
     blocker = depth_map[np.where(inside, ty * r + tx, 0)]
     shadowed = inside & (z > blocker + shadow_bias(view, z))
     return np.where(shadowed, 0.0, 1.0)
+
+
+def silhouette_pixels(view: View, occluder, delta: float) -> np.ndarray:
+    """Pixels (`bool[H*W]`) whose centre lies within `delta` pixels of a place where the
+    occluder's coverage or surface jumps in `view`: for the sphere, its outline (the
+    ray's discriminant within 1e-4 r² of 0); for a mesh, its drawn triangles' edges
+    except those shared by exactly two drawn triangles lying on opposite sides of the
+    edge (there the surface continues across, and either triangle gives the same point).
+    For docs/model.md §11's band: float32 may put such a pixel centre on the other side."""
+    w, h = view.width, view.height
+    if occluder.kind == "sphere":
+        origin, direction = view.pixel_rays()
+        oc = origin - np.asarray(occluder.center)
+        b = np.sum(oc * direction, axis=1)
+        disc = b * b - (np.sum(oc * oc, axis=1) - occluder.radius**2)
+        return np.abs(disc) < 1e-4 * occluder.radius**2
+    tri = occluder.triangles[drawable_triangles(view, occluder.vertices, occluder.triangles)]
+    xy, _ = view.project(occluder.vertices)
+    edges = np.concatenate([tri[:, [0, 1, 2]], tri[:, [1, 2, 0]], tri[:, [2, 0, 1]]])  # (a, b, opposite)
+    key = np.sort(edges[:, :2], axis=1)
+    order = np.lexsort((key[:, 1], key[:, 0]))
+    key, edges = key[order], edges[order]
+    start = np.r_[True, np.any(key[1:] != key[:-1], axis=1)]
+    group = np.cumsum(start) - 1
+    count = np.bincount(group)[group]
+
+    def side(e):
+        a, b, c = xy[e[:, 0]], xy[e[:, 1]], xy[e[:, 2]]
+        return np.sign((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
+
+    s = side(np.column_stack([key, edges[:, 2]]))  # the opposite vertex's side of a → b (sorted)
+    # A pair is continuous when its two opposite vertices lie strictly on opposite sides.
+    pair_sum = np.bincount(group, s)[group]
+    continuous = (count == 2) & (pair_sum == 0) & (s != 0)
+    seg = key[start & ~continuous]  # one row per edge; continuity is the same for both rows
+    return _near_segments(xy[seg[:, 0]], xy[seg[:, 1]], delta, w, h)
+
+
+def _near_segments(p0: np.ndarray, p1: np.ndarray, delta: float, w: int, h: int) -> np.ndarray:
+    """Pixels whose centre lies within `delta` of one of the segments p0 → p1."""
+    out = np.zeros(w * h, bool)
+    x0 = np.clip(np.ceil(np.minimum(p0[:, 0], p1[:, 0]) - delta - 0.5), 0, w)
+    x1 = np.clip(np.floor(np.maximum(p0[:, 0], p1[:, 0]) + delta - 0.5), -1, w - 1)
+    y0 = np.clip(np.ceil(np.minimum(p0[:, 1], p1[:, 1]) - delta - 0.5), 0, h)
+    y1 = np.clip(np.floor(np.maximum(p0[:, 1], p1[:, 1]) + delta - 0.5), -1, h - 1)
+    nx = np.maximum(x1 - x0 + 1, 0).astype(np.int64)
+    ny = np.maximum(y1 - y0 + 1, 0).astype(np.int64)
+    k = np.repeat(np.arange(len(p0)), nx * ny)
+    r = np.arange(k.size) - np.repeat(np.cumsum(nx * ny) - nx * ny, nx * ny)
+    px, py = x0[k] + r % nx[k], y0[k] + r // nx[k]
+    c = np.stack([px + 0.5, py + 0.5], axis=1)
+    d = p1[k] - p0[k]
+    length2 = np.sum(d * d, axis=1)
+    # Fires for zero-length edges (coincident vertices): the distance to the point p0.
+    t = np.clip(np.sum((c - p0[k]) * d, axis=1) / np.where(length2 > 0, length2, 1.0), 0.0, 1.0)
+    near = np.linalg.norm(c - (p0[k] + t[:, None] * d), axis=1) <= delta
+    out[(py[near] * w + px[near]).astype(np.int64)] = True
+    return out
