@@ -1,0 +1,152 @@
+"""The occluder (docs/model.md §9, §13): a mesh hides hair behind it, casts its shadow
+(light-view depth test) and receives the hair's (τ = exp(−κΩ) at its surface); hand-made
+cases, the κ-gradient, and JAX against GL."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import jax
+import numpy as np
+import pytest
+from helpers import DATA, central_difference, unexplained_pixels
+
+import hairjax as hj
+from hairjax._render import occluder_colors, point_colors
+from hairjax._shadows import light_frame
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "experiments" / "scenes"
+
+
+def quad(corners) -> hj.Occluder:
+    """A planar quad a, b, c, d (counter-clockwise seen from its front) as two triangles."""
+    return dict(vertices=np.asarray(corners, np.float64), triangles=[[0, 1, 2], [0, 2, 3]])
+
+
+def hair_line(y=0.0, z=0.0, n=9):
+    x = np.linspace(-1.0, 1.0, n)
+    return np.stack([x, np.full(n, y), np.full(n, z)], axis=1)
+
+
+def test_a_quad_in_front_hides_the_hair_behind_it():
+    """Camera on +z; a quad at z = 0 over x < 0 faces it (normal +z, light along −z: N·L = 1).
+    Left of centre the pixel is the quad's k·(ambient + light), nothing of the hair at
+    z = −1 behind it; right of centre the hair shows; the quad behind the hair hides nothing."""
+    hair = hj.Strands.from_list([hair_line(z=-1.0)], alpha=1.0)
+    k = np.array([0.2, 0.4, 0.6])
+    params = hj.ShadingParams(kd=0.5, ks=0.0, ambient=0.1)
+    front = hj.Occluder(kind="mesh", color=k, **quad([[-3, -3, 0], [0, -3, 0], [0, 3, 0], [-3, 3, 0]]))
+    base = dict(camera=hj.Camera(eye=(0, 0, 5), width=32, height=32), shadows=hj.Shadows("none"),
+                light=hj.Light(direction=(0, 0, -1)), params=params)
+    img = np.asarray(hj.render(hj.Scene(hair, occluder=front, **base)))
+    plain = np.asarray(hj.render(hj.Scene(hair, **base)))
+    row = 16 if plain[16, 8, 3] > 0 else 15  # the hair's row (y = 0 is on a pixel edge)
+    assert plain[row, 12, 3] > 0.4 and plain[row, 20, 3] > 0.4
+    np.testing.assert_allclose(img[row, 12, :3], k * (0.1 + 1.0), rtol=1e-12)
+    assert img[row, 12, 3] == 1.0
+    np.testing.assert_array_equal(img[row, 20], plain[row, 20])
+    behind = hj.Occluder(kind="mesh", color=k, **quad([[-3, -3, -2], [0, -3, -2], [0, 3, -2], [-3, 3, -2]]))
+    img = np.asarray(hj.render(hj.Scene(hair, occluder=behind, **base)))
+    assert np.abs(img[row, 12, :3] - k * 1.1).max() > 0.05  # the hair covers the quad
+
+
+def test_a_quad_between_light_and_hair_leaves_only_ambient():
+    """Light straight down; a quad at y = 1 over x < 0: the hair at y = 0 gets no direct
+    light there (V = 0, colour ambient·c) and full light for x > 0 (V = 1)."""
+    hair = hj.Strands.from_list([hair_line(n=9)], alpha=0.5)
+    occ = hj.Occluder(kind="mesh", **quad([[-3, 1, 3], [0, 1, 3], [0, 1, -3], [-3, 1, -3]]))
+    params = hj.ShadingParams(kd=0.5, ks=0.2, ambient=0.07, kappa=0.0)
+    scene = hj.Scene(hair, camera=hj.Camera(eye=(0, 0, 5), width=32, height=32),
+                     light=hj.Light(direction=(0, -1, 0)), params=params, occluder=occ,
+                     shadows=hj.Shadows("opacity-maps", maps=4, resolution=32))
+    geom = hj.geometry_stage(scene)
+    x = scene.strands.points[:, 0]
+    # The point at x = 0 lies under the quad's edge: the map's texel there may go either way.
+    clear = np.abs(x) > 0.2  # > 1 texel (the map spans ~2.5 units over 26 texels)
+    np.testing.assert_array_equal(np.asarray(geom.light_visibility)[clear], np.where(x < 0, 0.0, 1.0)[clear])
+    colors = np.asarray(point_colors(geom, params))
+    np.testing.assert_allclose(colors[clear & (x < 0)], 0.07, rtol=1e-12)
+    assert np.all(colors[clear & (x > 0)] > 0.07 + 0.4)  # Kd·sin(T, L) = 0.5 with T ⊥ L
+    # No shadows, no shadow work: V is not computed.
+    assert hj.geometry_stage(scene.replace(shadows=hj.Shadows("none"))).light_visibility is None
+
+
+def slab_scene(method: str, kappa: float = 0.7):
+    """Strands along x at y = 0.5, exactly one light texel apart in z and 2 texels wide,
+    above a quad at y = 0 facing up; light straight down, camera below. A texel's column
+    then holds ribbons whose coverages sum to the width, 2 (ribbons of integer width w at
+    unit spacing cover each point w times), so under the middle Ω = 2a for any alignment,
+    and the quad shows k·ambient + exp(−κ·2a)·k·light."""
+    light = hj.Light(direction=(0.0, -1.0, 0.0))
+    res, count = 32, 15
+
+    def strands(spacing):
+        z = (np.arange(count) - count // 2) * spacing
+        return hj.Strands.from_list([hair_line(y=0.5, z=zi, n=5) * [1.6, 1, 1] for zi in z],
+                                    alpha=0.3, width=2.0)
+
+    hair = strands(0.1)
+    # Re-space the strands to one texel of the light's framing (set by the strands' x
+    # extent, which the spacing leaves alone: one step reaches the fixed point).
+    for _ in range(3):
+        frame = light_frame(hair.points, hair.segments(), hair.width, light, res)
+        spacing = 1.0 / frame.view.focal
+        hair = strands(spacing)
+    frame = light_frame(hair.points, hair.segments(), hair.width, light, res)
+    assert abs(frame.view.focal * spacing - 1) < 1e-9
+    occ = hj.Occluder(kind="mesh", color=(0.5, 0.6, 0.7),
+                      **quad([[-3, 0, 3], [3, 0, 3], [3, 0, -3], [-3, 0, -3]]))
+    return hj.Scene(hair, camera=hj.Camera(eye=(0, -5, 0.0), up=(0, 0, -1), fov=20, width=16,
+                                           height=16),
+                    light=light, occluder=occ, shadows=hj.Shadows(method, maps=4, resolution=res),
+                    params=hj.ShadingParams(kd=0.5, ks=0.1, ambient=0.05, kappa=kappa))
+
+
+@pytest.mark.parametrize("method", ["opacity-maps", "exact"])
+def test_the_occluder_under_a_slab_receives_exp_minus_kappa_omega(method):
+    scene = slab_scene(method)
+    img = np.asarray(hj.render(scene))
+    geom = hj.geometry_stage(scene)
+    centre = 8 * 16 + 8
+    pixel = list(np.asarray(geom.occluder_pixel))
+    q = pixel.index(centre)
+    np.testing.assert_allclose(float(geom.occluder_omega[q]), 2 * 0.3, rtol=1e-9)
+    k = np.array([0.5, 0.6, 0.7])
+    np.testing.assert_allclose(img[8, 8, :3], k * 0.05 + np.exp(-0.7 * 0.6) * k, rtol=1e-9)
+    # Without shadows the quad is fully lit: the shadow is the hair's.
+    plain = np.asarray(hj.render(scene.replace(shadows=hj.Shadows("none"))))
+    np.testing.assert_allclose(plain[8, 8, :3], k * 1.05, rtol=1e-12)
+
+
+def test_kappa_gradient_through_the_receiving_occluder():
+    """d/dκ of Σ image² (hair and the occluder beneath it) against central differences in
+    float64 (ε = 1e-6·κ: truncation ~ε²·|f'''| ≪ the 1e-6 relative tolerance); and the
+    occluder's own share is not zero."""
+    scene = slab_scene("opacity-maps")
+
+    def loss(kappa):
+        p = scene.params
+        return float(np.sum(np.asarray(hj.render(scene, hj.ShadingParams(
+            kd=p.kd, ks=p.ks, shininess=p.shininess, ambient=p.ambient, kappa=kappa))) ** 2))
+
+    import jax.numpy as jnp
+
+    def loss_jax(kappa):
+        p = scene.params
+        return jnp.sum(hj.render(scene, hj.ShadingParams(
+            kd=p.kd, ks=p.ks, shininess=p.shininess, ambient=p.ambient, kappa=kappa)) ** 2)
+
+    grad = float(jax.grad(loss_jax)(0.7))
+    fd = central_difference(loss, 0.7, 1e-6 * 0.7)
+    np.testing.assert_allclose(grad, fd, rtol=1e-6)
+    # The quad's pixels alone, colour k·ambient + e^{−κΩ}·k (light 1, N·L = 1, V = 1):
+    # d/dκ Σ colour² = Σ 2·colour·(−Ω e^{−κΩ} k), with each pixel's Ω.
+    geom = hj.geometry_stage(scene)
+    omega = np.asarray(geom.occluder_omega)[:, None]
+    k = np.array([0.5, 0.6, 0.7])
+    colour = k * 0.05 + np.exp(-0.7 * omega) * k
+    by_hand = np.sum(2 * colour * -omega * np.exp(-0.7 * omega) * k)
+    assert by_hand < -1.0
+    occ_only = jax.grad(lambda kp: jnp.sum(occluder_colors(geom, hj.ShadingParams(
+        kd=0.5, ks=0.1, ambient=0.05, kappa=kp)) ** 2))(0.7)
+    np.testing.assert_allclose(float(occ_only), by_hand, rtol=1e-9)
