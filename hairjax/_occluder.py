@@ -252,3 +252,4 @@ def _near_segments(p0: np.ndarray, p1: np.ndarray, delta: float, w: int, h: int)
     near = np.linalg.norm(c - (p0[k] + t[:, None] * d), axis=1) <= delta
     out[(py[near] * w + px[near]).astype(np.int64)] = True
     return out
+
