@@ -250,3 +250,60 @@ def test_mesh_occluder_in_a_scene_file(tmp_path):
     path.write_text(head + 'path = "bad.obj"\n')
     with pytest.raises(hj.SceneError, match=r"bad.obj:1: 'v' needs 3 coordinates"):
         hj.load_scene(path)
+
+
+def test_guard_degenerate_triangles_and_a_mesh_behind_the_eye(gl):
+    """_occluder: a zero-area triangle (collinear vertices) is drawn nowhere and its own
+    vertices get the zero normal (vertex_normals/_unit, occluder_mesh.frag's guard), a
+    zero-length edge is a point for silhouette_pixels (_near_segments); a mesh entirely
+    behind the eye is drawn by neither renderer (drawable_triangles; GL's empty index
+    buffer and depth_far without it); points outside the occluder's light map are lit."""
+    from hairjax._occluder import mesh_hits, occluder_visibility, silhouette_pixels, vertex_normals
+    from hairjax._projection import camera_view
+    from hairjax.gl import render_gl
+
+    flat = np.array([[-3, -3, 0], [0, -3, 0], [0, 3, 0], [-3, 3, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]], float)
+    tris = np.array([[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 4, 5]])
+    n = vertex_normals(flat, tris)
+    np.testing.assert_array_equal(n[4:], 0.0)
+    np.testing.assert_allclose(n[:4], [[0, 0, 1]] * 4)
+    hair = hj.Strands.from_list([hair_line(z=-1.0)], alpha=0.5)
+    scene = hj.Scene(hair, camera=hj.Camera(eye=(0, 0, 5), width=16, height=16),
+                     light=hj.Light(direction=(0, 0, -1)),
+                     occluder=hj.Occluder(kind="mesh", vertices=flat, triangles=tris),
+                     shadows=hj.Shadows("opacity-maps", maps=4, resolution=16))
+    view = camera_view(scene.camera)
+    depth, _, _ = mesh_hits(view, flat, tris[2:])
+    assert not np.isfinite(depth).any()
+    # The quad's free edge x = 0 projects to column boundary 8; the degenerate triangles'
+    # edges (boundary edges: no neighbour) lie on row boundary 8 from x = 1 (column 12.4)
+    # to x = 3, the zero-length one at x = 1. Within 0.6 px: columns 7 and 8 along the quad,
+    # rows 7 and 8 along the degenerate edges.
+    near = silhouette_pixels(view, scene.occluder, 0.6).reshape(16, 16)
+    assert near[2, 7] and near[2, 8] and not near[2, 6] and not near[2, 9]
+    assert near[7, 12] and near[8, 12] and not near[6, 12]
+    bad, _ = unexplained_pixels(scene, render_gl(scene).image, np.asarray(hj.render(scene)))
+    assert bad.size == 0
+    behind = scene.replace(occluder=hj.Occluder(kind="mesh", vertices=flat + [0, 0, 6], triangles=tris))
+    assert hj.prepare(behind).occluder_pixel.size == 0
+    gl_image = render_gl(behind).image
+    assert np.all(gl_image[..., 3] < 1.0)
+    np.testing.assert_allclose(gl_image, np.asarray(hj.render(behind)), atol=1e-4)
+    # Off the map (and behind a point light's near plane): V = 1 whatever the map holds.
+    light_view = hj.prepare(scene).view  # any view: points far outside its raster
+    far = np.array([[1e6, 0.0, 0.0], [0.0, 0.0, 10.0]])
+    np.testing.assert_array_equal(occluder_visibility(light_view, np.zeros(16 * 16), far), 1.0)
+
+
+def test_fit_sees_the_occluder_receive_the_shadow():
+    """hj.fit's image (hairjax/_fit.py) includes the occluder's κ-dependent colour: on the
+    slab scene the camera sees only the quad (k·ambient + e^{−κΩ}k; the hair is behind it),
+    so κ is known from the occluder alone. A κ-only fit from 0.3 recovers 0.7 to 1e-6
+    (the float64 solver's rtol is 1e-8) with RMSE < 1e-9."""
+    scene = slab_scene("opacity-maps", kappa=0.7)
+    target = np.asarray(hj.render(scene))
+    p = scene.params
+    start = hj.ShadingParams(kd=p.kd, ks=p.ks, shininess=p.shininess, ambient=p.ambient, kappa=0.3)
+    r = hj.fit(scene, target, fit=("kappa",), init=start, max_steps=50)
+    np.testing.assert_allclose(float(r.params.kappa), 0.7, rtol=1e-6)
+    assert r.rmse < 1e-9
