@@ -7,8 +7,9 @@ The image is linear in Kd, Ks and the ambient term:
 A = composite(c), K_d = composite(τ·light·sin(T, L)·c), K_s = composite(τ·light·b^p)
 (docs/model.md §6, §8); with an occluder, the backdrop holds its k·ambient and
 O(κ) = exp(−κΩ)·V·k·light·max(N·L, 0) at the pixels it covers (§13). The geometry stage
-runs once per target; Kajiya-Kay's geometric terms once per target; K_d is recomputed per step only when κ is fitted, K_s only when κ or
-the shininess is, and otherwise a step is a handful of per-pixel multiply-adds. Being
+runs once per target; Kajiya-Kay's geometric terms once per target; K_d is recomputed per
+step only when κ is fitted, K_s only when κ or the shininess is, and otherwise a step is a
+handful of per-pixel multiply-adds. Being
 linear, the fitted gains are by default solved for (non-negative least squares) at every
 step, and the solver iterates on the shininess and κ only (variable projection).
 """
