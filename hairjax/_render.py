@@ -1,12 +1,14 @@
 """The staged renderer: scene → geometry stage → shading stage → image (docs/model.md).
 
 - `prepare(scene)`: NumPy set-up that depends on geometry, camera and light only:
-  projection, visibility order, fragments, occluder test, the opacity-map gather plan.
+  projection, visibility order, fragments, occluder test, the opacity-map gather plan
+  (for strand points and the occluder's surface points), the occluder's shadow.
   Cached per `Scene` object.
 - `geometry_stage(scene, alpha)`: the opacity-dependent JAX part: compositing weights
   and Ω. Differentiable in the per-strand `alpha`.
-- `shading_stage(geometry, params)`: Kajiya-Kay at the points, τ = exp(−κΩ), and the
-  weighted sum that is the composite. Differentiable in `ShadingParams`.
+- `shading_stage(geometry, params)`: Kajiya-Kay at the points, τ = exp(−κΩ), the
+  occluder's colour (τ at its surface, docs/model.md §13), and the weighted sum that is
+  the composite. Differentiable in `ShadingParams`.
 
 A scene without shadows builds no shadow work; a scene without occluder runs no occluder
 test. Re-rendering with new parameters reuses both earlier stages.
@@ -344,10 +346,10 @@ def _geometry_stage(scene: Scene, alpha, order=None) -> Geometry:
     omega = occluder_omega = None
     if setup.shadow is not None:
         omega = _omega(scene, setup.shadow, alpha, dtype)
-        # With an occluder, its surface points follow the strand points (§13).
-        omega, occluder_omega = omega[:scene.strands.num_points], omega[scene.strands.num_points:]
-        if setup.occluder_pixel is None:
-            occluder_omega = None
+        if setup.occluder_pixel is not None:
+            # The occluder's surface points follow the strand points (§13).
+            p = scene.strands.num_points
+            omega, occluder_omega = omega[:p], omega[p:]
     maybe = lambda x, t=dtype: None if x is None else jnp.asarray(x, t)  # noqa: E731
     return Geometry(
         tangent=jnp.asarray(setup.tangent, dtype), to_light=jnp.asarray(setup.to_light, dtype),

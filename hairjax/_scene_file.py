@@ -24,6 +24,7 @@ from typing import Any
 
 from ._errors import SceneError
 from ._scene import (
+    OCCLUDER_KINDS,
     ORDERING_METHODS,
     SHADOW_METHODS,
     Camera,
@@ -42,7 +43,6 @@ __all__ = ["load_scene", "scene_from_dict", "default_scene_path"]
 PROCEDURAL_SOURCES = ("furball", "scalp")
 HAIR_FILE_SUFFIXES = (".hair", ".tfx", ".ply")
 LIGHT_KINDS = ("directional", "point")
-OCCLUDER_KINDS = ("sphere", "mesh")
 MESH_FILE_SUFFIXES = (".obj",)
 
 # Defaults that belong to the file format rather than to a dataclass: a scene's hair is

@@ -57,6 +57,10 @@ inputs that make it fire and the guarded result checked against the model's valu
 | _occluder: sphere_hits far root (eye inside)    | sphere_rays_that_miss_and_an_eye_inside     |
 | _occluder: sphere_hits _unit(point − centre)    | unreachable: hits at the radius, misses out |
 | _render: _prepare Lambert clip (max(N·L, 0))    | sphere_rays_that_miss_and_an_eye_inside     |
+| _occluder: vertex_normals/_unit, zero sum       | test_occluder::…degenerate_triangles_…      |
+| _occluder: mesh_hits zero-area projections      | test_occluder::…degenerate_triangles_…      |
+| _occluder: _near_segments zero-length edge      | test_occluder::…degenerate_triangles_…      |
+| _occluder: occluder_visibility off the map      | test_occluder::…degenerate_triangles_…      |
 | _vectors: safe_norm double-where                | safe_norm_at_zero                           |
 | _vectors: safe_normalize (unused by renderer)   | safe_normalize_of_zero                      |
 | _shading: specular_power double-where           | specular_power_at_and_below_the_cut         |
@@ -97,6 +101,10 @@ inputs that make it fire and the guarded result checked against the model's valu
 | omega_exact.comp: texels outside the map        | test_point_light_at_a_strand_point[gl]      |
 | occluder_sphere.frag: t > 0                     | point_light_on_the_occluder (eye outside)   |
 | occluder_color.frag: light on the surface       | point_light_on_the_occluder                 |
+| occluder_mesh.frag: zero interpolated normal    | unreachable in practice: only at a vertex   |
+|                                                 | whose faces' normals cancel exactly         |
+| occluder_visibility.comp: off the map           | not reached by a test (JAX's is, above)     |
+| gl/_renderer: no drawable triangle              | test_occluder::…a_mesh_behind_the_eye       |
 | gl/_renderer: empty buffers, ortho near         | exact_shadows_without_fragments             |
 | gl/_renderer: depth_far (fixed)                 | test_gl_depth_test_keeps_its_resolution_…   |
 
