@@ -49,9 +49,11 @@ TAU_TOL = 1e-4
 SLICE_DELTA = 1e-4
 MAX_BAND = 1e-3
 # A mesh occluder's pixel centres within this many pixels of an edge where its coverage
-# jumps may fall on either side: llvmpipe snaps vertices to 1/256 pixel (8 sub-pixel
-# bits) before its edge test, moving an edge by up to 1/256·√2 ≈ 0.0055 px; 4/256 is
-# that with margin (measured: no occluder pixel outside it differs, tests/test_occluder.py).
+# jumps may fall on either side: llvmpipe rounds vertices to 1/256 pixel (8 sub-pixel
+# bits) before its edge test, moving an edge by up to √2/512 ≈ 0.003 px (measured: an
+# edge 0.001 px beyond a pixel centre still covers it in GL, one 0.002 px beyond does
+# not); 4/256 is that with a 5× margin (no occluder pixel outside it differs on
+# tests/test_occluder.py's scenes).
 OCCLUDER_EDGE_DELTA = 4 / 256
 
 # `_risk` per scene object: the geometry does not change with the shading parameters or
