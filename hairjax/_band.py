@@ -35,7 +35,7 @@ import weakref
 import numpy as np
 
 from ._constants import SHADOW_FILTER_RADIUS
-from ._occluder import occluder_hits, silhouette_pixels
+from ._occluder import interpolation_bound, occluder_hits, silhouette_pixels
 from ._raster import Fragments, rasterize
 from ._render import geometry_stage, visibility_order
 from ._scene import Scene
@@ -55,6 +55,12 @@ MAX_BAND = 1e-3
 # not); 4/256 is that with a 5× margin (no occluder pixel outside it differs on
 # tests/test_occluder.py's scenes).
 OCCLUDER_EDGE_DELTA = 4 / 256
+# The same rounding moves each projected vertex by ≤ 1/512 px per axis, and GL's
+# interpolated normal with it: inside triangles much smaller than a pixel by enough to
+# matter (measured 1.1e-4 at one pixel of Sintel at 64²; JAX with vertices rounded to
+# 1/256 differs from JAX by 2.3e-4 there, GL lies between). `interpolation_bound` bounds
+# it to first order with that step; tests/test_occluder.py checks GL stays within it.
+OCCLUDER_VERTEX_STEP = 1 / 512
 
 # `_risk` per scene object: the geometry does not change with the shading parameters or
 # colour_bound, so a fit's targets share one computation.
@@ -333,6 +339,7 @@ def _camera_risk(scene: Scene) -> dict:
     if scene.occluder is not None:
         # The occluder's outline and jumps, and hair fragments at its own depth.
         always |= silhouette_pixels(view, scene.occluder, OCCLUDER_EDGE_DELTA)
+        always |= interpolation_bound(view, scene.occluder, scene.light, OCCLUDER_VERTEX_STEP) > PIXEL_TOL
         hit, _, _ = occluder_hits(view, scene.occluder)
         close = np.abs(frags.depth - hit[frags.pixel]) < 1e-5 * np.abs(hit[frags.pixel])
         always[frags.pixel[close]] = True

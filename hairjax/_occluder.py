@@ -29,7 +29,8 @@ from ._constants import OCCLUDER_SHADOW_BIAS
 from ._projection import View, light_view
 
 __all__ = ["occluder_hits", "sphere_hits", "mesh_hits", "vertex_normals", "occluder_extent",
-           "occluder_light_view", "occluder_visibility", "shadow_bias", "silhouette_pixels"]
+           "occluder_light_view", "occluder_visibility", "shadow_bias", "silhouette_pixels",
+           "interpolation_bound"]
 
 _CHUNK = 1 << 22  # (triangle, pixel) candidates per batch: bounds memory to ~1 GB
 
@@ -96,12 +97,19 @@ def drawable_triangles(view: View, vertices: np.ndarray, triangles: np.ndarray) 
 
 def mesh_hits(view: View, vertices: np.ndarray, triangles: np.ndarray, normals=None):
     """The mesh rasterised at `view`'s pixel centres (module docstring): as `sphere_hits`."""
+    depth, normal, point, _ = _mesh_raster(view, vertices, triangles, normals)
+    return depth, normal, point
+
+
+def _mesh_raster(view: View, vertices: np.ndarray, triangles: np.ndarray, normals=None):
+    """`mesh_hits` and, per pixel, the winning triangle's index into `triangles` (−1: none)."""
     w, h = view.width, view.height
     depth_out = np.full(w * h, np.inf)
     normal_out = np.zeros((w * h, 3))
     point_out = np.zeros((w * h, 3))
     normals = vertex_normals(vertices, triangles) if normals is None else normals
-    tri = triangles[drawable_triangles(view, vertices, triangles)]
+    drawn = drawable_triangles(view, vertices, triangles)
+    tri = triangles[drawn]
     xy, depth = view.project(vertices)
     a, b, c = (xy[tri[:, k]] for k in range(3))
     area = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
@@ -153,7 +161,9 @@ def mesh_hits(view: View, vertices: np.ndarray, triangles: np.ndarray, normals=N
     corners3 = tri[best_tri[hit]]
     point_out[hit] = np.einsum("ni,nij->nj", best_lam[hit], vertices[corners3])
     normal_out[hit] = _unit(np.einsum("ni,nij->nj", best_lam[hit], normals[corners3]))
-    return best_depth, normal_out, point_out
+    winner = np.full(w * h, -1, np.int64)
+    winner[hit] = drawn[best_tri[hit]]
+    return best_depth, normal_out, point_out, winner
 
 
 def occluder_extent(occluder) -> np.ndarray:
@@ -253,3 +263,52 @@ def _near_segments(p0: np.ndarray, p1: np.ndarray, delta: float, w: int, h: int)
     out[(py[near] * w + px[near]).astype(np.int64)] = True
     return out
 
+
+
+def interpolation_bound(view: View, occluder, light, step: float) -> np.ndarray:
+    """Per pixel (`float[H*W]`), how far the mesh's lit colour k·light·max(N·L, 0) may
+    move when the winning triangle's projected vertices move by up to `step` pixels per
+    axis (llvmpipe rounds them to 1/256 px, and its attribute interpolation follows): the
+    first-order bound Σ over the 6 coordinates of |∂colour/∂coordinate|·step, derivatives
+    by central differences of the barycentric interpolation (module docstring), times
+    max(k·light). Matters for triangles much smaller than a pixel, where the barycentrics
+    move by step/altitude. 0 off the mesh and for a sphere."""
+    w, h = view.width, view.height
+    out = np.zeros(w * h)
+    if occluder.kind == "sphere":
+        return out
+    vertices, triangles = occluder.vertices, occluder.triangles
+    normals = vertex_normals(vertices, triangles)
+    _, _, point, winner = _mesh_raster(view, vertices, triangles, normals)
+    pix = np.flatnonzero(winner >= 0)
+    tri = triangles[winner[pix]]
+    xy, depth = view.project(vertices)
+    corners = xy[tri]  # [Q, 3, 2]
+    c = np.stack([pix % w + 0.5, pix // w + 0.5], axis=1)
+    if light.kind == "directional":
+        to_l = -np.asarray(light.direction, np.float64) / np.linalg.norm(light.direction)
+        to_l = np.broadcast_to(to_l, point[pix].shape)
+    else:
+        to_l = _unit(np.asarray(light.position, np.float64) - point[pix])
+
+    def lambert(p):
+        a, b, cc = p[:, 0], p[:, 1], p[:, 2]
+        area = (b[:, 0] - a[:, 0]) * (cc[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (cc[:, 0] - a[:, 0])
+        la = ((b[:, 0] - c[:, 0]) * (cc[:, 1] - c[:, 1]) - (b[:, 1] - c[:, 1]) * (cc[:, 0] - c[:, 0])) / area
+        lb = ((cc[:, 0] - c[:, 0]) * (a[:, 1] - c[:, 1]) - (cc[:, 1] - c[:, 1]) * (a[:, 0] - c[:, 0])) / area
+        lam = np.stack([la, lb, 1 - la - lb], axis=1)
+        if view.perspective:
+            lam = lam / depth[tri]
+            lam /= lam.sum(axis=1, keepdims=True)
+        n = _unit(np.einsum("ni,nij->nj", lam, normals[tri]))
+        return np.maximum(np.sum(n * to_l, axis=1), 0.0)
+
+    bound = np.zeros(len(pix))
+    for i in range(3):
+        for axis in range(2):
+            up, down = corners.copy(), corners.copy()
+            up[:, i, axis] += step
+            down[:, i, axis] -= step
+            bound += 0.5 * np.abs(lambert(up) - lambert(down))
+    out[pix] = float(np.max(np.asarray(occluder.color) * np.asarray(light.color))) * bound
+    return out
