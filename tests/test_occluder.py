@@ -165,6 +165,18 @@ def gl_scenes():
         light=hj.Light(direction=(0.2, -1, 0.1)), params=hj.ShadingParams(kappa=0.5),
         occluder=hj.Occluder(kind="mesh", **quad([[-3, 1, 3], [0, 1, 3], [0, 1, -3], [-3, 1, -3]])),
         shadows=hj.Shadows("opacity-maps", maps=4, resolution=32))
+    # A point light between two layers of hair: the upper layer lies behind the light's
+    # near plane (V = 1 in both renderers: occluder_visibility's and the compute shader's
+    # "unseen" branch); the quad under the light (x ≤ −0.3: a triangle reaching the light's
+    # near plane would not be drawn, §13) shadows the lower layer where x ≤ −0.6.
+    layers = hj.Strands.from_list([hair_line(y=0.0, z=z, n=9) for z in (-0.2, 0.2)]
+                                  + [hair_line(y=2.0, z=z, n=9) for z in (-0.2, 0.2)], alpha=0.5)
+    out["quad-point-light"] = hj.Scene(
+        layers, camera=hj.Camera(eye=(0.5, 1.0, 5), target=(0, 1, 0), width=32, height=32),
+        light=hj.Light(kind="point", position=(0.0, 1.0, 0.0)), params=hj.ShadingParams(kappa=0.5),
+        occluder=hj.Occluder(kind="mesh", **quad([[-3, 0.5, 3], [-0.3, 0.5, 3], [-0.3, 0.5, -3],
+                                                   [-3, 0.5, -3]])),
+        shadows=hj.Shadows("opacity-maps", maps=4, resolution=128))  # bias 3 texels: 0.28 at z = 1
     small = hj.Camera(eye=(0.0, 0.6, 4.5), target=(0.0, 0.1, 0.0), width=64, height=64)
     sphere = hj.load_scene(EXAMPLES / "occluder.toml")  # with 600 of its 3,000 strands
     out["sphere"] = sphere.replace(
@@ -326,3 +338,14 @@ def test_fit_sees_the_occluder_receive_the_shadow():
     r = hj.fit(scene, target, fit=("kappa",), init=start, max_steps=50)
     np.testing.assert_allclose(float(r.params.kappa), 0.7, rtol=1e-6)
     assert r.rmse < 1e-9
+
+
+def test_a_point_light_between_layers():
+    """The quad-point-light scene by hand: the lower layer's points whose ray to the light
+    (0, 1, 0) crosses y = 0.5 at x/2 ≤ −0.3 (x ≤ −0.6: x = −1, −0.75) are shadowed; the
+    upper layer, behind the light's near plane, and the rest are lit."""
+    scene = SCENES["quad-point-light"]
+    v = np.asarray(hj.geometry_stage(scene).light_visibility).reshape(4, 9)
+    expected = np.ones((4, 9))
+    expected[:2, :2] = 0.0
+    np.testing.assert_array_equal(v, expected)
