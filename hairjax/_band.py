@@ -35,18 +35,32 @@ import weakref
 import numpy as np
 
 from ._constants import SHADOW_FILTER_RADIUS
+from ._occluder import interpolation_bound, occluder_hits, silhouette_pixels
 from ._raster import Fragments, rasterize
-from ._render import geometry_stage, sphere_hits, visibility_order
+from ._render import geometry_stage, visibility_order
 from ._scene import Scene
 from ._shadows import light_frame
 
-__all__ = ["renderer_band", "camera_band", "shadow_band", "omega_uncertainty",
+__all__ = ["renderer_band", "camera_band", "shadow_band", "omega_uncertainty", "occluder_light_uncertainty",
            "transmittance_uncertainty", "PIXEL_TOL", "TAU_TOL", "SLICE_DELTA", "MAX_BAND"]
 
 PIXEL_TOL = 1e-4
 TAU_TOL = 1e-4
 SLICE_DELTA = 1e-4
 MAX_BAND = 1e-3
+# A mesh occluder's pixel centres within this many pixels of an edge where its coverage
+# jumps may fall on either side: llvmpipe rounds vertices to 1/256 pixel (8 sub-pixel
+# bits) before its edge test, moving an edge by up to √2/512 ≈ 0.003 px (measured: an
+# edge 0.001 px beyond a pixel centre still covers it in GL, one 0.002 px beyond does
+# not); 4/256 is that with a 5× margin (no occluder pixel outside it differs on
+# tests/test_occluder.py's scenes).
+OCCLUDER_EDGE_DELTA = 4 / 256
+# The same rounding moves each projected vertex by ≤ 1/512 px per axis, and GL's
+# interpolated normal with it: inside triangles much smaller than a pixel by enough to
+# matter (measured 1.1e-4 at one pixel of Sintel at 64²; JAX with vertices rounded to
+# 1/256 differs from JAX by 2.3e-4 there, GL lies between). `interpolation_bound` bounds
+# it to first order with that step; tests/test_occluder.py checks GL stays within it.
+OCCLUDER_VERTEX_STEP = 1 / 512
 
 # `_risk` per scene object: the geometry does not change with the shading parameters or
 # colour_bound, so a fit's targets share one computation.
@@ -226,6 +240,56 @@ def transmittance_uncertainty(omega: np.ndarray, bound: np.ndarray) -> np.ndarra
     return out
 
 
+def occluder_light_uncertainty(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    """(strand points `bool[P]`, pixels `bool[H·W]`) whose occluder light (docs/model.md
+    §13) GL may compute differently within float32 rounding: V at a point within 1e-4 texel
+    of a texel edge of the occluder's light raster, at a texel within OCCLUDER_EDGE_DELTA
+    of the occluder's outline there, or within 1e-5 (relative) of the bias threshold; and
+    at an occluder pixel, also Ω when its surface point lies within 1e-4 texel of an
+    opacity-map texel edge or (opacity maps) SLICE_DELTA of a plane. Not covered: an
+    occluder point's Ω moved by hair fragments near their segment ends (as
+    `omega_uncertainty` bounds for strand points). All False without an occluder or
+    shadows."""
+    from ._occluder import occluder_light_view, shadow_bias
+    from ._render import prepare
+    from ._shadows import with_receivers
+
+    cam, s = scene.camera, scene.strands
+    points_out, pixels_out = np.zeros(s.num_points, bool), np.zeros(cam.width * cam.height, bool)
+    setup = prepare(scene)
+    if setup.occluder_pixel is None or setup.shadow is None:
+        return points_out, pixels_out
+    _, _, hit_point = occluder_hits(setup.view, scene.occluder)
+    surface = hit_point[setup.occluder_pixel]
+    everything = np.concatenate([s.points, surface])
+    r = scene.shadows.resolution
+
+    def near_edge(xy):
+        frac = xy - np.floor(xy)
+        return np.any(np.minimum(frac, 1 - frac) < 1e-4, axis=1)
+
+    view = occluder_light_view(scene.light, s.points, scene.occluder, r)
+    depth_map, _, _ = occluder_hits(view, scene.occluder)
+    xy, z = view.project(everything)
+    tx = np.clip(np.floor(np.clip(xy[:, 0], -1, r)), 0, r - 1).astype(np.int64)
+    ty = np.clip(np.floor(np.clip(xy[:, 1], -1, r)), 0, r - 1).astype(np.int64)
+    texel = ty * r + tx
+    outline = silhouette_pixels(view, scene.occluder, OCCLUDER_EDGE_DELTA)
+    blocker = depth_map[texel]
+    # Fires where the texel holds no occluder (∞): no threshold to be near.
+    gap = np.where(np.isfinite(blocker), z - blocker - shadow_bias(view, z), np.inf)
+    unsure = near_edge(xy) | outline[texel] | (np.abs(gap) < 1e-5 * np.maximum(np.abs(z), 1e-300))
+    frame = with_receivers(light_frame(s.points, s.segments(), s.width, scene.light, r), surface)
+    receiver = slice(s.num_points, None)
+    unsure[receiver] |= near_edge(frame.xy[receiver])
+    if scene.shadows.method == "opacity-maps":
+        u = frame.slice_coordinate(frame.depth[receiver], scene.shadows.maps)
+        unsure[receiver] |= np.abs(u - np.round(u)) < SLICE_DELTA
+    points_out[:] = unsure[:s.num_points]
+    pixels_out[setup.occluder_pixel] = unsure[receiver]
+    return points_out, pixels_out
+
+
 def _risk(scene: Scene, shadows: bool) -> tuple[np.ndarray, np.ndarray]:
     """Per pixel (row-major): the summed weight α·T of fragments near a segment end, plus
     with `shadows` each other fragment's weight times how much its τ may differ (the larger
@@ -236,16 +300,24 @@ def _risk(scene: Scene, shadows: bool) -> tuple[np.ndarray, np.ndarray]:
         cache.update(_camera_risk(scene))
     if shadows and "either" not in cache:
         cache["either"] = cache["camera"]
+        cache["always_either"] = cache["always"]
         if scene.shadows.method != "none":
             # A fragment's colour mixes its segment's end colours, each moving by ≤ Δτ × its
             # fully lit colour: by ≤ max(Δτ₀, Δτ₁) × colour_bound.
             omega = np.asarray(geometry_stage(scene).omega, np.float64)
             dtau = transmittance_uncertainty(omega, omega_uncertainty(scene))
+            if scene.occluder is not None:
+                # §13: where GL's V or the occluder's Ω may differ, anything may.
+                unsure_points, unsure_pixels = occluder_light_uncertainty(scene)
+                dtau = np.where(unsure_points, 1.0, dtau)
+                cache["always_either"] = cache["always"] | unsure_pixels
             i0, i1 = cache["ends"]
             risk = np.where(cache["near_end"], 0.0, np.maximum(dtau[i0], dtau[i1]))
             cache["either"] = cache["camera"] + np.bincount(cache["pixel"], cache["weights"] * risk,
                                                             minlength=cache["camera"].size)
-    return cache["either" if shadows else "camera"], cache["always"]
+    if shadows:
+        return cache["either"], cache["always_either"]
+    return cache["camera"], cache["always"]
 
 
 def _camera_risk(scene: Scene) -> dict:
@@ -265,13 +337,10 @@ def _camera_risk(scene: Scene) -> dict:
     near_end = near_end[sort]
     always = np.zeros(hw, bool)
     if scene.occluder is not None:
-        # The sphere's silhouette, and hair fragments at the sphere's own depth.
-        origin, direction = view.pixel_rays()
-        oc = origin - np.asarray(scene.occluder.center)
-        b = np.sum(oc * direction, axis=1)
-        disc = b * b - (np.sum(oc * oc, axis=1) - scene.occluder.radius**2)
-        always |= np.abs(disc) < 1e-4 * scene.occluder.radius**2
-        hit, _, _ = sphere_hits(view, scene.occluder)
+        # The occluder's outline and jumps, and hair fragments at its own depth.
+        always |= silhouette_pixels(view, scene.occluder, OCCLUDER_EDGE_DELTA)
+        always |= interpolation_bound(view, scene.occluder, scene.light, OCCLUDER_VERTEX_STEP) > PIXEL_TOL
+        hit, _, _ = occluder_hits(view, scene.occluder)
         close = np.abs(frags.depth - hit[frags.pixel]) < 1e-5 * np.abs(hit[frags.pixel])
         always[frags.pixel[close]] = True
     return dict(camera=np.bincount(pixel, np.where(near_end, weights, 0.0), minlength=hw),

@@ -29,3 +29,11 @@ NEAR_FRACTION = 1e-3
 # the per-step composites. All of a pixel's fragments behind the cut weigh Σ w ≤ T_cut
 # together, so the image moves by at most T_cut × the brightest colour (1e-5 of it).
 FIT_TRANSMITTANCE_CUTOFF = 1e-5
+
+# The occluder's shadow (docs/model.md §13): a point is shadowed when its light depth
+# exceeds the occluder's depth at its texel by more than this many texels' world size.
+# A receiver on the occluder's own surface lies up to √2/2 texel from the texel centre
+# where the map was sampled, so its depth differs by up to 0.71·tan θ texels (θ between
+# the normal and the light): 3 texels keeps surfaces with tan θ < 4.2 (N·L > 0.23) free of
+# self-shadowing "acne"; below that Lambert's N·L is small anyway.
+OCCLUDER_SHADOW_BIAS = 3.0

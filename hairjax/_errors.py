@@ -14,3 +14,14 @@ class HairFormatError(ValueError):
 
 class SceneError(ValueError):
     """A scene (TOML file or Python values) is invalid; the message names the key."""
+
+
+class MeshFormatError(ValueError):
+    """A mesh file (``.obj``) is malformed; the message names the file and the line."""
+
+    def __init__(self, path, line: int | None, problem: str):
+        self.path = str(path)
+        self.line = line
+        self.problem = problem
+        where = self.path if line is None else f"{self.path}:{line}"
+        super().__init__(f"{where}: {problem}")

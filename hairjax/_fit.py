@@ -2,12 +2,14 @@
 
 The image is linear in Kd, Ks and the ambient term:
 
-    image = ambient⊙A + Kd⊙K_d(κ) + Ks⊙K_s(κ, p) + T·backdrop,
+    image = ambient⊙A + Kd⊙K_d(κ) + Ks⊙K_s(κ, p) + T·backdrop + T·O(κ),
 
 A = composite(c), K_d = composite(τ·light·sin(T, L)·c), K_s = composite(τ·light·b^p)
-(docs/model.md §6, §8). The geometry stage runs once per target; Kajiya-Kay's geometric
-terms once per target; K_d is recomputed per step only when κ is fitted, K_s only when κ or
-the shininess is, and otherwise a step is a handful of per-pixel multiply-adds. Being
+(docs/model.md §6, §8); with an occluder, the backdrop holds its k·ambient and
+O(κ) = exp(−κΩ)·V·k·light·max(N·L, 0) at the pixels it covers (§13). The geometry stage
+runs once per target; Kajiya-Kay's geometric terms once per target; K_d is recomputed per
+step only when κ is fitted, K_s only when κ or the shininess is, and otherwise a step is a
+handful of per-pixel multiply-adds. Being
 linear, the fitted gains are by default solved for (non-negative least squares) at every
 step, and the solver iterates on the shininess and κ only (variable projection).
 """
@@ -129,6 +131,9 @@ class _Terms(eqx.Module):
     light: jax.Array
     omega: jax.Array | None
     constant: jax.Array  # ambient⊙A + T·backdrop, [HW, 3]
+    occluder_pixel: jax.Array | None  # [Q] pixels the occluder covers (§13)
+    occluder_lit: jax.Array | None  # [Q, 3] T·V·k·light·max(N·L, 0) there
+    occluder_omega: jax.Array | None  # [Q] Ω at its surface points
     kd_image: jax.Array | None  # K_d when κ is fixed
     ks_image: jax.Array | None  # K_s when κ and p are fixed
     target: jax.Array
@@ -190,16 +195,35 @@ def _prepare_terms(scene: Scene, params: ShadingParams, names, target, sqrt_weig
     omega = geom.omega
     tau = None if omega is None else jnp.exp(-params.kappa * omega)
     # The fixed part of the image is computed once, with every fragment.
+    backdrop = full.backdrop
+    occ_pixel = occ_lit = None
+    if full.occluder_pixel is not None:
+        occ_pixel = full.occluder_pixel
+        backdrop = backdrop.at[occ_pixel].set(params.ambient[None, :] * full.occluder_color[None, :])
+        occ_lit = full.transmittance[occ_pixel][:, None] * full.occluder_direct
+        if full.occluder_visibility is not None:
+            occ_lit = occ_lit * full.occluder_visibility[:, None]
     constant = (composite(full, params.ambient[None, :] * full.base_color)
-                + full.transmittance[:, None] * full.backdrop)
+                + full.transmittance[:, None] * backdrop)
     kd_image = ks_image = None
     if "kappa" not in names or omega is None:
         scale = 1.0 if tau is None else tau[:, None]
         kd_image = composite(geom, scale * sin_tl[:, None] * lit_color)
         if "shininess" not in names:
             ks_image = composite(geom, scale * specular_power(gap, params.shininess)[:, None] * light)
-    return _Terms(geom, sin_tl, gap, lit_color, light, omega, constant, kd_image, ks_image,
+    return _Terms(geom, sin_tl, gap, lit_color, light, omega, constant, occ_pixel, occ_lit,
+                  full.occluder_omega if occ_pixel is not None else None, kd_image, ks_image,
                   jnp.asarray(target), jnp.asarray(sqrt_weight))
+
+
+def _fixed(terms: _Terms, kappa):
+    """ambient⊙A + T·backdrop + T·O(κ): the image without the K_d and K_s terms."""
+    if terms.occluder_pixel is None:
+        return terms.constant
+    lit = terms.occluder_lit
+    if terms.occluder_omega is not None:
+        lit = lit * jnp.exp(-kappa * terms.occluder_omega)[:, None]
+    return terms.constant.at[terms.occluder_pixel].add(lit)
 
 
 def _point_terms(terms: _Terms, shininess, kappa):
@@ -254,7 +278,7 @@ def _image(terms: _Terms, kd, ks, shininess, kappa, images=_kd_ks_images):
     """The RGB image [HW, 3] of one target for the given parameter values.
     (`images=_kd_ks_images_plain` gives plain autodiff, which the tests compare against.)"""
     kd_image, ks_image = images(terms, shininess, kappa)
-    return terms.constant + kd[None, :] * kd_image + ks[None, :] * ks_image
+    return _fixed(terms, kappa) + kd[None, :] * kd_image + ks[None, :] * ks_image
 
 
 # Kd and Ks enter the image linearly (module docstring): with `separable`, `fit` solves
@@ -268,7 +292,7 @@ def _design(terms: _Terms, linear, scalar, params: ShadingParams, shininess, kap
     per fitted Kd/Ks channel, or one for a grey value) and the right-hand side `[HW·3]`,
     both weighted, so that the residuals are Φc − rhs."""
     kd_image, ks_image = _kd_ks_images(terms, shininess, kappa)
-    fixed = terms.constant
+    fixed = _fixed(terms, kappa)
     columns = []
     for name, image in (("kd", kd_image), ("ks", ks_image)):
         if name not in linear:

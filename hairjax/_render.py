@@ -1,12 +1,14 @@
 """The staged renderer: scene → geometry stage → shading stage → image (docs/model.md).
 
 - `prepare(scene)`: NumPy set-up that depends on geometry, camera and light only:
-  projection, visibility order, fragments, occluder test, the opacity-map gather plan.
+  projection, visibility order, fragments, occluder test, the opacity-map gather plan
+  (for strand points and the occluder's surface points), the occluder's shadow.
   Cached per `Scene` object.
 - `geometry_stage(scene, alpha)`: the opacity-dependent JAX part: compositing weights
   and Ω. Differentiable in the per-strand `alpha`.
-- `shading_stage(geometry, params)`: Kajiya-Kay at the points, τ = exp(−κΩ), and the
-  weighted sum that is the composite. Differentiable in `ShadingParams`.
+- `shading_stage(geometry, params)`: Kajiya-Kay at the points, τ = exp(−κΩ), the
+  occluder's colour (τ at its surface, docs/model.md §13), and the weighted sum that is
+  the composite. Differentiable in `ShadingParams`.
 
 A scene without shadows builds no shadow work; a scene without occluder runs no occluder
 test. Re-rendering with new parameters reuses both earlier stages.
@@ -25,6 +27,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ._composite import over_weights
+from ._occluder import occluder_hits, occluder_light_view, occluder_visibility, sphere_hits
 from ._ordering import draw_order, segment_depth, stable_argsort_uint32
 from ._projection import View, camera_view
 from ._raster import rasterize
@@ -33,7 +36,7 @@ from ._shading import ShadingParams, kajiya_kay
 from ._shadows import ShadowSetup, exact_opacity, opacity_maps, point_opacity, shadow_setup
 
 __all__ = ["Setup", "Geometry", "prepare", "visibility_order", "sphere_hits", "to_light",
-           "geometry_stage", "shading_stage", "composite", "point_colors", "render",
+           "geometry_stage", "shading_stage", "composite", "point_colors", "occluder_colors", "render",
            "render_profiled", "forget", "tangents"]
 
 
@@ -77,10 +80,16 @@ class Setup:
     frag_coverage: np.ndarray    # [F]
     frag_first: np.ndarray       # [F] first fragment of its pixel
     frag_last: np.ndarray        # [F] last fragment of its pixel
-    backdrop: np.ndarray         # [H*W, 3] what lies behind the hair: background or occluder
+    backdrop: np.ndarray         # [H*W, 3] the background behind the hair (0 on the occluder)
     opaque: np.ndarray           # [H*W] the occluder covers the pixel centre
-    shadow: ShadowSetup | None
+    shadow: ShadowSetup | None   # with an occluder and shadows, its points follow the strands'
     timings: dict
+    # The occluder (§9, §13); None without one:
+    occluder_pixel: np.ndarray | None = None    # [Q] the pixels it covers
+    occluder_direct: np.ndarray | None = None   # [Q, 3] k·light·max(N·L, 0) at them
+    occluder_visibility: np.ndarray | None = None  # [Q] V there: 0 where it shadows itself
+    occluder_color: np.ndarray | None = None    # [3] k
+    light_visibility: np.ndarray | None = None  # [P] V: 0 where the occluder shadows a strand point
 
 
 class Geometry(eqx.Module):
@@ -92,6 +101,12 @@ class Geometry(eqx.Module):
     base_color: Float[Array, "P 3"]
     light_rgb: Float[Array, 3]
     omega: Float[Array, " P"] | None
+    light_visibility: Float[Array, " P"] | None
+    occluder_pixel: Array | None
+    occluder_direct: Float[Array, "Q 3"] | None
+    occluder_color: Float[Array, " 3"] | None
+    occluder_omega: Float[Array, " Q"] | None
+    occluder_visibility: Float[Array, " Q"] | None
     frag_pixel: Array
     frag_i0: Array  # the segment's first point; its second is frag_i0 + 1
     frag_t: Float[Array, " F"]
@@ -195,13 +210,19 @@ def _prepare(scene: Scene, order=None) -> Setup:
     light_rgb = np.asarray(light.color, dtype=np.float64)
     backdrop = np.broadcast_to(np.asarray(scene.background, np.float64), (hw, 3)).copy()
     opaque = np.zeros(hw, bool)
+    occluder = {}
     if scene.occluder is not None:
-        hit_depth, normal, hit_point = sphere_hits(view, scene.occluder)
+        hit_depth, normal, hit_point = occluder_hits(view, scene.occluder)
         opaque = np.isfinite(hit_depth)
-        to_l = to_light(light, hit_point[opaque])
-        # Lambert's max(N·L, 0) (§9): the clip fires on the sphere's unlit side.
-        lambert = np.clip(np.sum(normal[opaque] * to_l, axis=1), 0.0, None)
-        backdrop[opaque] = np.asarray(scene.occluder.color) * light_rgb * lambert[:, None]
+        occ_pixel = np.flatnonzero(opaque)
+        surface = hit_point[occ_pixel]
+        to_l = to_light(light, surface)
+        # Lambert's max(N·L, 0) (§9): the clip fires on the occluder's unlit side.
+        lambert = np.clip(np.sum(normal[occ_pixel] * to_l, axis=1), 0.0, None)
+        color = np.asarray(scene.occluder.color, np.float64)
+        occluder = dict(occluder_pixel=occ_pixel, occluder_color=color,
+                        occluder_direct=color * light_rgb * lambert[:, None])
+        backdrop[opaque] = 0.0  # the shading stage adds the occluder's colour (§13)
         # kim-2003 §3: depth test on, hair does not write depth.
         visible = np.flatnonzero(frags.depth < hit_depth[frags.pixel])
         frags = frags.take(visible)
@@ -220,9 +241,19 @@ def _prepare(scene: Scene, order=None) -> Setup:
 
     shadow = None
     if scene.shadows.method != "none":
+        receivers = surface if occluder else None
         shadow = shadow_setup(points, segments, seg_strand, strands.width, light,
-                              scene.shadows.method, scene.shadows.maps, scene.shadows.resolution)
+                              scene.shadows.method, scene.shadows.maps, scene.shadows.resolution,
+                              receivers)
         lap("shadow set-up")
+        if occluder:
+            # §13: the occluder's shadow, a depth test in the light's view.
+            light_view = occluder_light_view(light, points, scene.occluder,
+                                             scene.shadows.resolution)
+            depth_map, _, _ = occluder_hits(light_view, scene.occluder)
+            occluder["light_visibility"] = occluder_visibility(light_view, depth_map, points)
+            occluder["occluder_visibility"] = occluder_visibility(light_view, depth_map, surface)
+            lap("occluder shadow")
 
     base_color = strands.color if strands.color is not None else np.ones_like(points)
     return Setup(
@@ -231,7 +262,7 @@ def _prepare(scene: Scene, order=None) -> Setup:
         frag_pixel=pixel, frag_i0=segments[seg, 0].astype(np.int32), frag_t=frag_t,
         frag_strand=seg_strand[seg].astype(np.int32), frag_coverage=frag_coverage,
         frag_first=first, frag_last=last, backdrop=backdrop, opaque=opaque, shadow=shadow,
-        timings=timings,
+        timings=timings, **occluder,
     )
 
 
@@ -240,26 +271,6 @@ def to_light(light, points: np.ndarray) -> np.ndarray:
         d = -np.asarray(light.direction, dtype=np.float64)
         return np.broadcast_to(d / np.linalg.norm(d), points.shape)
     return _unit(np.asarray(light.position, dtype=np.float64) - points)
-
-
-def sphere_hits(view: View, occluder):
-    """Per pixel centre: view depth of the first hit on the sphere (inf if none), normal, point."""
-    origin, direction = view.pixel_rays()
-    centre = np.asarray(occluder.center, dtype=np.float64)
-    oc = origin - centre
-    b = np.sum(oc * direction, axis=1)
-    c = np.sum(oc * oc, axis=1) - occluder.radius**2
-    disc = b * b - c
-    # Fires for rays that miss the sphere (disc < 0): sqrt(0), not NaN; `hit` drops them.
-    root = np.sqrt(np.where(disc >= 0, disc, 0.0))
-    # The nearer intersection in front of the eye; the farther one when the eye is inside.
-    t = np.where(-b - root > 0, -b - root, -b + root)
-    hit = (disc >= 0) & (t > 0)
-    point = origin + t[:, None] * direction
-    depth = np.where(hit, (point - view.origin) @ view.forward, np.inf)
-    # _unit's zero branch cannot fire here: hits lie at the radius, misses farther out.
-    normal = _unit(point - centre)
-    return depth, normal, point
 
 
 @eqx.filter_jit
@@ -332,11 +343,22 @@ def _geometry_stage(scene: Scene, alpha, order=None) -> Geometry:
     weights, frag_alpha, transmittance, alpha_channel = _composite_weights(
         alpha, setup.frag_strand, jnp.asarray(setup.frag_coverage, dtype), setup.frag_first,
         setup.frag_last, last_pixel, jnp.asarray(setup.opaque, dtype))
-    omega = None if setup.shadow is None else _omega(scene, setup.shadow, alpha, dtype)
+    omega = occluder_omega = None
+    if setup.shadow is not None:
+        omega = _omega(scene, setup.shadow, alpha, dtype)
+        if setup.occluder_pixel is not None:
+            # The occluder's surface points follow the strand points (§13).
+            p = scene.strands.num_points
+            omega, occluder_omega = omega[:p], omega[p:]
+    maybe = lambda x, t=dtype: None if x is None else jnp.asarray(x, t)  # noqa: E731
     return Geometry(
         tangent=jnp.asarray(setup.tangent, dtype), to_light=jnp.asarray(setup.to_light, dtype),
         to_eye=jnp.asarray(setup.to_eye, dtype), base_color=jnp.asarray(setup.base_color, dtype),
         light_rgb=jnp.asarray(setup.light_rgb, dtype), omega=omega,
+        light_visibility=maybe(setup.light_visibility),
+        occluder_pixel=maybe(setup.occluder_pixel, jnp.int32),
+        occluder_direct=maybe(setup.occluder_direct), occluder_color=maybe(setup.occluder_color),
+        occluder_omega=occluder_omega, occluder_visibility=maybe(setup.occluder_visibility),
         frag_pixel=jnp.asarray(setup.frag_pixel, jnp.int32),
         frag_i0=jnp.asarray(setup.frag_i0, jnp.int32),
         frag_t=jnp.asarray(setup.frag_t, dtype), frag_weight=weights, frag_alpha=frag_alpha,
@@ -354,7 +376,20 @@ def point_colors(geometry: Geometry, params: ShadingParams) -> Float[Array, "P 3
     lit = geometry.light_rgb[None, :] * (diffuse * geometry.base_color + specular)
     if geometry.omega is not None:
         lit = lit * jnp.exp(-params.kappa * geometry.omega)[:, None]
+    if geometry.light_visibility is not None:  # §13: the occluder's shadow
+        lit = lit * geometry.light_visibility[:, None]
     return params.ambient[None, :] * geometry.base_color + lit
+
+
+def occluder_colors(geometry: Geometry, params: ShadingParams) -> Float[Array, "Q 3"]:
+    """The occluder's colour at the pixels it covers (docs/model.md §13):
+    k·ambient + τ·k·light·max(N·L, 0)·V, τ = exp(−κΩ) at its surface point."""
+    direct = geometry.occluder_direct
+    if geometry.occluder_omega is not None:
+        direct = direct * jnp.exp(-params.kappa * geometry.occluder_omega)[:, None]
+    if geometry.occluder_visibility is not None:
+        direct = direct * geometry.occluder_visibility[:, None]
+    return params.ambient[None, :] * geometry.occluder_color[None, :] + direct
 
 
 def composite(geometry: Geometry, colors: Float[Array, "P C"]) -> Float[Array, "HW C"]:
@@ -371,7 +406,10 @@ def composite(geometry: Geometry, colors: Float[Array, "P C"]) -> Float[Array, "
 def shading_stage(geometry: Geometry, params: ShadingParams) -> Float[Array, "H W 4"]:
     """The image from the geometry stage and the shading parameters (`[H, W, 4]`)."""
     rgb = composite(geometry, point_colors(geometry, params))
-    rgb = rgb + geometry.transmittance[:, None] * geometry.backdrop
+    backdrop = geometry.backdrop
+    if geometry.occluder_pixel is not None:
+        backdrop = backdrop.at[geometry.occluder_pixel].set(occluder_colors(geometry, params))
+    rgb = rgb + geometry.transmittance[:, None] * backdrop
     image = jnp.concatenate([rgb, geometry.alpha_channel[:, None]], axis=1)
     return image.reshape(geometry.height, geometry.width, 4)
 

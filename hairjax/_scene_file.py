@@ -24,6 +24,7 @@ from typing import Any
 
 from ._errors import SceneError
 from ._scene import (
+    OCCLUDER_KINDS,
     ORDERING_METHODS,
     SHADOW_METHODS,
     Camera,
@@ -42,7 +43,7 @@ __all__ = ["load_scene", "scene_from_dict", "default_scene_path"]
 PROCEDURAL_SOURCES = ("furball", "scalp")
 HAIR_FILE_SUFFIXES = (".hair", ".tfx", ".ply")
 LIGHT_KINDS = ("directional", "point")
-OCCLUDER_KINDS = ("sphere",)
+MESH_FILE_SUFFIXES = (".obj",)
 
 # Defaults that belong to the file format rather than to a dataclass: a scene's hair is
 # semi-transparent unless the file says otherwise, whatever its source.
@@ -61,7 +62,7 @@ TABLES: dict[str, tuple[str, ...]] = {
     "shading": ("model", "kd", "ks", "shininess", "kappa", "ambient"),
     "shadows": ("method", "maps", "resolution"),
     "ordering": ("method", "bins"),
-    "occluder": ("kind", "center", "radius", "color"),
+    "occluder": ("kind", "center", "radius", "color", "path"),
     "background": ("color",),
 }
 TOP_LEVEL_KEYS = ("name",)
@@ -124,7 +125,7 @@ def scene_from_dict(
     ordering = _build(where, Ordering, **_read_ordering(tables["ordering"]))
     occluder = None
     if "occluder" in data:  # The table's presence, even empty, asks for an occluder.
-        occluder = _build(where, Occluder, **_read_occluder(tables["occluder"]))
+        occluder = _build(where, Occluder, **_read_occluder(tables["occluder"], Path(base_dir)))
     background = tables["background"].rgb("color")
     # Hair last: generating or reading it is the only slow step, so the cheap checks of
     # the other tables fail first.
@@ -379,9 +380,28 @@ def _read_ordering(table: _Table) -> dict[str, Any]:
     return _given(method=table.choice("method", ORDERING_METHODS), bins=table.integer("bins"))
 
 
-def _read_occluder(table: _Table) -> dict[str, Any]:
-    return _given(kind=table.choice("kind", OCCLUDER_KINDS), center=table.vec3("center"),
-                  radius=table.number("radius", lo=0, lo_open=True), color=table.rgb("color"))
+def _read_occluder(table: _Table, base_dir: Path) -> dict[str, Any]:
+    kind = table.choice("kind", OCCLUDER_KINDS) or "sphere"
+    # Occluder would refuse the keys of the other kind; say which kind takes them.
+    for key, owner in (("center", "sphere"), ("radius", "sphere"), ("path", "mesh")):
+        if key in table and kind != owner:
+            raise SceneError(f"{table.where}: occluder.{key} is only for kind = {owner!r}, "
+                             f"not {kind!r}")
+    path = table.string("path")
+    if kind == "mesh":
+        if path is None:
+            raise SceneError(f"{table.where}: occluder.path is required for kind = 'mesh': "
+                             f"a {'/'.join(MESH_FILE_SUFFIXES)} file")
+        if Path(path).suffix.lower() not in MESH_FILE_SUFFIXES:
+            raise table.error("path", f"a path to a {'/'.join(MESH_FILE_SUFFIXES)} file", path)
+        full = Path(path) if Path(path).is_absolute() else base_dir / path
+        if not full.is_file():
+            raise SceneError(f"{table.where}: occluder.path file not found: {full} (from {path!r}; "
+                             "relative paths are resolved against the scene file's directory)")
+        path = str(full.resolve())
+    return _given(kind=kind, center=table.vec3("center"),
+                  radius=table.number("radius", lo=0, lo_open=True), color=table.rgb("color"),
+                  path=path)
 
 
 # --------------------------------------------------------------------------- helpers

@@ -28,7 +28,7 @@ from ._constants import PIXEL_HALF_EXTENT, SHADOW_FILTER_RADIUS
 from ._projection import View, light_view
 from ._raster import rasterize
 
-__all__ = ["ShadowSetup", "LightFrame", "light_frame", "point_planes", "shadow_setup",
+__all__ = ["ShadowSetup", "LightFrame", "light_frame", "point_planes", "shadow_setup", "with_receivers",
            "opacity_maps", "point_opacity", "MAX_MAP_CELLS"]
 
 # (N + 1) · R² map cells at most: 1 GiB in float32.
@@ -106,20 +106,36 @@ def light_frame(points, segments, width, light, resolution: int) -> LightFrame:
     return LightFrame(view, xy, depth, seen, drawable, zmin, span)
 
 
+def with_receivers(frame: LightFrame, receivers: np.ndarray | None) -> LightFrame:
+    """`frame` with `receivers` (`[Q, 3]`, e.g. the occluder's visible surface points,
+    docs/model.md §13) appended to its points: they get Ω like strand points but neither
+    cast nor move the depth range D₀ … D_N. Unchanged for None."""
+    if receivers is None:
+        return frame
+    xy, depth = frame.view.project(receivers)
+    # Behind a point light's near plane: no shadow, as for strand points.
+    seen = depth > frame.view.near if frame.view.perspective else np.ones(len(depth), bool)
+    return dataclasses.replace(frame, xy=np.concatenate([frame.xy, xy]),
+                               depth=np.concatenate([frame.depth, depth]),
+                               seen=np.concatenate([frame.seen, seen]))
+
+
 def shadow_setup(points, segments, seg_strand, width, light, method: str, maps: int,
-                 resolution: int) -> ShadowSetup:
+                 resolution: int, receivers: np.ndarray | None = None) -> ShadowSetup:
     """Rasterise the strands from the light (same ribbons as the camera pass; width in
-    texels = the strand's width in pixels) and plan Ω at every point."""
+    texels = the strand's width in pixels) and plan Ω at every point, then at every
+    point of `receivers` (`[Q, 3]`, optional: the per-point arrays get P + Q entries)."""
     if method == "opacity-maps" and (maps + 1) * resolution**2 > MAX_MAP_CELLS:
         raise ValueError(f"{maps} maps of {resolution}² exceed {MAX_MAP_CELLS} cells; "
                          "use fewer maps or a lower resolution")
     frame = light_frame(points, segments, width, light, resolution)
-    view, xy, depth, seen, zmin, span = (frame.view, frame.xy, frame.depth, frame.seen,
-                                         frame.zmin, frame.span)
     seg_ids = frame.drawable
     s0, s1 = segments[seg_ids, 0], segments[seg_ids, 1]
-    frags = rasterize(xy[s0], xy[s1], depth[s0], depth[s1], width[seg_strand[seg_ids]],
-                      resolution, resolution, view.perspective)
+    frags = rasterize(frame.xy[s0], frame.xy[s1], frame.depth[s0], frame.depth[s1],
+                      width[seg_strand[seg_ids]], resolution, resolution, frame.view.perspective)
+    frame = with_receivers(frame, receivers)
+    view, xy, depth, seen, zmin, span = (frame.view, frame.xy, frame.depth, frame.seen,
+                                         frame.zmin, frame.span)
 
     # Clip fires for a light at the hair's centre (near ≈ 1e-303: xy ~1e300, no int64); outside stays outside.
     tx = np.floor(np.clip(xy[:, 0], -1, resolution)).astype(np.int64)

@@ -148,7 +148,9 @@ def scene_digest(scene: Scene) -> str:
     """A hash of everything that changes the image, to tell one sweep's folder from another's."""
     h = hashlib.sha256()
     s = scene.strands
-    for a in (s.points, s.offsets, s.alpha, s.width, s.color):
+    occ = scene.occluder
+    mesh = (occ.vertices, occ.triangles) if occ is not None and occ.kind == "mesh" else ()
+    for a in (s.points, s.offsets, s.alpha, s.width, s.color, *mesh):
         if a is not None:
             h.update(np.ascontiguousarray(a).tobytes())
     h.update(repr((scene.camera, scene.light, scene.shading_model, scene.shadows, scene.ordering,

@@ -50,7 +50,10 @@ SCENES = ["default", "point_light", "grazing", "dense_opaque", "occluder", "tres
 @pytest.fixture(scope="module")
 def references():
     """JAX image and Ω per scene, computed once (float64)."""
+    from hairjax.gl import occluder_light
+
     cache = {}
+    occluders = {}  # the JAX renderer's occluder light, for the camera pass
 
     def get(name):
         if name not in cache:
@@ -58,8 +61,10 @@ def references():
             geom = hj.geometry_stage(scene)
             cache[name] = scene, np.asarray(hj.shading_stage(geom, scene.params)), (
                 None if geom.omega is None else np.asarray(geom.omega))
+            occluders[name] = occluder_light(scene, geom)
         return cache[name]
 
+    get.occluder = occluders.get
     return get
 
 
@@ -69,7 +74,7 @@ def test_camera_pass_matches(gl, references, name):
     from hairjax.gl import render_gl
 
     scene, jax_image, omega = references(name)
-    result = render_gl(scene, omega=omega)
+    result = render_gl(scene, omega=omega, occluder=references.occluder(name))
     assert result.image.shape == jax_image.shape and np.all(np.isfinite(result.image))
     bad, band = unexplained_pixels(scene, result.image, jax_image)
     assert bad.size == 0, f"{bad.size} pixels differ by > {PIXEL_TOL} with no boundary nearby"

@@ -103,7 +103,7 @@ def test_default_scene_values():
 
 # --------------------------------------------------------------------------- examples
 
-EXAMPLE_NAMES = ["point_light", "grazing", "dense_opaque", "occluder", "tressfx_ponytail"]
+EXAMPLE_NAMES = ["point_light", "grazing", "dense_opaque", "occluder", "tressfx_ponytail", "sintel"]
 
 
 def test_every_example_is_listed():
@@ -112,7 +112,7 @@ def test_every_example_is_listed():
 
 @pytest.mark.parametrize("name", EXAMPLE_NAMES)
 def test_example_scene_loads(name):
-    if name == "tressfx_ponytail":
+    if name in ("tressfx_ponytail", "sintel"):
         real_load_hair()
     scene = load_scene(EXAMPLES / f"{name}.toml")
     assert scene.name == name
@@ -163,7 +163,7 @@ def assert_framed(scene):
 
 @pytest.mark.parametrize("name", EXAMPLE_NAMES)
 def test_example_scene_is_framed(name):
-    if name == "tressfx_ponytail":
+    if name in ("tressfx_ponytail", "sintel"):
         real_load_hair()
     assert_framed(load_scene(EXAMPLES / f"{name}.toml"))
 

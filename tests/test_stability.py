@@ -53,10 +53,14 @@ inputs that make it fire and the guarded result checked against the model's valu
 |-------------------------------------------------|---------------------------------------------|
 | _render: tangents/_unit, zero difference        | zero_tangent_of_repeated_points             |
 | _render: to_light/_unit, point light at a point | test_point_light_at_a_strand_point          |
-| _render: sphere_hits sqrt(where(disc ≥ 0))      | sphere_rays_that_miss_and_an_eye_inside     |
-| _render: sphere_hits far root (eye inside)      | sphere_rays_that_miss_and_an_eye_inside     |
-| _render: sphere_hits _unit(point − centre)      | unreachable: hits at the radius, misses out |
+| _occluder: sphere_hits sqrt(where(disc ≥ 0))    | sphere_rays_that_miss_and_an_eye_inside     |
+| _occluder: sphere_hits far root (eye inside)    | sphere_rays_that_miss_and_an_eye_inside     |
+| _occluder: sphere_hits _unit(point − centre)    | unreachable: hits at the radius, misses out |
 | _render: _prepare Lambert clip (max(N·L, 0))    | sphere_rays_that_miss_and_an_eye_inside     |
+| _occluder: vertex_normals/_unit, zero sum       | test_occluder::…degenerate_triangles_…      |
+| _occluder: mesh_hits zero-area projections      | test_occluder::…degenerate_triangles_…      |
+| _occluder: _near_segments zero-length edge      | test_occluder::…degenerate_triangles_…      |
+| _occluder: occluder_visibility off the map      | test_occluder::…degenerate_triangles_…      |
 | _vectors: safe_norm double-where                | safe_norm_at_zero                           |
 | _vectors: safe_normalize (unused by renderer)   | safe_normalize_of_zero                      |
 | _shading: specular_power double-where           | specular_power_at_and_below_the_cut         |
@@ -95,7 +99,12 @@ inputs that make it fire and the guarded result checked against the model's valu
 | strand.vert: safe_normalize                     | test_point_light_at_a_strand_point[gl]      |
 | omega_maps.comp: outside the map, f clamp       | test_point_light_at_the_hairs_centre[gl]    |
 | omega_exact.comp: texels outside the map        | test_point_light_at_a_strand_point[gl]      |
-| sphere.frag: t > 0; normalize(light − hit)      | point_light_on_the_occluder (unguarded)     |
+| occluder_sphere.frag: t > 0                     | point_light_on_the_occluder (eye outside)   |
+| occluder_color.frag: light on the surface       | point_light_on_the_occluder                 |
+| occluder_mesh.frag: zero interpolated normal    | unreachable in practice: only at a vertex   |
+|                                                 | whose faces' normals cancel exactly         |
+| occluder_visibility.comp: off the map           | not reached by a test (JAX's is, above)     |
+| gl/_renderer: no drawable triangle              | test_occluder::…a_mesh_behind_the_eye       |
 | gl/_renderer: empty buffers, ortho near         | exact_shadows_without_fragments             |
 | gl/_renderer: depth_far (fixed)                 | test_gl_depth_test_keeps_its_resolution_…   |
 
@@ -143,8 +152,9 @@ def channel_bound(scene: hj.Scene, params: hj.ShadingParams, dtype) -> np.ndarra
     colours and the backdrop B. A fragment colour (1 − t)c(p₀) + t c(p₁), t ∈ [0, 1), lies
     between two point colours; a point colour ambient·c + τ·light·(Kd sin(T, L) c + Ks
     max(b, 0)^p) has τ = exp(−κΩ) ≤ 1 (κ, Ω ≥ 0), sin ≤ 1 and b = cos(θ_L ∓ θ_V) ≤ 1 for
-    unit vectors; B is the background or the occluder's k·light·max(N·L, 0) ≤ k·light. So
-    C ≤ max(ambient·c_max + light·(Kd·c_max + Ks), background, k·light) per channel.
+    unit vectors; B is the background or the occluder's k·ambient + τ·V·k·light·max(N·L, 0)
+    ≤ k·(ambient + light) (§13). So
+    C ≤ max(ambient·c_max + light·(Kd·c_max + Ks), background, k·(ambient + light)) per channel.
 
     Rounding, u the unit roundoff: the unit vectors' norms are 1 ± u, so sin ≤ 1 + 3u and
     b, ~10 roundings, ≤ 1 + 16u, hence b^p ≤ exp(16pu) (p is b^p's condition number):
@@ -161,7 +171,7 @@ def channel_bound(scene: hj.Scene, params: hj.ShadingParams, dtype) -> np.ndarra
     hair = (amb * c_max + light * kd * c_max) * (1 + 8 * u) + light * ks * np.exp(16 * p * u)
     backdrop = np.asarray(scene.background)
     if scene.occluder is not None:
-        backdrop = np.maximum(backdrop, np.asarray(scene.occluder.color) * light)
+        backdrop = np.maximum(backdrop, np.asarray(scene.occluder.color) * (amb + light))
     n = len(strands.segments())
     return np.maximum(hair, backdrop) * (1 + 4 * n * u)
 
@@ -934,8 +944,8 @@ def test_gl_depth_test_keeps_its_resolution_at_1e_minus_4(gl):
     gl_image = render_gl(scene).image
     # By hand: hair in front (gap > 0) shows white (it runs through the pixel centre:
     # coverage 1 up to the projection's rounding, ~1e-13), behind it the sphere's
-    # 0.2·N·L. GL: the same to float32 rounding of values ≤ 1 (a few ulps).
-    expected = np.where(gaps > 0, 1.0, 0.2 * np.asarray(lambert))
+    # 0.2·(ambient + N·L), ambient 1 (§13). GL: the same to float32 rounding (a few ulps).
+    expected = np.where(gaps > 0, 1.0, 0.2 * (1.0 + np.asarray(lambert)))
     np.testing.assert_allclose(jax_image[rows, 16, 0], expected, rtol=0, atol=1e-12)
     np.testing.assert_allclose(gl_image[rows, 16, 0], expected, rtol=0, atol=1e-6)
     bad, _ = unexplained_pixels(scene, gl_image, jax_image)
@@ -1363,13 +1373,13 @@ def test_guard_sphere_rays_that_miss_and_an_eye_inside():
     scene = hj.Scene(hj.Strands.from_list([[[2.0, 2.0, 0.0]]]), camera=hj.Camera(width=16, height=16),
                      light=hj.Light(direction=(0.0, 0.0, 1.0)), occluder=occ, shadows=hj.Shadows("none"))
     setup = hj.prepare(scene)
-    assert setup.opaque.any() and np.all(setup.backdrop[setup.opaque] == 0.0)  # lit from behind
+    assert setup.opaque.any() and np.all(setup.occluder_direct == 0.0)  # lit from behind
 
 
 def test_guard_point_light_on_the_occluder(gl):
     """A point light exactly on the sphere at the centre pixel's hit point: JAX's _unit
-    gives L = 0 there (Lambert 0); GLSL's normalize(0) is undefined (llvmpipe returns
-    something max(·, 0) maps to 0): both must show 0, finite."""
+    gives L = 0 there (Lambert 0), occluder_color.frag's guarded normalisation too: both
+    must show the ambient part k·ambient only, finite."""
     from hairjax.gl import render_gl
 
     hair = hj.Strands.from_list([[[-0.5, 1.5, 0.5], [0.5, 1.5, 0.5]]], alpha=0.5)
@@ -1380,8 +1390,9 @@ def test_guard_point_light_on_the_occluder(gl):
     assert np.array_equal(hj.prepare(scene).view.pixel_rays()[1][4 * 9 + 4], [0.0, 0.0, -1.0])
     jax_image, gl_image = np.asarray(hj.render(scene)), render_gl(scene).image
     assert np.all(np.isfinite(gl_image))
-    np.testing.assert_array_equal(jax_image[4, 4], [0.0, 0.0, 0.0, 1.0])
-    np.testing.assert_array_equal(gl_image[4, 4], [0.0, 0.0, 0.0, 1.0])
+    amb = np.asarray(scene.params.ambient, np.float64) * np.ones(3)  # k = 1
+    np.testing.assert_array_equal(jax_image[4, 4], [*amb, 1.0])
+    np.testing.assert_allclose(gl_image[4, 4], [*amb, 1.0], rtol=1e-7)
     np.testing.assert_allclose(gl_image, jax_image, rtol=0, atol=1e-6)
 
 

@@ -43,9 +43,12 @@ _PROGRAMS = {
                         fragment_shader="light_slice.frag"),
     "light_list": dict(vertex_shader="strand.vert", geometry_shader="ribbon.geom",
                        fragment_shader="light_list.frag"),
-    "sphere": dict(vertex_shader="fullscreen.vert", fragment_shader="sphere.frag"),
+    "occluder_sphere": dict(vertex_shader="fullscreen.vert", fragment_shader="occluder_sphere.frag"),
+    "occluder_mesh": dict(vertex_shader="occluder_mesh.vert", fragment_shader="occluder_mesh.frag"),
+    "occluder_color": dict(vertex_shader="fullscreen.vert", fragment_shader="occluder_color.frag"),
 }
-_COMPUTE = {"omega_maps": "omega_maps.comp", "omega_exact": "omega_exact.comp"}
+_COMPUTE = {"omega_maps": "omega_maps.comp", "omega_exact": "omega_exact.comp",
+            "occluder_visibility": "occluder_visibility.comp"}
 _CACHE: dict = {}
 
 

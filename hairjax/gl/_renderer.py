@@ -15,26 +15,57 @@ import time
 
 import numpy as np
 
+from .._occluder import drawable_triangles, occluder_extent, occluder_light_view, vertex_normals
+from .._projection import View
 from .._render import tangents, visibility_order
 from .._scene import Scene
 from .._shading import ShadingParams
-from .._shadows import LightFrame, light_frame, point_planes
+from .._shadows import LightFrame, light_frame, point_planes, with_receivers
 from ._context import check, get_context, release
 from ._programs import SHADING_MODEL_IDS, programs
 
-__all__ = ["GLResult", "render_gl"]
+__all__ = ["GLResult", "OccluderLight", "occluder_light", "render_gl"]
 
 _GROUP = 64  # local size of the compute shaders
 
 
 @dataclasses.dataclass(frozen=True)
+class OccluderLight:
+    """The occluder's part of the light (docs/model.md §13): `visibility` V at the strand
+    points (`[P]`, 0 where the occluder shadows them); per pixel (`[H, W]`, row 0 at the
+    top) at the occluder's surface point: `omega` Ω (0 where it does not cover the pixel)
+    and `surface_visibility` V (1 there)."""
+
+    visibility: np.ndarray
+    omega: np.ndarray
+    surface_visibility: np.ndarray
+
+
+def occluder_light(scene: Scene, geometry) -> OccluderLight | None:
+    """The JAX renderer's `OccluderLight` (from its `Geometry`), to hand to `render_gl`
+    with its Ω; None where the scene's occluder takes no part in the light."""
+    if geometry.occluder_pixel is None or geometry.occluder_omega is None:
+        return None
+    cam = scene.camera
+    pixel = np.asarray(geometry.occluder_pixel)
+    omega = np.zeros(cam.width * cam.height)
+    omega[pixel] = np.asarray(geometry.occluder_omega)
+    surface = np.ones(cam.width * cam.height)
+    surface[pixel] = np.asarray(geometry.occluder_visibility)
+    return OccluderLight(np.asarray(geometry.light_visibility, np.float64),
+                         omega.reshape(cam.height, cam.width), surface.reshape(cam.height, cam.width))
+
+
+@dataclasses.dataclass(frozen=True)
 class GLResult:
     """`image`: `float32[H, W, 4]` linear RGBA, row 0 at the top; `omega`: Ω per point
-    (`float32[P]`, None without shadows); `timings`: seconds by pass."""
+    (`float32[P]`, None without shadows); `timings`: seconds by pass; `occluder`: the
+    occluder's part of the light (None without occluder or shadows)."""
 
     image: np.ndarray
     omega: np.ndarray | None
     timings: dict
+    occluder: OccluderLight | None = None
 
 
 def _set(prog, **values) -> None:
@@ -76,6 +107,7 @@ class _Strands:
         self.alpha = f4(s.alpha[per_point])
         self.width = f4(s.width[per_point])
         self.omega = f4(np.zeros(s.num_points))
+        self.visibility = f4(np.ones(s.num_points))
         self.segments = s.segments()
 
     def vertex_array(self, prog, index_buffer):
@@ -83,6 +115,7 @@ class _Strands:
             (self.position, "3f", "in_position"), (self.tangent, "3f", "in_tangent"),
             (self.color, "3f", "in_color"), (self.alpha, "f", "in_alpha"),
             (self.width, "f", "in_width"), (self.omega, "f", "in_omega"),
+            (self.visibility, "f", "in_visibility"),
         ], index_buffer=index_buffer, index_element_size=4, skip_errors=True)
 
     def index_buffer(self, segment_ids: np.ndarray):
@@ -91,13 +124,14 @@ class _Strands:
         return self.ctx.buffer(pairs.tobytes() if pairs.size else b"\0" * 8)  # no segments: GL needs ≥ 1 byte
 
     def release(self):
-        for b in (self.position, self.tangent, self.color, self.alpha, self.width, self.omega):
+        for b in (self.position, self.tangent, self.color, self.alpha, self.width, self.omega,
+                  self.visibility):
             b.release()
 
 
 def render_gl(scene: Scene, params: ShadingParams | None = None, *,
               clip_slices: bool = True, omega: np.ndarray | None = None,
-              order: np.ndarray | None = None) -> GLResult:
+              order: np.ndarray | None = None, occluder: OccluderLight | None = None) -> GLResult:
     """Render `scene` with OpenGL.
 
     **Arguments:** `params` (default `scene.params`); `clip_slices`: draw into each
@@ -105,7 +139,9 @@ def render_gl(scene: Scene, params: ShadingParams | None = None, *,
     draws all of them into every map (the basic algorithm) — the same image, for timing;
     `omega`: use this Ω per point (`[P]`) instead of computing the shadows; `order`: draw
     the camera pass in this segment order instead of sorting (`visibility_order`, e.g. an
-    order reused from an earlier view).
+    order reused from an earlier view); `occluder`: with `omega`, the occluder's part of
+    the light to use (`occluder_light(scene, geometry)` gives the JAX renderer's); required
+    with `omega` when the scene has an occluder and shadows.
     """
     params = scene.params if params is None else params
     ctx = get_context()
@@ -120,25 +156,181 @@ def render_gl(scene: Scene, params: ShadingParams | None = None, *,
         timings[name] = timings.get(name, 0.0) + now - clock
         clock = now
 
+    view, _, depth, _, order = visibility_order(scene, order)
+    depth_far = _depth_far(scene, view, depth)
+    lighting = scene.occluder is not None and scene.shadows.method != "none"
     strands = _Strands(ctx, scene)
+    surface = None
     try:
         lap("upload")
+        if scene.occluder is not None:
+            surface = _OccluderSurface(ctx, progs, scene.occluder, view, (0.0, depth_far))
+            lap("occluder surface")
         if omega is not None:
             omega = np.asarray(omega, dtype="f4").reshape(strands.count)
             strands.omega.write(omega.tobytes())
+            if lighting and occluder is None:
+                raise ValueError("render_gl: with omega and a scene whose occluder takes part in "
+                                 "the light, pass occluder= too (occluder_light(scene, geometry))")
         elif scene.shadows.method != "none":
             frame = light_frame(scene.strands.points, strands.segments, scene.strands.width,
                                 scene.light, scene.shadows.resolution)
-            if scene.shadows.method == "opacity-maps":
-                omega = _opacity_maps(ctx, progs, scene, strands, frame, clip_slices)
-            else:
-                omega = _exact_opacity(ctx, progs, scene, strands, frame)
-            lap("shadows")
-        image = _camera_pass(ctx, progs, scene, params, strands, order)
+            points = _Points(ctx, strands, None if surface is None else surface.points)
+            try:
+                frame = with_receivers(frame, points.receivers)
+                if scene.shadows.method == "opacity-maps":
+                    omega_all = _opacity_maps(ctx, progs, scene, strands, frame, clip_slices, points)
+                else:
+                    omega_all = _exact_opacity(ctx, progs, scene, strands, frame, points)
+                omega = omega_all[:strands.count].copy()
+                strands.omega.write(omega.tobytes())
+                lap("shadows")
+                if lighting:
+                    occluder = _occluder_shadow(ctx, progs, scene, strands, points, surface,
+                                                omega_all[strands.count:])
+                    lap("occluder shadow")
+            finally:
+                points.release()
+        if lighting:
+            strands.visibility.write(np.asarray(occluder.visibility, "f4").tobytes())
+        image = _camera_pass(ctx, progs, scene, params, strands, view, order, depth_far, surface,
+                             occluder if lighting else None)
         lap("camera pass")
-        return GLResult(image, omega, timings)
+        return GLResult(image, omega, timings, occluder if lighting else None)
     finally:
         strands.release()
+        if surface is not None:
+            surface.release()
+
+
+def _depth_far(scene: Scene, view: View, depth: np.ndarray) -> float:
+    """The camera depth mapped to 1 in the depth buffer: anything drawn lies in (near, far)."""
+    cam = scene.camera
+    # No floor at 1 unit (was initial=1.0): depth/far is stored in 2⁻²⁴ steps, tiny scenes lost digits.
+    far = 2.0 * float(max(np.max(depth, initial=0.0), cam.near))
+    occ = scene.occluder
+    if occ is not None and occ.kind == "sphere":
+        c = np.asarray(occ.center) - view.origin
+        far = max(far, 2.0 * (float(c @ view.forward) + occ.radius))
+    elif occ is not None:
+        drawn = occ.triangles[drawable_triangles(view, occ.vertices, occ.triangles)]
+        if drawn.size:  # fires unless every triangle reaches the near plane
+            far = max(far, 2.0 * float(np.max((occ.vertices[drawn] - view.origin) @ view.forward)))
+    return far
+
+
+class _OccluderSurface:
+    """The occluder drawn into a view's raster (§9, §13): per pixel centre its surface
+    point and normal (RGBA32F, w = 1 where covered) and the depth buffer."""
+
+    def __init__(self, ctx, progs, occluder, view: View, depth_range: tuple[float, float]):
+        import moderngl
+
+        self.ctx = ctx
+        w, h = view.width, view.height
+        self.position = ctx.texture((w, h), 4, dtype="f4")
+        self.normal = ctx.texture((w, h), 4, dtype="f4")
+        self.depth = ctx.depth_texture((w, h))
+        fbo = ctx.framebuffer(color_attachments=[self.position, self.normal],
+                              depth_attachment=self.depth)
+        buffers = [fbo]
+        try:
+            fbo.use()
+            ctx.viewport = (0, 0, w, h)
+            fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+            ctx.disable(moderngl.BLEND)
+            ctx.enable(moderngl.DEPTH_TEST)
+            ctx.depth_func = "<"
+            fbo.depth_mask = True
+            uniforms = dict(raster_size=(float(w), float(h)), depth_range=depth_range,
+                            **_view_uniforms("view", view))
+            if occluder.kind == "sphere":
+                prog = progs["occluder_sphere"]
+                _set(prog, center=_vec(occluder.center), radius=float(occluder.radius), **uniforms)
+                vao = ctx.vertex_array(prog, [])
+                buffers.append(vao)
+                vao.render(moderngl.TRIANGLES, vertices=3)
+            else:
+                prog = progs["occluder_mesh"]
+                _set(prog, **uniforms)
+                tri = occluder.triangles[drawable_triangles(view, occluder.vertices, occluder.triangles)]
+                if tri.size:  # fires unless every triangle reaches the near plane
+                    f4 = lambda a: ctx.buffer(np.ascontiguousarray(a, "f4").tobytes())  # noqa: E731
+                    vbo = f4(occluder.vertices)
+                    nbo = f4(vertex_normals(occluder.vertices, occluder.triangles))
+                    ibo = ctx.buffer(np.ascontiguousarray(tri, "u4").tobytes())
+                    vao = ctx.vertex_array(prog, [(vbo, "3f", "in_position"), (nbo, "3f", "in_normal")],
+                                           index_buffer=ibo, index_element_size=4)
+                    buffers += [vao, vbo, nbo, ibo]
+                    vao.render(moderngl.TRIANGLES, vertices=tri.size)
+            check(ctx, "occluder surface pass")
+            raw = np.frombuffer(self.position.read(), dtype="f4").reshape(h, w, 4)
+            self.covered = raw[..., 3] > 0  # GL's rows: row 0 at the bottom
+            self.points = raw[self.covered][:, :3].astype(np.float64)
+        finally:
+            ctx.disable(moderngl.DEPTH_TEST)
+            release(ctx, *buffers)
+
+    def per_pixel(self, values: np.ndarray, fill: float) -> np.ndarray:
+        """Values at `points` scattered to a `float32[H, W]` texture image (GL's rows)."""
+        image = np.full(self.covered.shape, fill, "f4")
+        image[self.covered] = values
+        return image
+
+    def release(self):
+        release(self.ctx, self.position, self.normal, self.depth)
+
+
+class _Points:
+    """The points whose Ω the shadow passes compute: the strand points, then the
+    occluder's surface points (`receivers`, §13) when there are any."""
+
+    def __init__(self, ctx, strands, receivers):
+        self.receivers = receivers if receivers is not None and len(receivers) else None
+        self.count = strands.count + (0 if self.receivers is None else len(self.receivers))
+        self.own = None
+        self.buffer = strands.position
+        if self.receivers is not None:
+            s_pos = np.frombuffer(strands.position.read(), "f4").reshape(-1, 3)
+            self.own = ctx.buffer(np.concatenate([s_pos, self.receivers.astype("f4")]).tobytes())
+            self.buffer = self.own
+
+    def release(self):
+        if self.own is not None:
+            self.own.release()
+
+
+def _occluder_shadow(ctx, progs, scene: Scene, strands, points: _Points, surface,
+                     receiver_omega: np.ndarray) -> OccluderLight:
+    """§13: the occluder drawn in its light view (`occluder_light_view`), then V at the
+    strand points and at the occluder's surface points by the depth test."""
+    r = scene.shadows.resolution
+    view = occluder_light_view(scene.light, scene.strands.points, scene.occluder, r)
+    _, z = view.project(np.concatenate([scene.strands.points, occluder_extent(scene.occluder)]))
+    # The light's depth range with room on both sides: [0, 1) holds every surface point.
+    lo, hi = float(z.min()), float(z.max())
+    pad = 0.5 * (hi - lo) + 1e-6 * max(abs(lo), abs(hi), 1.0)
+    light_surface = _OccluderSurface(ctx, progs, scene.occluder, view, (lo - pad, hi + pad))
+    out = ctx.buffer(reserve=4 * max(points.count, 1))
+    comp = progs["occluder_visibility"]
+    try:
+        light_surface.position.use(0)
+        points.buffer.bind_to_storage_buffer(0)
+        out.bind_to_storage_buffer(1)
+        _set(comp, light_position_map=0, count=points.count, resolution=r,
+             **_view_uniforms("light", view))
+        comp.run(group_x=(points.count + _GROUP - 1) // _GROUP)
+        ctx.memory_barrier()
+        check(ctx, "occluder shadow")
+        v = np.frombuffer(out.read(), "f4")[:points.count].astype(np.float64)
+    finally:
+        release(ctx, out)
+        light_surface.release()
+    p = strands.count
+    h, w = surface.covered.shape
+    omega = surface.per_pixel(receiver_omega, 0.0)[::-1].astype(np.float64)
+    vis = surface.per_pixel(v[p:], 1.0)[::-1].astype(np.float64)
+    return OccluderLight(v[:p], omega.reshape(h, w), vis.reshape(h, w))
 
 
 def _light_uniforms(scene: Scene) -> dict:
@@ -152,41 +344,54 @@ def _light_uniforms(scene: Scene) -> dict:
             "light_rgb": _vec(light.color)}
 
 
-def _camera_pass(ctx, progs, scene: Scene, params: ShadingParams, strands, order=None) -> np.ndarray:
+def _camera_pass(ctx, progs, scene: Scene, params: ShadingParams, strands, view: View, order,
+                 depth_far: float, surface: _OccluderSurface | None,
+                 occluder: OccluderLight | None) -> np.ndarray:
     import moderngl
 
     cam = scene.camera
     w, h = cam.width, cam.height
-    view, _, depth, _, order = visibility_order(scene, order)
-    # Depths map to [0, 1) for the depth test: anything drawn lies in (near, depth_far).
-    # No floor at 1 unit (was initial=1.0): depth/far is stored in 2⁻²⁴ steps, tiny scenes lost digits.
-    depth_far = 2.0 * float(max(np.max(depth, initial=0.0), cam.near))
-    if scene.occluder is not None:
-        c = np.asarray(scene.occluder.center) - view.origin
-        depth_far = max(depth_far, 2.0 * (float(c @ view.forward) + scene.occluder.radius))
     color = ctx.texture((w, h), 4, dtype="f4")
-    depth_tex = ctx.depth_texture((w, h))
+    # Depths map to [0, 1) for the depth test: anything drawn lies in (near, depth_far); the
+    # occluder's surface pass already wrote its depths.
+    own_depth = ctx.depth_texture((w, h)) if surface is None else None
+    depth_tex = own_depth if surface is None else surface.depth
     fbo = ctx.framebuffer(color_attachments=[color], depth_attachment=depth_tex)
     ibo = strands.index_buffer(order)
+    extra = []
     try:
         fbo.use()
         ctx.viewport = (0, 0, w, h)
         bg = _vec(scene.background)
+        fbo.depth_mask = surface is None  # keep the occluder's depths
         fbo.clear(*bg, 0.0, depth=1.0)
         common = dict(raster_size=(float(w), float(h)), depth_far=depth_far,
                       **_view_uniforms("view", view), **_light_uniforms(scene))
-        if scene.occluder is not None:
-            ctx.disable(moderngl.BLEND)
+        if surface is not None:
+            # §13: the occluder's colour where its surface pass covered the pixel centre.
+            ctx.disable(moderngl.BLEND | moderngl.DEPTH_TEST)
+            fbo.depth_mask = False
+            if occluder is None:
+                omega_img = np.zeros((h, w), "f4")
+                vis_img = np.ones((h, w), "f4")
+            else:  # the per-pixel arrays have row 0 at the top, textures at the bottom
+                omega_img = np.ascontiguousarray(occluder.omega[::-1], "f4")
+                vis_img = np.ascontiguousarray(occluder.surface_visibility[::-1], "f4")
+            omega_tex = ctx.texture((w, h), 1, omega_img.tobytes(), dtype="f4")
+            vis_tex = ctx.texture((w, h), 1, vis_img.tobytes(), dtype="f4")
+            extra += [omega_tex, vis_tex]
+            prog = progs["occluder_color"]
+            for unit, tex in enumerate((surface.position, surface.normal, omega_tex, vis_tex)):
+                tex.use(unit)
+            _set(prog, position_map=0, normal_map=1, omega_map=2, visibility_map=3,
+                 albedo=_vec(scene.occluder.color), ambient=_vec(params.ambient),
+                 kappa=float(params.kappa), **_light_uniforms(scene))
+            occ_vao = ctx.vertex_array(prog, [])
+            extra.append(occ_vao)
+            occ_vao.render(moderngl.TRIANGLES, vertices=3)
+            check(ctx, "occluder colour pass")
             ctx.enable(moderngl.DEPTH_TEST)
             ctx.depth_func = "<"
-            fbo.depth_mask = True
-            occ = scene.occluder
-            _set(progs["sphere"], center=_vec(occ.center), radius=float(occ.radius),
-                 albedo=_vec(occ.color), **common)
-            sphere_vao = ctx.vertex_array(progs["sphere"], [])
-            sphere_vao.render(moderngl.TRIANGLES, vertices=3)
-            sphere_vao.release()
-            check(ctx, "occluder pass")
         else:
             ctx.disable(moderngl.DEPTH_TEST)
         # kim-2003 §3: hair far to near, depth test on (if anything wrote depth), no depth
@@ -212,7 +417,7 @@ def _camera_pass(ctx, progs, scene: Scene, params: ShadingParams, strands, order
         return data[::-1].copy()  # GL's row 0 is the bottom
     finally:
         ctx.disable(moderngl.BLEND | moderngl.DEPTH_TEST)
-        release(ctx, ibo, fbo, color, depth_tex)
+        release(ctx, ibo, fbo, color, *([own_depth] if own_depth is not None else []), *extra)
 
 
 def _light_pass_uniforms(scene: Scene, frame: LightFrame) -> dict:
@@ -222,7 +427,7 @@ def _light_pass_uniforms(scene: Scene, frame: LightFrame) -> dict:
                 **_view_uniforms("view", frame.view))
 
 
-def _opacity_maps(ctx, progs, scene, strands, frame: LightFrame, clip_slices: bool):
+def _opacity_maps(ctx, progs, scene, strands, frame: LightFrame, clip_slices: bool, points: _Points):
     """kim-2003 Routine 2: B_current accumulates slice after slice (GL_ONE, GL_ONE), the
     points of slice i are evaluated between B_prev = Ω(D_i) and B_current = Ω(D_{i+1})."""
     import moderngl
@@ -255,7 +460,7 @@ def _opacity_maps(ctx, progs, scene, strands, frame: LightFrame, clip_slices: bo
     by_plane = seen[np.argsort(plane[seen], kind="stable")]
     plane_starts = np.searchsorted(plane[by_plane], np.arange(n + 1))
     id_buf = ctx.buffer(by_plane.astype("u4").tobytes() if by_plane.size else b"\0" * 4)  # no point seen
-    omega_buf = ctx.buffer(np.zeros(strands.count, "f4").tobytes())
+    omega_buf = ctx.buffer(np.zeros(points.count, "f4").tobytes())
 
     current = ctx.texture((r, r), 1, dtype="f4")
     previous = ctx.texture((r, r), 1, dtype="f4")
@@ -276,7 +481,7 @@ def _opacity_maps(ctx, progs, scene, strands, frame: LightFrame, clip_slices: bo
              **_light_pass_uniforms(scene, frame))
         _set(comp, zmin=float(frame.zmin), span=float(frame.span), maps=n, resolution=r,
              prev_map=0, cur_map=1, **_view_uniforms("light", frame.view))
-        strands.position.bind_to_storage_buffer(0)
+        points.buffer.bind_to_storage_buffer(0)
         id_buf.bind_to_storage_buffer(1)
         omega_buf.bind_to_storage_buffer(2)
         drawn_since_copy = True
@@ -302,15 +507,13 @@ def _opacity_maps(ctx, progs, scene, strands, frame: LightFrame, clip_slices: bo
                 comp.run(group_x=(count + _GROUP - 1) // _GROUP)
                 ctx.memory_barrier()
         check(ctx, f"{n} opacity-map passes")
-        omega = np.frombuffer(omega_buf.read(), dtype="f4").copy()
-        strands.omega.write(omega.tobytes())
-        return omega
+        return np.frombuffer(omega_buf.read(), dtype="f4").copy()
     finally:
         ctx.disable(moderngl.BLEND)
         release(ctx, vao, ibo, id_buf, omega_buf, fbo, prev_fbo, current, previous)
 
 
-def _exact_opacity(ctx, progs, scene, strands, frame: LightFrame):
+def _exact_opacity(ctx, progs, scene, strands, frame: LightFrame, points: _Points):
     """Ω without slicing: per-texel fragment lists (count, prefix sum, fill), then each
     point sums the alpha strictly nearer the light in its 3 × 3 texels."""
     import moderngl
@@ -352,10 +555,10 @@ def _exact_opacity(ctx, progs, scene, strands, frame: LightFrame):
         check(ctx, "exact opacity: fill pass")
         seen = np.flatnonzero(frame.seen).astype("u4")
         ids = ctx.buffer(seen.tobytes() if seen.size else b"\0" * 4)  # fires when no point is seen
-        omega_buf = ctx.buffer(np.zeros(strands.count, "f4").tobytes())
+        omega_buf = ctx.buffer(np.zeros(points.count, "f4").tobytes())
         buffers += [ids, omega_buf]
         comp = progs["omega_exact"]
-        strands.position.bind_to_storage_buffer(0)
+        points.buffer.bind_to_storage_buffer(0)
         ids.bind_to_storage_buffer(1)
         omega_buf.bind_to_storage_buffer(2)
         counts.bind_to_storage_buffer(3)
@@ -366,8 +569,6 @@ def _exact_opacity(ctx, progs, scene, strands, frame: LightFrame):
             comp.run(group_x=(len(seen) + _GROUP - 1) // _GROUP)
         ctx.memory_barrier()
         check(ctx, "exact opacity passes")
-        omega = np.frombuffer(omega_buf.read(), dtype="f4").copy()
-        strands.omega.write(omega.tobytes())
-        return omega
+        return np.frombuffer(omega_buf.read(), dtype="f4").copy()
     finally:
         release(ctx, *buffers)

@@ -9,6 +9,7 @@ in vec3 in_color;
 in float in_alpha;
 in float in_width;
 in float in_omega;
+in float in_visibility;  // §13: 0 where the occluder shadows the point
 
 uniform View view;
 uniform bool shade;        // camera pass: shade points; light passes: geometry only
@@ -40,7 +41,7 @@ void main() {
     if (shade) {
         vec3 L = point_light ? safe_normalize(light_vector - in_position) : light_vector;
         vec3 V = safe_normalize(eye - in_position);
-        float tau = exp(-shading.kappa * in_omega);
+        float tau = exp(-shading.kappa * in_omega) * in_visibility;
         vout.color = shade_point(shading, in_tangent, L, V, in_color, light_rgb, tau);
     }
     gl_Position = vec4(0.0, 0.0, 0.0, 1.0);  // the geometry shader places the ribbon
