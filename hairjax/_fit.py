@@ -28,7 +28,7 @@ import numpy as np
 from ._constants import FIT_TRANSMITTANCE_CUTOFF
 from ._render import composite, geometry_stage
 from ._scene import Scene
-from ._shading import ShadingParams, kajiya_kay_terms, specular_power
+from ._shading import SHADING_MODELS, ShadingParams, kajiya_kay_terms, specular_power
 
 __all__ = ["fit", "FitResult", "FitError", "FITTABLE", "SOLVERS"]
 
@@ -561,6 +561,11 @@ def fit(
         scenes = scenes * len(target_list)
     if len(scenes) != len(target_list):
         raise FitError(f"{len(scenes)} scenes for {len(target_list)} targets")
+    for s in scenes:  # the fit's split into Kd and Ks images is written for the formula (§8)
+        if s.shading_model not in SHADING_MODELS:
+            raise FitError(f"scene {s.name!r}: fit supports the analytic models "
+                           f"{', '.join(SHADING_MODELS)}, not {s.shading_model!r} (use jax.grad "
+                           "through hairjax.render for the lookup model)")
     mask_list = [None] * len(scenes) if masks is None else list(masks)
     weight_list = [None] * len(scenes) if weights is None else list(weights)
     names = _check_names(fit, scalar)

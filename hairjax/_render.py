@@ -25,6 +25,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ._composite import over_weights
+from ._lookup import LOOKUP_MODELS, kajiya_kay_lookup
 from ._ordering import draw_order, segment_depth, stable_argsort_uint32
 from ._projection import View, camera_view
 from ._raster import rasterize
@@ -103,6 +104,7 @@ class Geometry(eqx.Module):
     height: int = eqx.field(static=True)
     width: int = eqx.field(static=True)
     model: str = eqx.field(static=True)
+    lookup_size: int = eqx.field(static=True, default=0)  # lookup models' table size (§13)
 
 
 _SETUP_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -342,15 +344,19 @@ def _geometry_stage(scene: Scene, alpha, order=None) -> Geometry:
         frag_t=jnp.asarray(setup.frag_t, dtype), frag_weight=weights, frag_alpha=frag_alpha,
         transmittance=transmittance, backdrop=jnp.asarray(setup.backdrop, dtype),
         alpha_channel=alpha_channel, height=scene.camera.height, width=scene.camera.width,
-        model=scene.shading_model,
+        model=scene.shading_model, lookup_size=scene.lookup_size,
     )
 
 
 def point_colors(geometry: Geometry, params: ShadingParams) -> Float[Array, "P 3"]:
     """Shaded colour at every strand point (Gouraud, kim-2003 §5):
     ambient·c + τ · light · (Kd·sin(T, L)·c + Ks·spec), with c the per-point colour."""
-    diffuse, specular = jax.vmap(kajiya_kay, in_axes=(0, 0, 0, None, None))(
-        geometry.tangent, geometry.to_light, geometry.to_eye, params, geometry.model)
+    if geometry.model in LOOKUP_MODELS:  # §13: the same terms read from a table
+        diffuse, specular = kajiya_kay_lookup(geometry.tangent, geometry.to_light, geometry.to_eye,
+                                              params, geometry.lookup_size, geometry.model)
+    else:
+        diffuse, specular = jax.vmap(kajiya_kay, in_axes=(0, 0, 0, None, None))(
+            geometry.tangent, geometry.to_light, geometry.to_eye, params, geometry.model)
     lit = geometry.light_rgb[None, :] * (diffuse * geometry.base_color + specular)
     if geometry.omega is not None:
         lit = lit * jnp.exp(-params.kappa * geometry.omega)[:, None]

@@ -23,7 +23,9 @@ from pathlib import Path
 from typing import Any
 
 from ._errors import SceneError
+from ._lookup import LOOKUP_MODELS
 from ._scene import (
+    MODELS,
     ORDERING_METHODS,
     SHADOW_METHODS,
     Camera,
@@ -33,7 +35,7 @@ from ._scene import (
     Scene,
     Shadows,
 )
-from ._shading import SHADING_MODELS, ShadingParams
+from ._shading import ShadingParams
 from ._sources import furball, scalp
 from ._strands import Strands
 
@@ -58,7 +60,7 @@ TABLES: dict[str, tuple[str, ...]] = {
     "hair": _HAIR_COMMON + _HAIR_PROCEDURAL + tuple(_HAIR_ONLY_FOR),
     "camera": ("eye", "target", "up", "fov", "width", "height", "near"),
     "light": ("kind", "direction", "position", "color"),
-    "shading": ("model", "kd", "ks", "shininess", "kappa", "ambient"),
+    "shading": ("model", "kd", "ks", "shininess", "kappa", "ambient", "lookup_size"),
     "shadows": ("method", "maps", "resolution"),
     "ordering": ("method", "bins"),
     "occluder": ("kind", "center", "radius", "color"),
@@ -120,6 +122,7 @@ def scene_from_dict(
     camera = _build(where, Camera, **_read_camera(tables["camera"]))
     light = _build(where, Light, **_read_light(tables["light"]))
     model, params = _read_shading(tables["shading"])
+    lookup_size = _read_lookup_size(tables["shading"], model)
     shadows = _build(where, Shadows, **_read_shadows(tables["shadows"]))
     ordering = _build(where, Ordering, **_read_ordering(tables["ordering"]))
     occluder = None
@@ -130,7 +133,7 @@ def scene_from_dict(
     # the other tables fail first.
     strands = _read_hair(tables["hair"], Path(base_dir))
 
-    scene_args = _given(shading_model=model, background=background)
+    scene_args = _given(shading_model=model, background=background, lookup_size=lookup_size)
     return _build(where, Scene, strands=strands, camera=camera, light=light, params=params,
                   shadows=shadows, ordering=ordering, occluder=occluder, name=scene_name,
                   **scene_args)
@@ -358,7 +361,7 @@ def _read_light(table: _Table) -> dict[str, Any]:
 def _read_shading(table: _Table) -> tuple[str | None, ShadingParams]:
     # ShadingParams does not validate (it is a pytree that gradients flow through), so the
     # ranges are checked here.
-    model = table.choice("model", SHADING_MODELS)
+    model = table.choice("model", MODELS)
     params = ShadingParams(**_given(
         kd=table.rgb("kd", scalar=True),
         ks=table.rgb("ks", scalar=True),
@@ -367,6 +370,15 @@ def _read_shading(table: _Table) -> tuple[str | None, ShadingParams]:
         ambient=table.rgb("ambient", scalar=True),
     ))
     return model, params
+
+
+def _read_lookup_size(table: _Table, model: str | None) -> int | None:
+    # Range is Scene's check; a table size for an analytic model would be silently ignored.
+    if "lookup_size" in table and model not in LOOKUP_MODELS:
+        raise SceneError(f"{table.where}: shading.lookup_size applies only to the lookup models "
+                         f"({', '.join(repr(m) for m in LOOKUP_MODELS)}), not to model = "
+                         f"{model or 'kajiya-kay'!r}")
+    return table.integer("lookup_size")
 
 
 def _read_shadows(table: _Table) -> dict[str, Any]:

@@ -15,6 +15,7 @@ import time
 
 import numpy as np
 
+from .._lookup import LOOKUP_MODELS, kajiya_kay_table
 from .._render import tangents, visibility_order
 from .._scene import Scene
 from .._shading import ShadingParams
@@ -168,6 +169,7 @@ def _camera_pass(ctx, progs, scene: Scene, params: ShadingParams, strands, order
     depth_tex = ctx.depth_texture((w, h))
     fbo = ctx.framebuffer(color_attachments=[color], depth_attachment=depth_tex)
     ibo = strands.index_buffer(order)
+    table = _lookup_texture(ctx, scene, params)
     try:
         fbo.use()
         ctx.viewport = (0, 0, w, h)
@@ -203,6 +205,9 @@ def _camera_pass(ctx, progs, scene: Scene, params: ShadingParams, strands, order
                 "shading.ambient": _vec(params.ambient),
                 "shading.shininess": float(params.shininess), "shading.kappa": float(params.kappa),
                 "shading.model": SHADING_MODEL_IDS[scene.shading_model]}, **common)
+        if table is not None:
+            table.use(0)
+            _set(prog, kajiya_kay_table=0)
         vao = strands.vertex_array(prog, ibo)
         if len(order):
             vao.render(moderngl.LINES, vertices=2 * len(order))
@@ -212,7 +217,22 @@ def _camera_pass(ctx, progs, scene: Scene, params: ShadingParams, strands, order
         return data[::-1].copy()  # GL's row 0 is the bottom
     finally:
         ctx.disable(moderngl.BLEND | moderngl.DEPTH_TEST)
-        release(ctx, ibo, fbo, color, depth_tex)
+        release(ctx, ibo, fbo, color, depth_tex, table)
+
+
+def _lookup_texture(ctx, scene: Scene, params: ShadingParams):
+    """§13: the lookup model's table (built by the JAX code, `kajiya_kay_table`) as an
+    RG32F texture sampled with LINEAR filtering and CLAMP_TO_EDGE; None for other models."""
+    import moderngl
+
+    if scene.shading_model not in LOOKUP_MODELS:
+        return None
+    table = kajiya_kay_table(params.shininess, scene.lookup_size, LOOKUP_MODELS[scene.shading_model])
+    n = scene.lookup_size
+    tex = ctx.texture((n, n), 2, np.ascontiguousarray(table, dtype="f4").tobytes(), dtype="f4")
+    tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+    tex.repeat_x = tex.repeat_y = False  # CLAMP_TO_EDGE
+    return tex
 
 
 def _light_pass_uniforms(scene: Scene, frame: LightFrame) -> dict:

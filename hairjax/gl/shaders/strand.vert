@@ -17,6 +17,7 @@ uniform vec3 light_rgb;
 uniform vec3 light_vector; // −direction (directional) or the light's position (point)
 uniform bool point_light;
 uniform vec3 eye;
+uniform sampler2D kajiya_kay_table;  // §13, bound for SHADING_KAJIYA_KAY_LOOKUP only
 
 out VertexOut {
     vec3 screen;
@@ -41,7 +42,9 @@ void main() {
         vec3 L = point_light ? safe_normalize(light_vector - in_position) : light_vector;
         vec3 V = safe_normalize(eye - in_position);
         float tau = exp(-shading.kappa * in_omega);
-        vout.color = shade_point(shading, in_tangent, L, V, in_color, light_rgb, tau);
+        vout.color = shading.model == SHADING_KAJIYA_KAY_LOOKUP
+            ? shade_point_lookup(shading, kajiya_kay_table, in_tangent, L, V, in_color, light_rgb, tau)
+            : shade_point(shading, in_tangent, L, V, in_color, light_rgb, tau);
     }
     gl_Position = vec4(0.0, 0.0, 0.0, 1.0);  // the geometry shader places the ribbon
 }
