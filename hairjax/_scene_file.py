@@ -65,6 +65,8 @@ TABLES: dict[str, tuple[str, ...]] = {
     "ordering": ("method", "bins"),
     "occluder": ("kind", "center", "radius", "color"),
     "background": ("color",),
+    # Read by `hairjax animate` only (hairjax/_animate.py); a still render shows the rest pose.
+    "animation": ("amplitude", "frequency", "phase", "inertia", "frames"),
 }
 TOP_LEVEL_KEYS = ("name",)
 
