@@ -174,12 +174,15 @@ def _prepare_terms(scene: Scene, params: ShadingParams, names, target, sqrt_weig
     geom = _visible_fragments(full)
     sin_tl, gap = jax.vmap(kajiya_kay_terms, in_axes=(0, 0, 0, None))(
         geom.tangent, geom.to_light, geom.to_eye, geom.model)
-    light = geom.light_rgb[None, :]
+    # §15: the streak factor scales a point's whole colour, so it rides on the light (and
+    # the ambient term): [P, 3] instead of [1, 3] with streaks.
+    streak = 1.0 if geom.streak is None else geom.streak[:, None]
+    light = geom.light_rgb[None, :] * streak
     lit_color = light * geom.base_color
     omega = geom.omega
     tau = None if omega is None else jnp.exp(-params.kappa * omega)
     # The fixed part of the image is computed once, with every fragment.
-    constant = (composite(full, params.ambient[None, :] * full.base_color)
+    constant = (composite(full, params.ambient[None, :] * full.base_color * streak)
                 + full.transmittance[:, None] * full.backdrop)
     kd_image = ks_image = None
     if "kappa" not in names or omega is None:

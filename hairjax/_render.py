@@ -32,6 +32,7 @@ from ._raster import rasterize
 from ._scene import Scene
 from ._shading import ShadingParams, kajiya_kay
 from ._shadows import ShadowSetup, exact_opacity, opacity_maps, point_opacity, shadow_setup
+from ._streaks import strand_coordinates, streak_factor, streak_prefix, streak_texture
 
 __all__ = ["Setup", "Geometry", "prepare", "visibility_order", "sphere_hits", "to_light",
            "geometry_stage", "shading_stage", "composite", "point_colors", "render",
@@ -105,6 +106,7 @@ class Geometry(eqx.Module):
     width: int = eqx.field(static=True)
     model: str = eqx.field(static=True)
     lookup_size: int = eqx.field(static=True, default=0)  # lookup models' table size (§13)
+    streak: Float[Array, " P"] | None = None  # §15's factor per point; None without streaks
 
 
 _SETUP_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -345,7 +347,18 @@ def _geometry_stage(scene: Scene, alpha, order=None) -> Geometry:
         transmittance=transmittance, backdrop=jnp.asarray(setup.backdrop, dtype),
         alpha_channel=alpha_channel, height=scene.camera.height, width=scene.camera.width,
         model=scene.shading_model, lookup_size=scene.lookup_size,
+        streak=None if scene.streaks is None else _streak_factors(scene, dtype),
     )
+
+
+def _streak_factors(scene: Scene, dtype) -> Float[Array, " P"]:
+    """§15: each point's streak factor, the texture's mean over its hair's [u_i, u_i + Δ]."""
+    streaks, strands = scene.streaks, scene.strands
+    texture = streak_texture(streaks)
+    u = strand_coordinates(streaks, strands.num_strands)[strands.strand_of_point]
+    return jax.vmap(streak_factor, in_axes=(None, None, 0, None))(
+        jnp.asarray(texture, dtype), jnp.asarray(streak_prefix(texture), dtype),
+        jnp.asarray(u, dtype), streaks.width)
 
 
 def point_colors(geometry: Geometry, params: ShadingParams) -> Float[Array, "P 3"]:
@@ -360,7 +373,10 @@ def point_colors(geometry: Geometry, params: ShadingParams) -> Float[Array, "P 3
     lit = geometry.light_rgb[None, :] * (diffuse * geometry.base_color + specular)
     if geometry.omega is not None:
         lit = lit * jnp.exp(-params.kappa * geometry.omega)[:, None]
-    return params.ambient[None, :] * geometry.base_color + lit
+    colors = params.ambient[None, :] * geometry.base_color + lit
+    if geometry.streak is not None:  # §15: the streak texture modulates the whole colour
+        colors = colors * geometry.streak[:, None]
+    return colors
 
 
 def composite(geometry: Geometry, colors: Float[Array, "P C"]) -> Float[Array, "HW C"]:

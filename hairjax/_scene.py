@@ -16,6 +16,7 @@ from ._errors import SceneError
 from ._lookup import LOOKUP_MODELS
 from ._shading import SHADING_MODELS, ShadingParams
 from ._strands import Strands
+from ._streaks import Streaks
 
 __all__ = ["Camera", "Light", "Shadows", "Ordering", "Occluder", "Scene"]
 
@@ -186,6 +187,7 @@ class Scene:
     Kajiya-Kay convention (`"kajiya-kay"` or `"kajiya-kay-mirror"`, see docs/model.md) or
     the seed's convention read from a `lookup_size` × `lookup_size` table
     (`"kajiya-kay-lookup"`, §13; `lookup_size` is unused by the other models).
+    `streaks`: wenzel-2002's streak texture along the hairs (§15), or None.
     """
 
     strands: Strands
@@ -199,6 +201,7 @@ class Scene:
     background: tuple[float, float, float] = (0.0, 0.0, 0.0)
     name: str = "scene"
     lookup_size: int = 256
+    streaks: Streaks | None = None
 
     def __post_init__(self):
         if not isinstance(self.strands, Strands):
@@ -211,6 +214,8 @@ class Scene:
         if isinstance(n, bool) or int(n) != n or not lo <= n <= hi:
             raise SceneError(f"shading.lookup_size must be an integer in [{lo}, {hi}], got {n!r}")
         object.__setattr__(self, "lookup_size", int(n))
+        if self.streaks is not None and not isinstance(self.streaks, Streaks):
+            raise SceneError("scene.streaks must be a Streaks or None")
         object.__setattr__(self, "background", _rgb("background.color", self.background))
 
     def replace(self, **changes) -> Scene:

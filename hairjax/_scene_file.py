@@ -1,7 +1,8 @@
 """Scene files: TOML text -> `Scene`.
 
 A scene file has one table per part of the scene (`[hair]`, `[camera]`, `[light]`,
-`[shading]`, `[shadows]`, `[ordering]`, `[occluder]`, `[background]`) and an optional
+`[shading]`, `[shadows]`, `[ordering]`, `[occluder]`, `[background]`, `[streaks]`,
+`[animation]`) and an optional
 top-level `name`; docs/scenes.md documents every key. Every key but `hair.source` is
 optional, and an absent key takes the default of the dataclass (or generator) it feeds,
 so defaults live in one place.
@@ -38,6 +39,7 @@ from ._scene import (
 from ._shading import ShadingParams
 from ._sources import furball, scalp
 from ._strands import Strands
+from ._streaks import Streaks
 
 __all__ = ["load_scene", "scene_from_dict", "default_scene_path"]
 
@@ -65,6 +67,7 @@ TABLES: dict[str, tuple[str, ...]] = {
     "ordering": ("method", "bins"),
     "occluder": ("kind", "center", "radius", "color"),
     "background": ("color",),
+    "streaks": ("texels", "width", "contrast", "seed"),
     # Read by `hairjax animate` only (hairjax/_animate.py); a still render shows the rest pose.
     "animation": ("amplitude", "frequency", "phase", "inertia", "frames"),
 }
@@ -131,11 +134,15 @@ def scene_from_dict(
     if "occluder" in data:  # The table's presence, even empty, asks for an occluder.
         occluder = _build(where, Occluder, **_read_occluder(tables["occluder"]))
     background = tables["background"].rgb("color")
+    streaks = None
+    if "streaks" in data:  # The table's presence, even empty, asks for streaks (§15).
+        streaks = _build(where, Streaks, **_read_streaks(tables["streaks"]))
     # Hair last: generating or reading it is the only slow step, so the cheap checks of
     # the other tables fail first.
     strands = _read_hair(tables["hair"], Path(base_dir))
 
-    scene_args = _given(shading_model=model, background=background, lookup_size=lookup_size)
+    scene_args = _given(shading_model=model, background=background, lookup_size=lookup_size,
+                        streaks=streaks)
     return _build(where, Scene, strands=strands, camera=camera, light=light, params=params,
                   shadows=shadows, ordering=ordering, occluder=occluder, name=scene_name,
                   **scene_args)
@@ -381,6 +388,12 @@ def _read_lookup_size(table: _Table, model: str | None) -> int | None:
                          f"({', '.join(repr(m) for m in LOOKUP_MODELS)}), not to model = "
                          f"{model or 'kajiya-kay'!r}")
     return table.integer("lookup_size")
+
+
+def _read_streaks(table: _Table) -> dict[str, Any]:
+    # Ranges are Streaks' checks.
+    return _given(texels=table.integer("texels"), width=table.number("width"),
+                  contrast=table.number("contrast"), seed=table.integer("seed"))
 
 
 def _read_shadows(table: _Table) -> dict[str, Any]:

@@ -159,6 +159,8 @@ def scene_digest(scene: Scene) -> str:
     h.update(np.asarray([scene.params.shininess, scene.params.kappa], np.float64).tobytes())
     if scene.shading_model in LOOKUP_MODELS:  # §13 (analytic scenes keep their old digests)
         h.update(repr(scene.lookup_size).encode())
+    if scene.streaks is not None:  # §15
+        h.update(repr(scene.streaks).encode())
     return h.hexdigest()[:16]
 
 

@@ -20,6 +20,7 @@ from .._render import tangents, visibility_order
 from .._scene import Scene
 from .._shading import ShadingParams
 from .._shadows import LightFrame, light_frame, point_planes
+from .._streaks import strand_coordinates, streak_prefix, streak_texture
 from ._context import check, get_context, release
 from ._programs import SHADING_MODEL_IDS, programs
 
@@ -78,12 +79,16 @@ class _Strands:
         self.width = f4(s.width[per_point])
         self.omega = f4(np.zeros(s.num_points))
         self.segments = s.segments()
+        self.streak = None  # §15: each point's hair coordinate u_i, only for scenes with streaks
+        if scene.streaks is not None:
+            self.streak = f4(strand_coordinates(scene.streaks, s.num_strands)[per_point])
 
     def vertex_array(self, prog, index_buffer):
+        streak = [] if self.streak is None else [(self.streak, "f", "in_streak")]
         return self.ctx.vertex_array(prog, [
             (self.position, "3f", "in_position"), (self.tangent, "3f", "in_tangent"),
             (self.color, "3f", "in_color"), (self.alpha, "f", "in_alpha"),
-            (self.width, "f", "in_width"), (self.omega, "f", "in_omega"),
+            (self.width, "f", "in_width"), (self.omega, "f", "in_omega"), *streak,
         ], index_buffer=index_buffer, index_element_size=4, skip_errors=True)
 
     def index_buffer(self, segment_ids: np.ndarray):
@@ -92,8 +97,10 @@ class _Strands:
         return self.ctx.buffer(pairs.tobytes() if pairs.size else b"\0" * 8)  # no segments: GL needs ≥ 1 byte
 
     def release(self):
-        for b in (self.position, self.tangent, self.color, self.alpha, self.width, self.omega):
-            b.release()
+        for b in (self.position, self.tangent, self.color, self.alpha, self.width, self.omega,
+                  self.streak):
+            if b is not None:
+                b.release()
 
 
 def render_gl(scene: Scene, params: ShadingParams | None = None, *,
@@ -170,6 +177,7 @@ def _camera_pass(ctx, progs, scene: Scene, params: ShadingParams, strands, order
     fbo = ctx.framebuffer(color_attachments=[color], depth_attachment=depth_tex)
     ibo = strands.index_buffer(order)
     table = _lookup_texture(ctx, scene, params)
+    streak = _streak_texture(ctx, scene)
     try:
         fbo.use()
         ctx.viewport = (0, 0, w, h)
@@ -208,6 +216,11 @@ def _camera_pass(ctx, progs, scene: Scene, params: ShadingParams, strands, order
         if table is not None:
             table.use(0)
             _set(prog, kajiya_kay_table=0)
+        _set(prog, streaks=streak is not None)
+        if streak is not None:
+            streak.use(1)
+            _set(prog, streak_texture=1, streak_texels=scene.streaks.texels,
+                 streak_width=float(scene.streaks.width))
         vao = strands.vertex_array(prog, ibo)
         if len(order):
             vao.render(moderngl.LINES, vertices=2 * len(order))
@@ -217,7 +230,7 @@ def _camera_pass(ctx, progs, scene: Scene, params: ShadingParams, strands, order
         return data[::-1].copy()  # GL's row 0 is the bottom
     finally:
         ctx.disable(moderngl.BLEND | moderngl.DEPTH_TEST)
-        release(ctx, ibo, fbo, color, depth_tex, table)
+        release(ctx, ibo, fbo, color, depth_tex, table, streak)
 
 
 def _lookup_texture(ctx, scene: Scene, params: ShadingParams):
@@ -233,6 +246,16 @@ def _lookup_texture(ctx, scene: Scene, params: ShadingParams):
     tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
     tex.repeat_x = tex.repeat_y = False  # CLAMP_TO_EDGE
     return tex
+
+
+def _streak_texture(ctx, scene: Scene):
+    """§15: texel k = (N_{k mod m}, P_k), k = 0 … m, as an RG32F texture read with
+    texelFetch (the mean over a hair's span is computed from it exactly); None without streaks."""
+    if scene.streaks is None:
+        return None
+    texture = streak_texture(scene.streaks)
+    data = np.stack([np.append(texture, texture[0]), streak_prefix(texture)], axis=1)
+    return ctx.texture((len(data), 1), 2, np.ascontiguousarray(data, dtype="f4").tobytes(), dtype="f4")
 
 
 def _light_pass_uniforms(scene: Scene, frame: LightFrame) -> dict:

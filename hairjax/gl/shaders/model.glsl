@@ -110,6 +110,27 @@ vec3 shade_point_lookup(Shading s, sampler2D table, vec3 T, vec3 L, vec3 V, vec3
     return s.ambient * base + tau * light_rgb * (s.kd * sin_tl * base + s.ks * spec);
 }
 
+// §15: H(y) = ∫₀^y g, g the periodic linear interpolant of the streak texture in texel units;
+// texel k of `streak` holds (N_{k mod m}, P_k), P the running integral (hairjax/_streaks.py).
+float streak_antiderivative(sampler2D streak, int m, float y) {
+    float k = floor(y);
+    float f = y - k;
+    float q = floor(k / float(m));
+    // r = K mod m; the clamp fires only if float rounding of K/m puts r at m.
+    int r = int(clamp(k - q * float(m), 0.0, float(m - 1)));
+    float n0 = texelFetch(streak, ivec2(r, 0), 0).x;
+    float n1 = texelFetch(streak, ivec2((r + 1) % m, 0), 0).x;
+    return q * texelFetch(streak, ivec2(m, 0), 0).y + texelFetch(streak, ivec2(r, 0), 0).y
+         + f * n0 + 0.5 * f * f * (n1 - n0);
+}
+
+// §15: the streak texture's mean over [u, u + width] (a hair's span across its ribbon).
+float streak_factor(sampler2D streak, int m, float u, float width) {
+    float a = u * float(m) - 0.5;
+    float b = (u + width) * float(m) - 0.5;
+    return (streak_antiderivative(streak, m, b) - streak_antiderivative(streak, m, a)) / (width * float(m));
+}
+
 // §7: the slice of depth z, (z − D₀)·N/span clamped to [0, N] (fires by float32 rounding at D₀, D_N).
 int slice_of(float z, float zmin, float span, int maps) {
     return int(clamp(floor((z - zmin) * float(maps) / span), 0.0, float(maps)));

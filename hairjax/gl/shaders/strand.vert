@@ -9,6 +9,7 @@ in vec3 in_color;
 in float in_alpha;
 in float in_width;
 in float in_omega;
+in float in_streak;        // §15: the hair's streak coordinate u_i (bound only with streaks)
 
 uniform View view;
 uniform bool shade;        // camera pass: shade points; light passes: geometry only
@@ -18,6 +19,10 @@ uniform vec3 light_vector; // −direction (directional) or the light's position
 uniform bool point_light;
 uniform vec3 eye;
 uniform sampler2D kajiya_kay_table;  // §13, bound for SHADING_KAJIYA_KAY_LOOKUP only
+uniform bool streaks;                 // §15
+uniform sampler2D streak_texture;     // (N_{k mod m}, P_k), k = 0 … m
+uniform int streak_texels;            // m
+uniform float streak_width;           // Δ
 
 out VertexOut {
     vec3 screen;
@@ -45,6 +50,7 @@ void main() {
         vout.color = shading.model == SHADING_KAJIYA_KAY_LOOKUP
             ? shade_point_lookup(shading, kajiya_kay_table, in_tangent, L, V, in_color, light_rgb, tau)
             : shade_point(shading, in_tangent, L, V, in_color, light_rgb, tau);
+        if (streaks) vout.color *= streak_factor(streak_texture, streak_texels, in_streak, streak_width);
     }
     gl_Position = vec4(0.0, 0.0, 0.0, 1.0);  // the geometry shader places the ribbon
 }
