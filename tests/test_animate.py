@@ -7,6 +7,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+from helpers import unexplained_pixels
 
 import hairjax as hj
 from hairjax._animate import (
@@ -101,6 +102,12 @@ def test_cli_animate_and_its_errors(scene_file, tmp_path, capsys, gl):
     assert main(["animate", str(scene_file), "--frames", "2", "-o", str(out), "--backend", "gl"]) == 0
     assert "wrote 2 frames" in capsys.readouterr().out
     assert sorted(p.name for p in out.iterdir()) == ["frame_0000.exr", "frame_0001.exr"]
+    # GL's frame is the JAX renderer's frame (to PIXEL_TOL outside the camera band, as
+    # tests/test_gl.py; this scene has no shadows).
+    scene = load_animation(scene_file).scene(1 / 2)
+    bad, _ = unexplained_pixels(scene, hj.read_image(out / "frame_0001.exr"),
+                                np.asarray(hj.render(scene)))
+    assert bad.size == 0
 
     assert main(["animate", str(scene_file), "--frames", "0", "-o", str(out)]) == 2
     assert "frames must be an integer >= 1, got 0" in capsys.readouterr().err
