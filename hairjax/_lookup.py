@@ -19,11 +19,12 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
-from jaxtyping import Array, Float
+from jaxtyping import Array, Bool, Float
 
 from ._shading import ShadingParams, kajiya_kay_terms, specular_power
 
-__all__ = ["LOOKUP_MODELS", "kajiya_kay_table", "bilinear", "kajiya_kay_lookup"]
+__all__ = ["LOOKUP_MODELS", "kajiya_kay_table", "bilinear", "lookup_coordinates", "lookup_terms",
+           "kajiya_kay_lookup"]
 
 # Lookup models and the analytic convention each tabulates (docs/model.md §8).
 LOOKUP_MODELS = {"kajiya-kay-lookup": "kajiya-kay"}
@@ -75,6 +76,33 @@ def bilinear(table: Float[Array, "n n C"], u: Float[Array, ""],
     return (1 - fy) * top + fy * bottom
 
 
+def lookup_coordinates(
+    tangent: Float[Array, "P 3"], to_light: Float[Array, "P 3"], to_eye: Float[Array, "P 3"],
+) -> tuple[Float[Array, "P 2"], Bool[Array, " P"], Bool[Array, " P"]]:
+    """Per point: (u, v) = ((L·T + 1)/2, (V·T + 1)/2), and where the diffuse and the
+    specular term may be read from the table at all (geometry only, no parameter)."""
+    tl = jnp.sum(tangent * to_light, axis=1)
+    tv = jnp.sum(tangent * to_eye, axis=1)
+
+    def nonzero(x):
+        return jnp.sum(x * x, axis=1) > 0
+
+    # Fires for zero vectors (a repeated point's tangent, a point light at the point, §1):
+    # as in the analytic model, no diffuse without T and L, no highlight without V too.
+    # The table alone would read u = ½, where sin θ_L = 1.
+    lit = nonzero(tangent) & nonzero(to_light)
+    return jnp.stack([0.5 * (1 + tl), 0.5 * (1 + tv)], axis=1), lit, lit & nonzero(to_eye)
+
+
+def lookup_terms(shininess: Float[Array, ""], uv: Float[Array, "P 2"], lit: Bool[Array, " P"],
+                 lit_specular: Bool[Array, " P"], size: int, model: str = "kajiya-kay-lookup",
+                 ) -> tuple[Float[Array, " P"], Float[Array, " P"]]:
+    """(sin θ_L, max(b, 0)^p) per point from the table, built once for all points."""
+    table = kajiya_kay_table(shininess, size, LOOKUP_MODELS[model])
+    terms = jax.vmap(bilinear, in_axes=(None, 0, 0))(table, uv[:, 0], uv[:, 1])
+    return jnp.where(lit, terms[:, 0], 0.0), jnp.where(lit_specular, terms[:, 1], 0.0)
+
+
 def kajiya_kay_lookup(
     tangent: Float[Array, "P 3"], to_light: Float[Array, "P 3"], to_eye: Float[Array, "P 3"],
     params: ShadingParams, size: int, model: str = "kajiya-kay-lookup",
@@ -85,18 +113,6 @@ def kajiya_kay_lookup(
     `(sin, spec) = bilinear(table, u, v)`, and the result is `(Kd·sin, Ks·spec)` like
     `kajiya_kay`'s.
     """
-    table = kajiya_kay_table(params.shininess, size, LOOKUP_MODELS[model])
-    tl = jnp.sum(tangent * to_light, axis=1)
-    tv = jnp.sum(tangent * to_eye, axis=1)
-    terms = jax.vmap(bilinear, in_axes=(None, 0, 0))(table, 0.5 * (1 + tl), 0.5 * (1 + tv))
-
-    def nonzero(x):
-        return jnp.sum(x * x, axis=1) > 0
-
-    # Fires for zero vectors (a repeated point's tangent, a point light at the point, §1):
-    # as in the analytic model, no diffuse without T and L, no highlight without V too.
-    # The table alone would read u = ½, where sin θ_L = 1.
-    lit = nonzero(tangent) & nonzero(to_light)
-    sin_tl = jnp.where(lit, terms[:, 0], 0.0)
-    spec = jnp.where(lit & nonzero(to_eye), terms[:, 1], 0.0)
+    sin_tl, spec = lookup_terms(params.shininess, *lookup_coordinates(tangent, to_light, to_eye),
+                                size, model)
     return sin_tl[:, None] * params.kd[None, :], spec[:, None] * params.ks[None, :]

@@ -217,3 +217,37 @@ def test_lookup_error_experiment_runs(tmp_path, capsys, gl):
     for key in ("rmse", "gl_rmse"):
         assert float(rows[1][key]) < float(rows[0][key]) / 4, key
     assert (out / "lookup_error.png").stat().st_size > 0
+
+
+# --------------------------------------------------------------------------- fit
+
+TRUE = hj.ShadingParams(kd=(0.3, 0.5, 0.2), ks=0.4, shininess=25.0, kappa=2.5, ambient=0.05)
+INIT = hj.ShadingParams(kd=0.5, ks=0.2, shininess=10.0, kappa=1.0, ambient=0.05)
+
+
+def test_fit_terms_and_derivatives_for_the_lookup_model():
+    """The fit's Kd/Ks images for a lookup scene: its image equals the renderer's (to the
+    fit's stated 1e-5 × brightest colour, tests/test_fit.py), and its one-pass derivative
+    rule equals forward-mode autodiff of the plain images (as tests/test_fit.py checks for
+    the formula; rtol 1e-10: the same maths summed in another order)."""
+    from hairjax import _fit
+
+    scene = lookup_scene(size=32, lookup_size=16)
+    exact = np.asarray(hj.render(scene, TRUE))[..., :3].reshape(-1, 3)
+    names = ("kd", "ks", "shininess", "kappa")
+    terms = _fit._prepare_terms(scene, TRUE, names, exact, np.ones((32 * 32, 1)))
+    image = np.asarray(_fit._image(terms, TRUE.kd, TRUE.ks, TRUE.shininess, TRUE.kappa))
+    assert np.abs(image - exact).max() <= 1e-5 * exact.max()
+    analytic = np.asarray(hj.render(scene.replace(shading_model="kajiya-kay"), TRUE))
+    assert np.abs(analytic[..., :3].reshape(-1, 3) - exact).max() > 1e-3  # the table shows
+
+    args = (jnp.asarray([0.3, 0.5, 0.2]), jnp.asarray([0.4, 0.4, 0.4]), jnp.asarray(25.0),
+            jnp.asarray(2.5))
+    tangent = (jnp.asarray([0.1, -0.2, 0.3]), jnp.asarray([0.5, 0.1, -0.1]), jnp.asarray(3.0),
+               jnp.asarray(-0.7))
+    _, jvp_f = jax.jvp(lambda *a: _fit._image(terms, *a), args, tangent)
+    _, jvp_g = jax.jvp(lambda *a: _fit._image(terms, *a, images=_fit._kd_ks_images_plain),
+                       args, tangent)
+    np.testing.assert_allclose(jvp_f, jvp_g, rtol=1e-10, atol=1e-13)
+    assert np.abs(np.asarray(jvp_g)).max() > 0
+
