@@ -166,7 +166,7 @@ def gl_weight_error(ctx, n: int) -> float:
             obj.release()
 
 
-@pytest.mark.parametrize("n", [8, 256])
+@pytest.mark.parametrize("n", [8, 100])  # exact and rounded u·n − ½ in GL
 def test_gl_lookup_matches_jax(gl, n):
     """GL samples the same table with texture(): the images agree outside the camera band
     (hairjax/_band.py) to PIXEL_TOL (float32 arithmetic, as for the analytic model) plus
