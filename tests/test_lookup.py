@@ -13,7 +13,11 @@ from helpers import PIXEL_TOL, camera_band, central_difference, small_furball_sc
 
 import hairjax as hj
 from hairjax._errors import SceneError
-from hairjax._lookup import bilinear, kajiya_kay_lookup, kajiya_kay_table
+from hairjax._lookup import bilinear, kajiya_kay_table
+from hairjax._lookup import kajiya_kay_lookup as _kajiya_kay_lookup
+
+# Compiled once per table size: op-by-op dispatch of the table build is slow.
+kajiya_kay_lookup = jax.jit(_kajiya_kay_lookup, static_argnums=(4, 5))
 
 
 def test_table_holds_sine_and_power_at_texel_centres():
@@ -57,7 +61,7 @@ def test_lookup_converges_to_the_formula():
     T, L, V = unit(2000), unit(2000), unit(2000)
     inner = (np.abs(np.sum(T * L, axis=1)) < 0.9) & (np.abs(np.sum(T * V, axis=1)) < 0.9)
     params = hj.ShadingParams(kd=1.0, ks=1.0, shininess=20.0)
-    exact = jax.vmap(hj.kajiya_kay, in_axes=(0, 0, 0, None))(T, L, V, params)
+    exact = jax.jit(jax.vmap(hj.kajiya_kay, in_axes=(0, 0, 0, None)))(T, L, V, params)
     err = {n: [np.asarray(a)[:, 0] - np.asarray(e)[:, 0]
                for a, e in zip(kajiya_kay_lookup(T, L, V, params, n), exact)] for n in (16, 256)}
     for term in range(2):  # diffuse, specular
@@ -88,10 +92,11 @@ def test_gradients_in_kd_ks_shininess_match_finite_differences():
     geometry = hj.geometry_stage(scene)
     params = scene.params
 
+    @jax.jit
     def loss(p):
         return jnp.sum(hj.shading_stage(geometry, p) ** 2)
 
-    grad = jax.grad(loss)(params)
+    grad = jax.jit(jax.grad(loss))(params)
     for field, index in [("kd", 0), ("ks", 2), ("shininess", ())]:
         leaf = getattr(params, field)
 

@@ -58,8 +58,9 @@ def test_streaks_scale_each_hairs_whole_colour():
         assert np.ptp(factor[strand == s]) == 0
     assert np.unique(factor).size == scene.strands.num_strands
     assert 0.2 <= factor.min() and factor.max() <= 1.0  # means of values in [1 − contrast, 1]
-    np.testing.assert_allclose(point_colors(geom, scene.params),
-                               np.asarray(point_colors(geom_plain, scene.params)) * factor[:, None],
+    colors = jax.jit(point_colors)
+    np.testing.assert_allclose(colors(geom, scene.params),
+                               np.asarray(colors(geom_plain, scene.params)) * factor[:, None],
                                rtol=1e-14)
     # Zero contrast renders the plain image.
     flat = scene.replace(streaks=Streaks(contrast=0.0))
