@@ -7,6 +7,8 @@ down once, in docs/model.md.
 
 from importlib.metadata import PackageNotFoundError, version
 
+from ._animate import load_animation as load_animation
+from ._animate import write_frames as write_frames
 from ._band import renderer_band as renderer_band
 from ._errors import HairFormatError as HairFormatError
 from ._errors import SceneError as SceneError
@@ -60,6 +62,7 @@ from ._shading import kajiya_kay as kajiya_kay
 from ._sources import furball as furball
 from ._sources import scalp as scalp
 from ._strands import Strands as Strands
+from ._streaks import Streaks as Streaks
 from ._supersample import supersample as supersample
 
 try:

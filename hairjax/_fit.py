@@ -28,6 +28,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._constants import FIT_TRANSMITTANCE_CUTOFF
+from ._lookup import LOOKUP_MODELS, lookup_coordinates, lookup_terms
 from ._render import composite, geometry_stage
 from ._scene import Scene
 from ._shading import ShadingParams, kajiya_kay_terms, specular_power
@@ -138,6 +139,10 @@ class _Terms(eqx.Module):
     ks_image: jax.Array | None  # K_s when κ and p are fixed
     target: jax.Array
     sqrt_weight: jax.Array
+    # Lookup models (§14): per point (u, v) and where the terms are lit; `gap` is then unused.
+    lookup: tuple | None = None
+    lookup_size: int = eqx.field(static=True, default=0)
+    model: str = eqx.field(static=True, default="kajiya-kay")
 
 
 def _check_names(fit_names, scalar) -> tuple[str, ...]:
@@ -188,9 +193,18 @@ def _visible_fragments(geom):
 def _prepare_terms(scene: Scene, params: ShadingParams, names, target, sqrt_weight) -> _Terms:
     full = geometry_stage(scene)
     geom = _visible_fragments(full)
-    sin_tl, gap = jax.vmap(kajiya_kay_terms, in_axes=(0, 0, 0, None))(
-        geom.tangent, geom.to_light, geom.to_eye, geom.model)
-    light = geom.light_rgb[None, :]
+    lookup = None
+    if geom.model in LOOKUP_MODELS:  # §14: the same terms, read from the table
+        lookup = lookup_coordinates(geom.tangent, geom.to_light, geom.to_eye)
+        sin_tl, _ = lookup_terms(params.shininess, *lookup, geom.lookup_size, geom.model)
+        gap = jnp.zeros_like(sin_tl)
+    else:
+        sin_tl, gap = jax.vmap(kajiya_kay_terms, in_axes=(0, 0, 0, None))(
+            geom.tangent, geom.to_light, geom.to_eye, geom.model)
+    # §16: the streak factor scales a point's whole colour, so it rides on the light (and
+    # the ambient term): [P, 3] instead of [1, 3] with streaks.
+    streak = 1.0 if geom.streak is None else geom.streak[:, None]
+    light = geom.light_rgb[None, :] * streak
     lit_color = light * geom.base_color
     omega = geom.omega
     tau = None if omega is None else jnp.exp(-params.kappa * omega)
@@ -203,17 +217,26 @@ def _prepare_terms(scene: Scene, params: ShadingParams, names, target, sqrt_weig
         occ_lit = full.transmittance[occ_pixel][:, None] * full.occluder_direct
         if full.occluder_visibility is not None:
             occ_lit = occ_lit * full.occluder_visibility[:, None]
-    constant = (composite(full, params.ambient[None, :] * full.base_color)
+    constant = (composite(full, params.ambient[None, :] * full.base_color * streak)
                 + full.transmittance[:, None] * backdrop)
     kd_image = ks_image = None
     if "kappa" not in names or omega is None:
         scale = 1.0 if tau is None else tau[:, None]
         kd_image = composite(geom, scale * sin_tl[:, None] * lit_color)
         if "shininess" not in names:
-            ks_image = composite(geom, scale * specular_power(gap, params.shininess)[:, None] * light)
+            ks_image = composite(geom, scale * _specular_of(gap, lookup, geom, params.shininess)[:, None]
+                                 * light)
     return _Terms(geom, sin_tl, gap, lit_color, light, omega, constant, occ_pixel, occ_lit,
                   full.occluder_omega if occ_pixel is not None else None, kd_image, ks_image,
-                  jnp.asarray(target), jnp.asarray(sqrt_weight))
+                  jnp.asarray(target), jnp.asarray(sqrt_weight), lookup, geom.lookup_size, geom.model)
+
+
+def _specular_of(gap, lookup, where, shininess):
+    """max(b, 0)^p per point: the guarded power of the gap (§8), or the lookup table read
+    at the points' (u, v) (§14); `where` carries the model and table size."""
+    if lookup is None:
+        return specular_power(gap, shininess)
+    return lookup_terms(shininess, *lookup, where.lookup_size, where.model)[1]
 
 
 def _fixed(terms: _Terms, kappa):
@@ -231,9 +254,13 @@ def _point_terms(terms: _Terms, shininess, kappa):
     τ·sin·light·c, τ·b^p·light, ∂/∂κ of both (−Ω times them), ∂/∂p of the second."""
     tau = jnp.ones_like(terms.sin_tl) if terms.omega is None else jnp.exp(-kappa * terms.omega)
     omega = jnp.zeros_like(terms.sin_tl) if terms.omega is None else terms.omega
-    spec = specular_power(terms.gap, shininess)
-    # d(b^p)/dp through the same guarded power: 0 where b ≤ SPECULAR_BASE_EPS, never NaN.
-    dspec = jax.vmap(jax.grad(specular_power, argnums=1), in_axes=(0, None))(terms.gap, shininess)
+    if terms.lookup is None:
+        spec = specular_power(terms.gap, shininess)
+        # d(b^p)/dp through the same guarded power: 0 where b ≤ SPECULAR_BASE_EPS, never NaN.
+        dspec = jax.vmap(jax.grad(specular_power, argnums=1), in_axes=(0, None))(terms.gap, shininess)
+    else:  # §14: the table entries' derivative in p, interpolated like the entries
+        spec, dspec = jax.jvp(lambda p: _specular_of(None, terms.lookup, terms, p), (shininess,),
+                              (jnp.ones_like(shininess),))
     kd_col = (tau * terms.sin_tl)[:, None] * terms.lit_color
     ks_col = (tau * spec)[:, None] * terms.light
     dks_dp = (tau * dspec)[:, None] * terms.light

@@ -27,6 +27,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ._composite import over_weights
+from ._lookup import LOOKUP_MODELS, kajiya_kay_lookup
 from ._occluder import occluder_hits, occluder_light_view, occluder_visibility, sphere_hits
 from ._ordering import draw_order, segment_depth, stable_argsort_uint32
 from ._projection import View, camera_view
@@ -34,6 +35,7 @@ from ._raster import rasterize
 from ._scene import Scene
 from ._shading import ShadingParams, kajiya_kay
 from ._shadows import ShadowSetup, exact_opacity, opacity_maps, point_opacity, shadow_setup
+from ._streaks import strand_coordinates, streak_factor, streak_prefix, streak_texture
 
 __all__ = ["Setup", "Geometry", "prepare", "visibility_order", "sphere_hits", "to_light",
            "geometry_stage", "shading_stage", "composite", "point_colors", "occluder_colors", "render",
@@ -118,6 +120,8 @@ class Geometry(eqx.Module):
     height: int = eqx.field(static=True)
     width: int = eqx.field(static=True)
     model: str = eqx.field(static=True)
+    lookup_size: int = eqx.field(static=True, default=0)  # lookup models' table size (§14)
+    streak: Float[Array, " P"] | None = None  # §16's factor per point; None without streaks
 
 
 _SETUP_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -364,21 +368,39 @@ def _geometry_stage(scene: Scene, alpha, order=None) -> Geometry:
         frag_t=jnp.asarray(setup.frag_t, dtype), frag_weight=weights, frag_alpha=frag_alpha,
         transmittance=transmittance, backdrop=jnp.asarray(setup.backdrop, dtype),
         alpha_channel=alpha_channel, height=scene.camera.height, width=scene.camera.width,
-        model=scene.shading_model,
+        model=scene.shading_model, lookup_size=scene.lookup_size,
+        streak=None if scene.streaks is None else _streak_factors(scene, dtype),
     )
+
+
+def _streak_factors(scene: Scene, dtype) -> Float[Array, " P"]:
+    """§16: each point's streak factor, the texture's mean over its hair's [u_i, u_i + Δ]."""
+    streaks, strands = scene.streaks, scene.strands
+    texture = streak_texture(streaks)
+    u = strand_coordinates(streaks, strands.num_strands)[strands.strand_of_point]
+    return jax.vmap(streak_factor, in_axes=(None, None, 0, None))(
+        jnp.asarray(texture, dtype), jnp.asarray(streak_prefix(texture), dtype),
+        jnp.asarray(u, dtype), streaks.width)
 
 
 def point_colors(geometry: Geometry, params: ShadingParams) -> Float[Array, "P 3"]:
     """Shaded colour at every strand point (Gouraud, kim-2003 §5):
     ambient·c + τ · light · (Kd·sin(T, L)·c + Ks·spec), with c the per-point colour."""
-    diffuse, specular = jax.vmap(kajiya_kay, in_axes=(0, 0, 0, None, None))(
-        geometry.tangent, geometry.to_light, geometry.to_eye, params, geometry.model)
+    if geometry.model in LOOKUP_MODELS:  # §14: the same terms read from a table
+        diffuse, specular = kajiya_kay_lookup(geometry.tangent, geometry.to_light, geometry.to_eye,
+                                              params, geometry.lookup_size, geometry.model)
+    else:
+        diffuse, specular = jax.vmap(kajiya_kay, in_axes=(0, 0, 0, None, None))(
+            geometry.tangent, geometry.to_light, geometry.to_eye, params, geometry.model)
     lit = geometry.light_rgb[None, :] * (diffuse * geometry.base_color + specular)
     if geometry.omega is not None:
         lit = lit * jnp.exp(-params.kappa * geometry.omega)[:, None]
     if geometry.light_visibility is not None:  # §13: the occluder's shadow
         lit = lit * geometry.light_visibility[:, None]
-    return params.ambient[None, :] * geometry.base_color + lit
+    colors = params.ambient[None, :] * geometry.base_color + lit
+    if geometry.streak is not None:  # §16: the streak texture modulates the whole colour
+        colors = colors * geometry.streak[:, None]
+    return colors
 
 
 def occluder_colors(geometry: Geometry, params: ShadingParams) -> Float[Array, "Q 3"]:

@@ -13,10 +13,16 @@ from typing import Literal
 import numpy as np
 
 from ._errors import SceneError
+from ._lookup import LOOKUP_MODELS
 from ._shading import SHADING_MODELS, ShadingParams
 from ._strands import Strands
+from ._streaks import Streaks
 
 __all__ = ["Camera", "Light", "Shadows", "Ordering", "Occluder", "Scene"]
+
+# Every shading model a scene may name: the analytic ones and their lookup-table variants (§14).
+MODELS = (*SHADING_MODELS, *LOOKUP_MODELS)
+LOOKUP_SIZE_RANGE = (2, 4096)
 
 
 def _vec3(name: str, value, *, nonzero: bool = False) -> tuple[float, float, float]:
@@ -232,7 +238,10 @@ class Scene:
     """Everything needed to render one image.
 
     `params` holds the differentiable shading parameters; `shading_model` picks the
-    Kajiya-Kay convention (`"kajiya-kay"` or `"kajiya-kay-mirror"`, see docs/model.md).
+    Kajiya-Kay convention (`"kajiya-kay"` or `"kajiya-kay-mirror"`, see docs/model.md) or
+    the seed's convention read from a `lookup_size` × `lookup_size` table
+    (`"kajiya-kay-lookup"`, §14; `lookup_size` is unused by the other models).
+    `streaks`: wenzel-2002's streak texture along the hairs (§16), or None.
     """
 
     strands: Strands
@@ -245,13 +254,22 @@ class Scene:
     occluder: Occluder | None = None
     background: tuple[float, float, float] = (0.0, 0.0, 0.0)
     name: str = "scene"
+    lookup_size: int = 256
+    streaks: Streaks | None = None
 
     def __post_init__(self):
         if not isinstance(self.strands, Strands):
             raise SceneError("scene.strands must be a Strands")
-        if self.shading_model not in SHADING_MODELS:
+        if self.shading_model not in MODELS:
             raise SceneError(
-                f"shading.model must be one of {SHADING_MODELS}, got {self.shading_model!r}")
+                f"shading.model must be one of {MODELS}, got {self.shading_model!r}")
+        lo, hi = LOOKUP_SIZE_RANGE
+        n = self.lookup_size
+        if isinstance(n, bool) or int(n) != n or not lo <= n <= hi:
+            raise SceneError(f"shading.lookup_size must be an integer in [{lo}, {hi}], got {n!r}")
+        object.__setattr__(self, "lookup_size", int(n))
+        if self.streaks is not None and not isinstance(self.streaks, Streaks):
+            raise SceneError("scene.streaks must be a Streaks or None")
         object.__setattr__(self, "background", _rgb("background.color", self.background))
 
     def replace(self, **changes) -> Scene:

@@ -1,7 +1,8 @@
 """Scene files: TOML text -> `Scene`.
 
 A scene file has one table per part of the scene (`[hair]`, `[camera]`, `[light]`,
-`[shading]`, `[shadows]`, `[ordering]`, `[occluder]`, `[background]`) and an optional
+`[shading]`, `[shadows]`, `[ordering]`, `[occluder]`, `[background]`, `[streaks]`,
+`[animation]`) and an optional
 top-level `name`; docs/scenes.md documents every key. Every key but `hair.source` is
 optional, and an absent key takes the default of the dataclass (or generator) it feeds,
 so defaults live in one place.
@@ -23,7 +24,9 @@ from pathlib import Path
 from typing import Any
 
 from ._errors import SceneError
+from ._lookup import LOOKUP_MODELS
 from ._scene import (
+    MODELS,
     OCCLUDER_KINDS,
     ORDERING_METHODS,
     SHADOW_METHODS,
@@ -34,9 +37,10 @@ from ._scene import (
     Scene,
     Shadows,
 )
-from ._shading import SHADING_MODELS, ShadingParams
+from ._shading import ShadingParams
 from ._sources import furball, scalp
 from ._strands import Strands
+from ._streaks import Streaks
 
 __all__ = ["load_scene", "scene_from_dict", "default_scene_path"]
 
@@ -59,11 +63,14 @@ TABLES: dict[str, tuple[str, ...]] = {
     "hair": _HAIR_COMMON + _HAIR_PROCEDURAL + tuple(_HAIR_ONLY_FOR),
     "camera": ("eye", "target", "up", "fov", "width", "height", "near"),
     "light": ("kind", "direction", "position", "color"),
-    "shading": ("model", "kd", "ks", "shininess", "kappa", "ambient"),
+    "shading": ("model", "kd", "ks", "shininess", "kappa", "ambient", "lookup_size"),
     "shadows": ("method", "maps", "resolution"),
     "ordering": ("method", "bins"),
     "occluder": ("kind", "center", "radius", "color", "path"),
     "background": ("color",),
+    "streaks": ("texels", "width", "contrast", "seed"),
+    # Read by `hairjax animate` only (hairjax/_animate.py); a still render shows the rest pose.
+    "animation": ("amplitude", "frequency", "phase", "inertia", "frames"),
 }
 TOP_LEVEL_KEYS = ("name",)
 
@@ -121,17 +128,22 @@ def scene_from_dict(
     camera = _build(where, Camera, **_read_camera(tables["camera"]))
     light = _build(where, Light, **_read_light(tables["light"]))
     model, params = _read_shading(tables["shading"])
+    lookup_size = _read_lookup_size(tables["shading"], model)
     shadows = _build(where, Shadows, **_read_shadows(tables["shadows"]))
     ordering = _build(where, Ordering, **_read_ordering(tables["ordering"]))
     occluder = None
     if "occluder" in data:  # The table's presence, even empty, asks for an occluder.
         occluder = _build(where, Occluder, **_read_occluder(tables["occluder"], Path(base_dir)))
     background = tables["background"].rgb("color")
+    streaks = None
+    if "streaks" in data:  # The table's presence, even empty, asks for streaks (§16).
+        streaks = _build(where, Streaks, **_read_streaks(tables["streaks"]))
     # Hair last: generating or reading it is the only slow step, so the cheap checks of
     # the other tables fail first.
     strands = _read_hair(tables["hair"], Path(base_dir))
 
-    scene_args = _given(shading_model=model, background=background)
+    scene_args = _given(shading_model=model, background=background, lookup_size=lookup_size,
+                        streaks=streaks)
     return _build(where, Scene, strands=strands, camera=camera, light=light, params=params,
                   shadows=shadows, ordering=ordering, occluder=occluder, name=scene_name,
                   **scene_args)
@@ -359,7 +371,7 @@ def _read_light(table: _Table) -> dict[str, Any]:
 def _read_shading(table: _Table) -> tuple[str | None, ShadingParams]:
     # ShadingParams does not validate (it is a pytree that gradients flow through), so the
     # ranges are checked here.
-    model = table.choice("model", SHADING_MODELS)
+    model = table.choice("model", MODELS)
     params = ShadingParams(**_given(
         kd=table.rgb("kd", scalar=True),
         ks=table.rgb("ks", scalar=True),
@@ -368,6 +380,21 @@ def _read_shading(table: _Table) -> tuple[str | None, ShadingParams]:
         ambient=table.rgb("ambient", scalar=True),
     ))
     return model, params
+
+
+def _read_lookup_size(table: _Table, model: str | None) -> int | None:
+    # Range is Scene's check; a table size for an analytic model would be silently ignored.
+    if "lookup_size" in table and model not in LOOKUP_MODELS:
+        raise SceneError(f"{table.where}: shading.lookup_size applies only to the lookup models "
+                         f"({', '.join(repr(m) for m in LOOKUP_MODELS)}), not to model = "
+                         f"{model or 'kajiya-kay'!r}")
+    return table.integer("lookup_size")
+
+
+def _read_streaks(table: _Table) -> dict[str, Any]:
+    # Ranges are Streaks' checks.
+    return _given(texels=table.integer("texels"), width=table.number("width"),
+                  contrast=table.number("contrast"), seed=table.integer("seed"))
 
 
 def _read_shadows(table: _Table) -> dict[str, Any]:

@@ -28,6 +28,7 @@ import numpy as np
 
 from ._compare import image_stats
 from ._files import atomic_path, write_json, write_text
+from ._lookup import LOOKUP_MODELS
 from ._scene import Ordering, Scene
 from ._supersample import supersample
 
@@ -158,6 +159,10 @@ def scene_digest(scene: Scene) -> str:
     h.update(np.asarray([np.asarray(x, np.float64).ravel() for x in
                          (scene.params.kd, scene.params.ks, scene.params.ambient)]).tobytes())
     h.update(np.asarray([scene.params.shininess, scene.params.kappa], np.float64).tobytes())
+    if scene.shading_model in LOOKUP_MODELS:  # §14 (analytic scenes keep their old digests)
+        h.update(repr(scene.lookup_size).encode())
+    if scene.streaks is not None:  # §16
+        h.update(repr(scene.streaks).encode())
     return h.hexdigest()[:16]
 
 

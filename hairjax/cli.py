@@ -1,4 +1,4 @@
-"""The `hairjax` command line: render, compare, fit, sweep, info, bench."""
+"""The `hairjax` command line: render, animate, compare, fit, sweep, info, bench."""
 
 from __future__ import annotations
 
@@ -44,6 +44,17 @@ def _render(args) -> int:
     if args.png:
         write_image(args.png, image)
         print(f"wrote {args.png}")
+    return 0
+
+
+def _animate(args) -> int:
+    from ._animate import load_animation, write_frames
+
+    animation = load_animation(args.scene)
+    written = write_frames(animation, args.output, frames=args.frames, backend=args.backend,
+                           png=args.png, gif=args.gif, progress=sys.stderr.isatty())
+    frames = sum(p.suffix == ".exr" for p in written)
+    print(f"wrote {frames} frames ({', '.join(sorted({p.suffix for p in written}))}) to {args.output}")
     return 0
 
 
@@ -174,6 +185,17 @@ def build_parser() -> argparse.ArgumentParser:
                    help="jax: the differentiable reference; gl: the OpenGL renderer")
     p.set_defaults(func=_render)
 
+    p = sub.add_parser("animate", help="render the frames of an animated fur ball (wenzel-2002)")
+    p.add_argument("scene", type=Path, help="scene TOML file with a fur ball and [animation]")
+    p.add_argument("--frames", type=int, help="frames per loop (default: animation.frames)")
+    p.add_argument("-o", "--output", type=Path, default=Path("out/animation"),
+                   help="folder for frame_0000.exr, … (default: out/animation)")
+    p.add_argument("--backend", choices=["jax", "gl"], default="jax",
+                   help="jax: the differentiable reference; gl: the OpenGL renderer")
+    p.add_argument("--png", action="store_true", help="also write frame_0000.png, … (8-bit sRGB)")
+    p.add_argument("--gif", action="store_true", help="also write animation.gif (Pillow)")
+    p.set_defaults(func=_animate)
+
     p = sub.add_parser("compare", help="render with JAX and GL and report the differences")
     p.add_argument("scene", nargs="?", type=Path, help="scene TOML file (default: built-in)")
     p.add_argument("--json", type=Path, help="also write the report as JSON")
@@ -244,7 +266,7 @@ def main(argv=None) -> int:
     from .gl import GLError, GLUnavailable
 
     args = build_parser().parse_args(argv)
-    if args.command in ("render", "bench", "compare", "fit", "sweep"):
+    if args.command in ("render", "animate", "bench", "compare", "fit", "sweep"):
         _enable_compilation_cache()
     try:
         return args.func(args)

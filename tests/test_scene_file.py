@@ -103,7 +103,8 @@ def test_default_scene_values():
 
 # --------------------------------------------------------------------------- examples
 
-EXAMPLE_NAMES = ["point_light", "grazing", "dense_opaque", "occluder", "tressfx_ponytail", "sintel"]
+EXAMPLE_NAMES = ["point_light", "grazing", "dense_opaque", "occluder", "tressfx_ponytail", "sintel",
+                 "furball_animated"]
 
 
 def test_every_example_is_listed():

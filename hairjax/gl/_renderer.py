@@ -15,12 +15,14 @@ import time
 
 import numpy as np
 
+from .._lookup import LOOKUP_MODELS, kajiya_kay_table
 from .._occluder import drawable_triangles, occluder_extent, occluder_light_view, vertex_normals
 from .._projection import View
 from .._render import tangents, visibility_order
 from .._scene import Scene
 from .._shading import ShadingParams
 from .._shadows import LightFrame, light_frame, point_planes, with_receivers
+from .._streaks import strand_coordinates, streak_prefix, streak_texture
 from ._context import check, get_context, release
 from ._programs import SHADING_MODEL_IDS, programs
 
@@ -109,13 +111,17 @@ class _Strands:
         self.omega = f4(np.zeros(s.num_points))
         self.visibility = f4(np.ones(s.num_points))
         self.segments = s.segments()
+        self.streak = None  # §16: each point's hair coordinate u_i, only for scenes with streaks
+        if scene.streaks is not None:
+            self.streak = f4(strand_coordinates(scene.streaks, s.num_strands)[per_point])
 
     def vertex_array(self, prog, index_buffer):
+        streak = [] if self.streak is None else [(self.streak, "f", "in_streak")]
         return self.ctx.vertex_array(prog, [
             (self.position, "3f", "in_position"), (self.tangent, "3f", "in_tangent"),
             (self.color, "3f", "in_color"), (self.alpha, "f", "in_alpha"),
             (self.width, "f", "in_width"), (self.omega, "f", "in_omega"),
-            (self.visibility, "f", "in_visibility"),
+            (self.visibility, "f", "in_visibility"), *streak,
         ], index_buffer=index_buffer, index_element_size=4, skip_errors=True)
 
     def index_buffer(self, segment_ids: np.ndarray):
@@ -125,8 +131,9 @@ class _Strands:
 
     def release(self):
         for b in (self.position, self.tangent, self.color, self.alpha, self.width, self.omega,
-                  self.visibility):
-            b.release()
+                  self.visibility, self.streak):
+            if b is not None:
+                b.release()
 
 
 def render_gl(scene: Scene, params: ShadingParams | None = None, *,
@@ -359,6 +366,8 @@ def _camera_pass(ctx, progs, scene: Scene, params: ShadingParams, strands, view:
     fbo = ctx.framebuffer(color_attachments=[color], depth_attachment=depth_tex)
     ibo = strands.index_buffer(order)
     extra = []
+    table = _lookup_texture(ctx, scene, params)
+    streak = _streak_texture(ctx, scene)
     try:
         fbo.use()
         ctx.viewport = (0, 0, w, h)
@@ -408,6 +417,14 @@ def _camera_pass(ctx, progs, scene: Scene, params: ShadingParams, strands, view:
                 "shading.ambient": _vec(params.ambient),
                 "shading.shininess": float(params.shininess), "shading.kappa": float(params.kappa),
                 "shading.model": SHADING_MODEL_IDS[scene.shading_model]}, **common)
+        if table is not None:
+            table.use(0)
+            _set(prog, kajiya_kay_table=0)
+        _set(prog, streaks=streak is not None)
+        if streak is not None:
+            streak.use(1)
+            _set(prog, streak_texture=1, streak_texels=scene.streaks.texels,
+                 streak_width=float(scene.streaks.width))
         vao = strands.vertex_array(prog, ibo)
         if len(order):
             vao.render(moderngl.LINES, vertices=2 * len(order))
@@ -417,7 +434,32 @@ def _camera_pass(ctx, progs, scene: Scene, params: ShadingParams, strands, view:
         return data[::-1].copy()  # GL's row 0 is the bottom
     finally:
         ctx.disable(moderngl.BLEND | moderngl.DEPTH_TEST)
-        release(ctx, ibo, fbo, color, *([own_depth] if own_depth is not None else []), *extra)
+        release(ctx, ibo, fbo, color, *([own_depth] if own_depth is not None else []), *extra, table, streak)
+
+
+def _lookup_texture(ctx, scene: Scene, params: ShadingParams):
+    """§14: the lookup model's table (built by the JAX code, `kajiya_kay_table`) as an
+    RG32F texture sampled with LINEAR filtering and CLAMP_TO_EDGE; None for other models."""
+    import moderngl
+
+    if scene.shading_model not in LOOKUP_MODELS:
+        return None
+    table = kajiya_kay_table(params.shininess, scene.lookup_size, LOOKUP_MODELS[scene.shading_model])
+    n = scene.lookup_size
+    tex = ctx.texture((n, n), 2, np.ascontiguousarray(table, dtype="f4").tobytes(), dtype="f4")
+    tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+    tex.repeat_x = tex.repeat_y = False  # CLAMP_TO_EDGE
+    return tex
+
+
+def _streak_texture(ctx, scene: Scene):
+    """§16: texel k = (N_{k mod m}, P_k), k = 0 … m, as an RG32F texture read with
+    texelFetch (the mean over a hair's span is computed from it exactly); None without streaks."""
+    if scene.streaks is None:
+        return None
+    texture = streak_texture(scene.streaks)
+    data = np.stack([np.append(texture, texture[0]), streak_prefix(texture)], axis=1)
+    return ctx.texture((len(data), 1), 2, np.ascontiguousarray(data, dtype="f4").tobytes(), dtype="f4")
 
 
 def _light_pass_uniforms(scene: Scene, frame: LightFrame) -> dict:

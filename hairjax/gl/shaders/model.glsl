@@ -83,7 +83,7 @@ struct Shading {
     vec3 ambient;
     float shininess;
     float kappa;
-    int model;  // SHADING_KAJIYA_KAY or SHADING_KAJIYA_KAY_MIRROR
+    int model;  // SHADING_KAJIYA_KAY, SHADING_KAJIYA_KAY_MIRROR or SHADING_KAJIYA_KAY_LOOKUP (§14)
 };
 
 // §8: ambient·c + τ·light·(Kd sin(T, L)·c + Ks·max(b, 0)^p).
@@ -95,6 +95,40 @@ vec3 shade_point(Shading s, vec3 T, vec3 L, vec3 V, vec3 base, vec3 light_rgb, f
     vec3 diffuse = s.kd * sin_tl;
     vec3 specular = s.ks * specular_power(kajiya_kay_gap(s.model, tl, tv, sin_tl, sin_tv), s.shininess);
     return s.ambient * base + tau * light_rgb * (diffuse * base + specular);
+}
+
+// §14: Kajiya-Kay's (sin θ_L, max(b, 0)^p) read from the lookup table (hairjax/_lookup.py)
+// at ((L·T + 1)/2, (V·T + 1)/2) with LINEAR filtering and CLAMP_TO_EDGE, level 0; then as
+// shade_point. Fires for zero vectors (§1: a zero tangent, a point light at the point): no
+// diffuse without T and L, no highlight without V too, as in §8 (the table reads 1 at u = ½).
+vec3 shade_point_lookup(Shading s, sampler2D table, vec3 T, vec3 L, vec3 V, vec3 base,
+                        vec3 light_rgb, float tau) {
+    vec2 terms = textureLod(table, 0.5 * (1.0 + vec2(dot(L, T), dot(V, T))), 0.0).rg;
+    bool lit = dot(T, T) > 0.0 && dot(L, L) > 0.0;
+    float sin_tl = lit ? terms.x : 0.0;
+    float spec = lit && dot(V, V) > 0.0 ? terms.y : 0.0;
+    return s.ambient * base + tau * light_rgb * (s.kd * sin_tl * base + s.ks * spec);
+}
+
+// §16: H(y) = ∫₀^y g, g the periodic linear interpolant of the streak texture in texel units;
+// texel k of `streak` holds (N_{k mod m}, P_k), P the running integral (hairjax/_streaks.py).
+float streak_antiderivative(sampler2D streak, int m, float y) {
+    float k = floor(y);
+    float f = y - k;
+    float q = floor(k / float(m));
+    // r = K mod m; the clamp fires only if float rounding of K/m puts r at m.
+    int r = int(clamp(k - q * float(m), 0.0, float(m - 1)));
+    float n0 = texelFetch(streak, ivec2(r, 0), 0).x;
+    float n1 = texelFetch(streak, ivec2((r + 1) % m, 0), 0).x;
+    return q * texelFetch(streak, ivec2(m, 0), 0).y + texelFetch(streak, ivec2(r, 0), 0).y
+         + f * n0 + 0.5 * f * f * (n1 - n0);
+}
+
+// §16: the streak texture's mean over [u, u + width] (a hair's span across its ribbon).
+float streak_factor(sampler2D streak, int m, float u, float width) {
+    float a = u * float(m) - 0.5;
+    float b = (u + width) * float(m) - 0.5;
+    return (streak_antiderivative(streak, m, b) - streak_antiderivative(streak, m, a)) / (width * float(m));
 }
 
 // §7: the slice of depth z, (z − D₀)·N/span clamped to [0, N] (fires by float32 rounding at D₀, D_N).

@@ -10,6 +10,7 @@ in float in_alpha;
 in float in_width;
 in float in_omega;
 in float in_visibility;  // §13: 0 where the occluder shadows the point
+in float in_streak;        // §16: the hair's streak coordinate u_i (bound only with streaks)
 
 uniform View view;
 uniform bool shade;        // camera pass: shade points; light passes: geometry only
@@ -18,6 +19,11 @@ uniform vec3 light_rgb;
 uniform vec3 light_vector; // −direction (directional) or the light's position (point)
 uniform bool point_light;
 uniform vec3 eye;
+uniform sampler2D kajiya_kay_table;  // §14, bound for SHADING_KAJIYA_KAY_LOOKUP only
+uniform bool streaks;                 // §16
+uniform sampler2D streak_texture;     // (N_{k mod m}, P_k), k = 0 … m
+uniform int streak_texels;            // m
+uniform float streak_width;           // Δ
 
 out VertexOut {
     vec3 screen;
@@ -42,7 +48,10 @@ void main() {
         vec3 L = point_light ? safe_normalize(light_vector - in_position) : light_vector;
         vec3 V = safe_normalize(eye - in_position);
         float tau = exp(-shading.kappa * in_omega) * in_visibility;
-        vout.color = shade_point(shading, in_tangent, L, V, in_color, light_rgb, tau);
+        vout.color = shading.model == SHADING_KAJIYA_KAY_LOOKUP
+            ? shade_point_lookup(shading, kajiya_kay_table, in_tangent, L, V, in_color, light_rgb, tau)
+            : shade_point(shading, in_tangent, L, V, in_color, light_rgb, tau);
+        if (streaks) vout.color *= streak_factor(streak_texture, streak_texels, in_streak, streak_width);
     }
     gl_Position = vec4(0.0, 0.0, 0.0, 1.0);  // the geometry shader places the ribbon
 }
