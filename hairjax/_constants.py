@@ -29,3 +29,8 @@ NEAR_FRACTION = 1e-3
 # the per-step composites. All of a pixel's fragments behind the cut weigh Σ w ≤ T_cut
 # together, so the image moves by at most T_cut × the brightest colour (1e-5 of it).
 FIT_TRANSMITTANCE_CUTOFF = 1e-5
+
+# Scheuermann (scheuermann-2004 slide 12, docs/model.md §13): the diffuse term is
+# saturate(lerp(SCHEUERMANN_DIFFUSE_FLOOR, 1, N·L)): the seed's 0.25 shifts the terminator
+# past N·L = 0 "for a softer look" (light reaches N·L > −1/3).
+SCHEUERMANN_DIFFUSE_FLOOR = 0.25

@@ -561,6 +561,9 @@ def fit(
         scenes = scenes * len(target_list)
     if len(scenes) != len(target_list):
         raise FitError(f"{len(scenes)} scenes for {len(target_list)} targets")
+    if any(s.shading_model == "scheuermann" for s in scenes):
+        raise FitError("fit supports the Kajiya-Kay models only; a Scheuermann scene is "
+                       "differentiable through hairjax.render (docs/model.md §13)")
     mask_list = [None] * len(scenes) if masks is None else list(masks)
     weight_list = [None] * len(scenes) if weights is None else list(weights)
     names = _check_names(fit, scalar)

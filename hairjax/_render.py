@@ -29,6 +29,7 @@ from ._ordering import draw_order, segment_depth, stable_argsort_uint32
 from ._projection import View, camera_view
 from ._raster import rasterize
 from ._scene import Scene
+from ._scheuermann import ScheuermannParams, ScheuermannPoints, scheuermann, scheuermann_inputs
 from ._shading import ShadingParams, kajiya_kay
 from ._shadows import ShadowSetup, exact_opacity, opacity_maps, point_opacity, shadow_setup
 
@@ -81,6 +82,7 @@ class Setup:
     opaque: np.ndarray           # [H*W] the occluder covers the pixel centre
     shadow: ShadowSetup | None
     timings: dict
+    scheuermann: ScheuermannPoints | None = None  # NumPy; Scheuermann scenes only (§13)
 
 
 class Geometry(eqx.Module):
@@ -103,6 +105,7 @@ class Geometry(eqx.Module):
     height: int = eqx.field(static=True)
     width: int = eqx.field(static=True)
     model: str = eqx.field(static=True)
+    scheuermann: ScheuermannPoints | None = None  # Scheuermann scenes only (§13)
 
 
 _SETUP_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -183,6 +186,14 @@ def _prepare(scene: Scene, order=None) -> Setup:
     seg_strand = strands.strand_of_point[segments[:, 0]]
     lap("project+order")
 
+    tangent = tangents(points, strands.offsets)
+    base_color = strands.color if strands.color is not None else np.ones_like(points)
+    extra, segment_alpha = None, None
+    if scene.shading_model == "scheuermann":  # §13's per-point inputs: this model only
+        extra, factor, segment_alpha = scheuermann_inputs(strands, tangent, scene.scheuermann_maps)
+        base_color = base_color * factor
+        lap("scheuermann inputs")
+
     # Rasterise nearest-first, then a stable sort by pixel gives front-to-back per pixel.
     near_first = order[::-1]
     s0, s1 = segments[near_first, 0], segments[near_first, 1]
@@ -211,6 +222,8 @@ def _prepare(scene: Scene, order=None) -> Setup:
     sort = stable_argsort_uint32(frags.pixel)
     pixel, frag_coverage, frag_t = frags.pixel[sort], frags.coverage[sort], frags.t[sort]
     seg = near_first[frags.segment[sort]]
+    if segment_alpha is not None:  # §13's alpha texture scales the segment's opacity
+        frag_coverage = frag_coverage * segment_alpha[seg]
     del frags
     first = np.ones(pixel.size, bool)
     first[1:] = pixel[1:] != pixel[:-1]
@@ -221,17 +234,17 @@ def _prepare(scene: Scene, order=None) -> Setup:
     shadow = None
     if scene.shadows.method != "none":
         shadow = shadow_setup(points, segments, seg_strand, strands.width, light,
-                              scene.shadows.method, scene.shadows.maps, scene.shadows.resolution)
+                              scene.shadows.method, scene.shadows.maps, scene.shadows.resolution,
+                              segment_alpha)
         lap("shadow set-up")
 
-    base_color = strands.color if strands.color is not None else np.ones_like(points)
     return Setup(
-        view=view, tangent=tangents(points, strands.offsets), to_light=to_light(light, points),
+        view=view, tangent=tangent, to_light=to_light(light, points),
         to_eye=_unit(view.origin - points), base_color=base_color, light_rgb=light_rgb,
         frag_pixel=pixel, frag_i0=segments[seg, 0].astype(np.int32), frag_t=frag_t,
         frag_strand=seg_strand[seg].astype(np.int32), frag_coverage=frag_coverage,
         frag_first=first, frag_last=last, backdrop=backdrop, opaque=opaque, shadow=shadow,
-        timings=timings,
+        timings=timings, scheuermann=extra,
     )
 
 
@@ -343,18 +356,37 @@ def _geometry_stage(scene: Scene, alpha, order=None) -> Geometry:
         transmittance=transmittance, backdrop=jnp.asarray(setup.backdrop, dtype),
         alpha_channel=alpha_channel, height=scene.camera.height, width=scene.camera.width,
         model=scene.shading_model,
+        scheuermann=None if setup.scheuermann is None else jax.tree.map(
+            lambda x: jnp.asarray(x, dtype), setup.scheuermann),
     )
 
 
-def point_colors(geometry: Geometry, params: ShadingParams) -> Float[Array, "P 3"]:
+def point_colors(geometry: Geometry, params: ShadingParams | ScheuermannParams) -> Float[Array, "P 3"]:
     """Shaded colour at every strand point (Gouraud, kim-2003 §5):
-    ambient·c + τ · light · (Kd·sin(T, L)·c + Ks·spec), with c the per-point colour."""
+    ambient·c + τ · light · (Kd·sin(T, L)·c + Ks·spec), with c the per-point colour;
+    for the Scheuermann model (§13) c · (ambient + τ · light · (diffuse + specular))."""
+    if geometry.model == "scheuermann":
+        return _scheuermann_colors(geometry, params)
+    if not isinstance(params, ShadingParams):
+        raise TypeError(f"shading model {geometry.model!r} takes ShadingParams, got {type(params).__name__}")
     diffuse, specular = jax.vmap(kajiya_kay, in_axes=(0, 0, 0, None, None))(
         geometry.tangent, geometry.to_light, geometry.to_eye, params, geometry.model)
     lit = geometry.light_rgb[None, :] * (diffuse * geometry.base_color + specular)
     if geometry.omega is not None:
         lit = lit * jnp.exp(-params.kappa * geometry.omega)[:, None]
     return params.ambient[None, :] * geometry.base_color + lit
+
+
+def _scheuermann_colors(geometry: Geometry, params: ScheuermannParams) -> Float[Array, "P 3"]:
+    if not isinstance(params, ScheuermannParams):
+        raise TypeError(f"shading model 'scheuermann' takes ScheuermannParams, got {type(params).__name__}")
+    pts = geometry.scheuermann
+    diffuse, specular = jax.vmap(scheuermann, in_axes=(0, 0, 0, 0, 0, 0, None))(
+        geometry.tangent, pts.normal, geometry.to_light, geometry.to_eye, pts.shift, pts.mask, params)
+    lit = geometry.light_rgb[None, :] * (diffuse + specular)
+    if geometry.omega is not None:
+        lit = lit * jnp.exp(-params.kappa * geometry.omega)[:, None]
+    return geometry.base_color * (params.ambient[None, :] + lit)
 
 
 def composite(geometry: Geometry, colors: Float[Array, "P C"]) -> Float[Array, "HW C"]:

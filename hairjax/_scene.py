@@ -13,6 +13,7 @@ from typing import Literal
 import numpy as np
 
 from ._errors import SceneError
+from ._scheuermann import ScheuermannMaps, ScheuermannParams, check_scheuermann_params
 from ._shading import SHADING_MODELS, ShadingParams
 from ._strands import Strands
 
@@ -178,7 +179,9 @@ class Scene:
     """Everything needed to render one image.
 
     `params` holds the differentiable shading parameters; `shading_model` picks the
-    Kajiya-Kay convention (`"kajiya-kay"` or `"kajiya-kay-mirror"`, see docs/model.md).
+    Kajiya-Kay convention (`"kajiya-kay"` or `"kajiya-kay-mirror"`, see docs/model.md) with
+    a `ShadingParams`, or `"scheuermann"` (docs/model.md §13) with a `ScheuermannParams`;
+    `scheuermann_maps` (used by that model only) says how its per-point inputs are made.
     """
 
     strands: Strands
@@ -191,6 +194,7 @@ class Scene:
     occluder: Occluder | None = None
     background: tuple[float, float, float] = (0.0, 0.0, 0.0)
     name: str = "scene"
+    scheuermann_maps: ScheuermannMaps = ScheuermannMaps()
 
     def __post_init__(self):
         if not isinstance(self.strands, Strands):
@@ -198,6 +202,12 @@ class Scene:
         if self.shading_model not in SHADING_MODELS:
             raise SceneError(
                 f"shading.model must be one of {SHADING_MODELS}, got {self.shading_model!r}")
+        wanted = ScheuermannParams if self.shading_model == "scheuermann" else ShadingParams
+        if not isinstance(self.params, wanted):
+            raise SceneError(f"shading model {self.shading_model!r} takes {wanted.__name__}, "
+                             f"got {type(self.params).__name__}")
+        if wanted is ScheuermannParams:
+            check_scheuermann_params(self.params)
         object.__setattr__(self, "background", _rgb("background.color", self.background))
 
     def replace(self, **changes) -> Scene:

@@ -13,7 +13,7 @@ from ._context import GLError
 
 __all__ = ["programs", "constants_glsl", "shader_source"]
 
-SHADING_MODEL_IDS = {"kajiya-kay": 0, "kajiya-kay-mirror": 1}
+SHADING_MODEL_IDS = {"kajiya-kay": 0, "kajiya-kay-mirror": 1, "scheuermann": 2}
 
 
 def constants_glsl() -> str:

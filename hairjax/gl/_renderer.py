@@ -17,6 +17,7 @@ import numpy as np
 
 from .._render import tangents, visibility_order
 from .._scene import Scene
+from .._scheuermann import ScheuermannParams, scheuermann_inputs
 from .._shading import ShadingParams
 from .._shadows import LightFrame, light_frame, point_planes
 from ._context import check, get_context, release
@@ -70,19 +71,32 @@ class _Strands:
         self.ctx = ctx
         self.count = s.num_points
         f4 = lambda a: ctx.buffer(np.ascontiguousarray(a, dtype="f4").tobytes())  # noqa: E731
+        tangent = tangents(s.points, s.offsets)
+        color = s.color if s.color is not None else np.ones_like(s.points)
+        alpha = s.alpha[per_point]
+        self.segments = s.segments()
+        self.extra = []  # §13's per-point inputs: Scheuermann scenes only
+        if scene.shading_model == "scheuermann":
+            pts, factor, segment_alpha = scheuermann_inputs(s, tangent, scene.scheuermann_maps)
+            color = color * factor
+            if segment_alpha is not None:
+                # ribbon.geom takes a segment's alpha from its first point.
+                alpha = alpha.copy()
+                alpha[self.segments[:, 0]] *= segment_alpha
+            self.extra = [(f4(pts.normal), "3f", "in_normal"),
+                          (f4(np.stack([pts.shift, pts.mask], axis=1)), "2f", "in_maps")]
         self.position = f4(s.points)
-        self.tangent = f4(tangents(s.points, s.offsets))
-        self.color = f4(s.color if s.color is not None else np.ones_like(s.points))
-        self.alpha = f4(s.alpha[per_point])
+        self.tangent = f4(tangent)
+        self.color = f4(color)
+        self.alpha = f4(alpha)
         self.width = f4(s.width[per_point])
         self.omega = f4(np.zeros(s.num_points))
-        self.segments = s.segments()
 
     def vertex_array(self, prog, index_buffer):
         return self.ctx.vertex_array(prog, [
             (self.position, "3f", "in_position"), (self.tangent, "3f", "in_tangent"),
             (self.color, "3f", "in_color"), (self.alpha, "f", "in_alpha"),
-            (self.width, "f", "in_width"), (self.omega, "f", "in_omega"),
+            (self.width, "f", "in_width"), (self.omega, "f", "in_omega"), *self.extra,
         ], index_buffer=index_buffer, index_element_size=4, skip_errors=True)
 
     def index_buffer(self, segment_ids: np.ndarray):
@@ -91,11 +105,12 @@ class _Strands:
         return self.ctx.buffer(pairs.tobytes() if pairs.size else b"\0" * 8)  # no segments: GL needs ≥ 1 byte
 
     def release(self):
-        for b in (self.position, self.tangent, self.color, self.alpha, self.width, self.omega):
+        for b in (self.position, self.tangent, self.color, self.alpha, self.width, self.omega,
+                  *(buffer for buffer, _, _ in self.extra)):
             b.release()
 
 
-def render_gl(scene: Scene, params: ShadingParams | None = None, *,
+def render_gl(scene: Scene, params: ShadingParams | ScheuermannParams | None = None, *,
               clip_slices: bool = True, omega: np.ndarray | None = None,
               order: np.ndarray | None = None) -> GLResult:
     """Render `scene` with OpenGL.
@@ -152,7 +167,7 @@ def _light_uniforms(scene: Scene) -> dict:
             "light_rgb": _vec(light.color)}
 
 
-def _camera_pass(ctx, progs, scene: Scene, params: ShadingParams, strands, order=None) -> np.ndarray:
+def _camera_pass(ctx, progs, scene: Scene, params, strands, order=None) -> np.ndarray:
     import moderngl
 
     cam = scene.camera
@@ -197,12 +212,7 @@ def _camera_pass(ctx, progs, scene: Scene, params: ShadingParams, strands, order
                           moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA)
         ctx.blend_equation = moderngl.FUNC_ADD
         prog = progs["camera"]
-        _set(prog, shade=True, eye=_vec(view.origin),
-             **{"shading.kd": _vec(params.kd),
-                "shading.ks": _vec(params.ks),
-                "shading.ambient": _vec(params.ambient),
-                "shading.shininess": float(params.shininess), "shading.kappa": float(params.kappa),
-                "shading.model": SHADING_MODEL_IDS[scene.shading_model]}, **common)
+        _set(prog, shade=True, eye=_vec(view.origin), **_shading_uniforms(scene, params), **common)
         vao = strands.vertex_array(prog, ibo)
         if len(order):
             vao.render(moderngl.LINES, vertices=2 * len(order))
@@ -213,6 +223,22 @@ def _camera_pass(ctx, progs, scene: Scene, params: ShadingParams, strands, order
     finally:
         ctx.disable(moderngl.BLEND | moderngl.DEPTH_TEST)
         release(ctx, ibo, fbo, color, depth_tex)
+
+
+def _shading_uniforms(scene: Scene, params) -> dict:
+    """The `shading` (and for §13 the `scheuermann`) uniforms of the camera pass."""
+    uniforms = {"shading.model": SHADING_MODEL_IDS[scene.shading_model],
+                "shading.kappa": float(params.kappa)}
+    if scene.shading_model == "scheuermann":
+        if not isinstance(params, ScheuermannParams):
+            raise TypeError(f"shading model 'scheuermann' takes ScheuermannParams, got {type(params).__name__}")
+        for name in ("kd", "ambient", "primary_color", "secondary_color"):
+            uniforms[f"scheuermann.{name}"] = _vec(getattr(params, name))
+        for name in ("primary_exponent", "secondary_exponent", "primary_shift", "secondary_shift"):
+            uniforms[f"scheuermann.{name}"] = float(getattr(params, name))
+        return uniforms
+    return {**uniforms, "shading.kd": _vec(params.kd), "shading.ks": _vec(params.ks),
+            "shading.ambient": _vec(params.ambient), "shading.shininess": float(params.shininess)}
 
 
 def _light_pass_uniforms(scene: Scene, frame: LightFrame) -> dict:

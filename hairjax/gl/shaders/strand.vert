@@ -9,10 +9,13 @@ in vec3 in_color;
 in float in_alpha;
 in float in_width;
 in float in_omega;
+in vec3 in_normal;         // §13 (Scheuermann scenes only): strand normal
+in vec2 in_maps;           // §13: shift texture σ, noise mask m
 
 uniform View view;
 uniform bool shade;        // camera pass: shade points; light passes: geometry only
 uniform Shading shading;
+uniform Scheuermann scheuermann;  // used when shading.model == SHADING_SCHEUERMANN
 uniform vec3 light_rgb;
 uniform vec3 light_vector; // −direction (directional) or the light's position (point)
 uniform bool point_light;
@@ -41,7 +44,11 @@ void main() {
         vec3 L = point_light ? safe_normalize(light_vector - in_position) : light_vector;
         vec3 V = safe_normalize(eye - in_position);
         float tau = exp(-shading.kappa * in_omega);
-        vout.color = shade_point(shading, in_tangent, L, V, in_color, light_rgb, tau);
+        if (shading.model == SHADING_SCHEUERMANN)
+            vout.color = shade_scheuermann(scheuermann, in_tangent, in_normal, L, V, in_maps.x,
+                                           in_maps.y, in_color, light_rgb, tau);
+        else
+            vout.color = shade_point(shading, in_tangent, L, V, in_color, light_rgb, tau);
     }
     gl_Position = vec4(0.0, 0.0, 0.0, 1.0);  // the geometry shader places the ribbon
 }
