@@ -103,7 +103,7 @@ def test_default_scene_values():
 
 # --------------------------------------------------------------------------- examples
 
-EXAMPLE_NAMES = ["point_light", "grazing", "dense_opaque", "occluder", "tressfx_ponytail"]
+EXAMPLE_NAMES = ["point_light", "grazing", "dense_opaque", "occluder", "tressfx_ponytail", "scheuermann"]
 
 
 def test_every_example_is_listed():
