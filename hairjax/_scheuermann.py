@@ -223,7 +223,8 @@ class ScheuermannMaps:
         if self.normal_center is not None:
             c = np.asarray(self.normal_center, dtype=np.float64)
             if c.shape != (3,) or not np.all(np.isfinite(c)):
-                raise SceneError(f"shading.normal_center must be 3 finite numbers, got {self.normal_center!r}")
+                raise SceneError("shading.normal_center must be 3 finite numbers, "
+                                 f"got {self.normal_center!r}")
             object.__setattr__(self, "normal_center", tuple(float(x) for x in c))
         if isinstance(self.seed, bool) or int(self.seed) != self.seed or self.seed < 0:
             raise SceneError(f"shading.texture_seed must be an integer >= 0, got {self.seed!r}")

@@ -231,7 +231,8 @@ def _shading_uniforms(scene: Scene, params) -> dict:
                 "shading.kappa": float(params.kappa)}
     if scene.shading_model == "scheuermann":
         if not isinstance(params, ScheuermannParams):
-            raise TypeError(f"shading model 'scheuermann' takes ScheuermannParams, got {type(params).__name__}")
+            raise TypeError("shading model 'scheuermann' takes ScheuermannParams, "
+                            f"got {type(params).__name__}")
         for name in ("kd", "ambient", "primary_color", "secondary_color"):
             uniforms[f"scheuermann.{name}"] = _vec(getattr(params, name))
         for name in ("primary_exponent", "secondary_exponent", "primary_shift", "secondary_shift"):
