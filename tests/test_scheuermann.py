@@ -408,3 +408,52 @@ def test_a_wrong_scheuermann_shader_fails_the_check(gl, gl_reference, monkeypatc
         _programs.clear_cache()
     bad, _ = unexplained_pixels(scene, wrong, jax_image)
     assert bad.size > 50
+
+
+# --------------------------------------------------------------------------- numerics
+
+
+def test_float32_power_is_accurate_near_the_peak():
+    """sin(T, H)^p from the gap cos²/(1 + sin): in float32 at p = 10⁴, where the power is
+    ≥ e⁻⁵ (|cos| ≤ √(10/p)), relative error ≤ 1e-4 against float64 on the same (float32)
+    inputs. The error model: ~2p|cos|·u ≤ 2√(10p)·u = 3.8e-5; rounding sin itself (the
+    seed's sqrt(1 − cos²)) would give ~p·u = 6e-4 and fail this."""
+    p = 1e4
+    rng = np.random.default_rng(7)
+    cos = rng.uniform(-np.sqrt(10 / p), np.sqrt(10 / p), 300)
+    t = np.tile([1.0, 0.0, 0.0], (300, 1))
+    h = np.stack([cos, np.sqrt(1 - cos**2), np.zeros(300)], axis=1)
+    t32, h32 = t.astype(np.float32), h.astype(np.float32)
+    with jax.enable_x64(False):
+        got = np.asarray(jax.vmap(strand_specular, in_axes=(0, 0, None))(
+            jnp.asarray(t32), jnp.asarray(h32), jnp.float32(p)), np.float64)
+    ref = np.asarray(jax.vmap(strand_specular, in_axes=(0, 0, None))(
+        jnp.asarray(t32, jnp.float64), jnp.asarray(h32, jnp.float64), jnp.float64(p)))
+    assert ref.min() > np.exp(-5.5)
+    np.testing.assert_allclose(got, ref, rtol=1e-4)
+
+
+def test_value_and_gradients_finite_at_the_special_points():
+    """At the peak (Tᵢ ⟂ H), T ∥ H, H = 0 (L = −V), N·L at the diffuse clamp, a point
+    without tangent, and p = 0.5 or 10⁴: value and every parameter gradient finite, in
+    float64 and float32."""
+    x, y, z = unit(1, 0, 0), unit(0, 1, 0), unit(0, 0, 1)
+    cases = [(x, y, z, z), (x, y, x, x), (x, y, y, -y), (x, y, unit(1, -1 / 3, 0), z),
+             (jnp.zeros(3), jnp.zeros(3), y, z)]
+
+    def total(p, t, n, light, eye):
+        d, s = scheuermann(t, n, light, eye, 0.0, 0.5, p)
+        return jnp.sum(d + s)
+
+    for dtype in ("float64", "float32"):
+        with jax.enable_x64(dtype == "float64"):
+            for exponent in (0.5, 1e4):
+                params = jax.tree.map(lambda a: jnp.asarray(a, dtype), ScheuermannParams(
+                    primary_exponent=exponent, secondary_exponent=exponent, primary_shift=0.0,
+                    secondary_shift=0.0))
+                for t, n, light, eye in cases:
+                    args = [jnp.asarray(np.asarray(a), dtype) for a in (t, n, light, eye)]
+                    value, grads = jax.value_and_grad(total)(params, *args)
+                    assert np.isfinite(float(value))
+                    for leaf in jax.tree_util.tree_leaves(grads):
+                        assert np.all(np.isfinite(np.asarray(leaf))), (dtype, exponent, t, light, eye)
