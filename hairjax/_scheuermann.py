@@ -24,7 +24,8 @@ from ._vectors import safe_norm, safe_normalize
 
 __all__ = ["ScheuermannParams", "ScheuermannMaps", "ScheuermannPoints", "scheuermann",
            "shift_tangent", "strand_specular", "smoothstep_attenuation", "scheuermann_diffuse",
-           "strand_normals", "strand_position", "scheuermann_inputs", "check_scheuermann_params"]
+           "strand_normals", "strand_position", "scheuermann_inputs", "segment_alpha",
+           "check_scheuermann_params"]
 
 
 def _rgb(x) -> Float[Array, 3]:
@@ -300,9 +301,15 @@ def scheuermann_inputs(strands, tangent: np.ndarray, maps: ScheuermannMaps):
     mask = 1.0 - maps.mask_noise * rng.random(strands.num_points)
     u = strand_position(points, offsets)
     factor = _sample(maps.base, u) * _sample(maps.occlusion, u)[:, None]
-    segment_alpha = None
-    if any(a != 1.0 for a in maps.alpha):
-        seg = strands.segments()
-        segment_alpha = _sample(maps.alpha, 0.5 * (u[seg[:, 0]] + u[seg[:, 1]]))
     pts = ScheuermannPoints(normal=normal, shift=shift[strands.strand_of_point], mask=mask)
-    return pts, factor, segment_alpha
+    return pts, factor, segment_alpha(strands, maps, u)
+
+
+def segment_alpha(strands, maps: ScheuermannMaps, u: np.ndarray | None = None) -> np.ndarray | None:
+    """The alpha texture per segment, at the mean u of its ends (`[E]`); None when it is 1
+    everywhere (the opacity is then left untouched). `u`: `strand_position`, if known."""
+    if all(a == 1.0 for a in maps.alpha):
+        return None
+    u = strand_position(strands.points, strands.offsets) if u is None else u
+    seg = strands.segments()
+    return _sample(maps.alpha, 0.5 * (u[seg[:, 0]] + u[seg[:, 1]]))
