@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
@@ -75,7 +76,10 @@ class ScheuermannParams(eqx.Module):
 
 def check_scheuermann_params(params: ScheuermannParams) -> None:
     """Raise `SceneError` naming the field unless every value is finite, colours ≥ 0,
-    exponents > 0 and κ ≥ 0 (for concrete parameters, e.g. a scene's)."""
+    exponents > 0 and κ ≥ 0 (for concrete parameters, e.g. a scene's; traced ones, which
+    have no values yet, pass)."""
+    if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(params)):
+        return
     for name in ("kd", "ambient", "primary_color", "secondary_color"):
         v = np.asarray(getattr(params, name))
         if not (np.all(np.isfinite(v)) and np.all(v >= 0)):

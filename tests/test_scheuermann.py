@@ -457,3 +457,15 @@ def test_value_and_gradients_finite_at_the_special_points():
                     assert np.isfinite(float(value))
                     for leaf in jax.tree_util.tree_leaves(grads):
                         assert np.all(np.isfinite(np.asarray(leaf))), (dtype, exponent, t, light, eye)
+
+
+def test_a_scene_may_hold_traced_parameters():
+    """A Scene built inside a trace (e.g. under jax.grad) cannot check values it does not
+    have yet; it must not fail on them."""
+    base = small_scene(size=8, strands=3, shadows="none")
+
+    def f(shift):
+        params = ScheuermannParams(**{**_fields(base.params), "primary_shift": shift})
+        return jnp.sum(hj.render(base.replace(params=params)))
+
+    assert np.isfinite(float(jax.grad(f)(0.1)))
