@@ -411,11 +411,11 @@ def _read_scheuermann(table: _Table) -> tuple[ScheuermannParams, ScheuermannMaps
                               else "a non-empty array of numbers", value)
     maps = _given(
         normal_center=table.vec3("normal_center"),
-        seed=table.integer("texture_seed", lo=0),
+        texture_seed=table.integer("texture_seed", lo=0),
         shift_noise=table.number("shift_noise", lo=0),
         mask_noise=table.number("mask_noise", lo=0, hi=1),
-        base=table.data.get("base_texture"),
-        alpha=table.data.get("alpha_texture"),
+        base_texture=table.data.get("base_texture"),
+        alpha_texture=table.data.get("alpha_texture"),
         occlusion=table.data.get("occlusion"),
     )
     try:

@@ -207,21 +207,21 @@ class ScheuermannMaps:
 
     - `normal_center`: the strand normal points away from this point (default None: the
       centre of the roots' bounding box).
-    - `seed`: the seed of the shift texture and the noise mask.
+    - `texture_seed`: the seed of the shift texture and the noise mask.
     - `shift_noise`: the shift texture's amplitude a: σ = a·(U − ½) per strand, U ~ U[0, 1)
       (a = 1 is the seed's tex − 0.5 for a texture spanning [0, 1]).
     - `mask_noise`: the noise mask's depth b: m = 1 − b·U per point (0: no mask).
-    - `base`, `alpha`, `occlusion`: 1-D textures over the position u ∈ [0, 1] along the
+    - `base_texture`, `alpha_texture`, `occlusion`: 1-D textures over the position u ∈ [0, 1] along the
       strand (root 0, tip 1), equally spaced samples, linearly interpolated: base colour
       (RGB ≥ 0), opacity factor and ambient occlusion (each in [0, 1]).
     """
 
     normal_center: tuple[float, float, float] | None = None
-    seed: int = 0
+    texture_seed: int = 0
     shift_noise: float = 1.0
     mask_noise: float = 1.0
-    base: tuple = ((1.0, 1.0, 1.0),)
-    alpha: tuple = (1.0,)
+    base_texture: tuple = ((1.0, 1.0, 1.0),)
+    alpha_texture: tuple = (1.0,)
     occlusion: tuple = (1.0,)
 
     def __post_init__(self):
@@ -231,17 +231,18 @@ class ScheuermannMaps:
                 raise SceneError("shading.normal_center must be 3 finite numbers, "
                                  f"got {self.normal_center!r}")
             object.__setattr__(self, "normal_center", tuple(float(x) for x in c))
-        if isinstance(self.seed, bool) or int(self.seed) != self.seed or self.seed < 0:
-            raise SceneError(f"shading.texture_seed must be an integer >= 0, got {self.seed!r}")
-        object.__setattr__(self, "seed", int(self.seed))
+        seed = self.texture_seed
+        if isinstance(seed, bool) or int(seed) != seed or seed < 0:
+            raise SceneError(f"shading.texture_seed must be an integer >= 0, got {seed!r}")
+        object.__setattr__(self, "texture_seed", int(seed))
         if not (np.isfinite(self.shift_noise) and self.shift_noise >= 0):
             raise SceneError(f"shading.shift_noise must be >= 0, got {self.shift_noise!r}")
         if not (0 <= self.mask_noise <= 1):
             raise SceneError(f"shading.mask_noise must be in [0, 1], got {self.mask_noise!r}")
         object.__setattr__(self, "shift_noise", float(self.shift_noise))
         object.__setattr__(self, "mask_noise", float(self.mask_noise))
-        object.__setattr__(self, "base", _table("base_texture", self.base, 3))
-        object.__setattr__(self, "alpha", _table("alpha_texture", self.alpha, None))
+        object.__setattr__(self, "base_texture", _table("base_texture", self.base_texture, 3))
+        object.__setattr__(self, "alpha_texture", _table("alpha_texture", self.alpha_texture, None))
         object.__setattr__(self, "occlusion", _table("occlusion", self.occlusion, None))
 
 
@@ -300,11 +301,11 @@ def scheuermann_inputs(strands, tangent: np.ndarray, maps: ScheuermannMaps):
         roots = points[offsets[:-1]]
         centre = 0.5 * (roots.min(axis=0) + roots.max(axis=0))
     normal = strand_normals(points, tangent, centre)
-    rng = np.random.default_rng(maps.seed)
+    rng = np.random.default_rng(maps.texture_seed)
     shift = maps.shift_noise * (rng.random(strands.num_strands) - 0.5)
     mask = 1.0 - maps.mask_noise * rng.random(strands.num_points)
     u = strand_position(points, offsets)
-    factor = _sample(maps.base, u) * _sample(maps.occlusion, u)[:, None]
+    factor = _sample(maps.base_texture, u) * _sample(maps.occlusion, u)[:, None]
     pts = ScheuermannPoints(normal=normal, shift=shift[strands.strand_of_point], mask=mask)
     return pts, factor, segment_alpha(strands, maps, u)
 
@@ -312,8 +313,8 @@ def scheuermann_inputs(strands, tangent: np.ndarray, maps: ScheuermannMaps):
 def segment_alpha(strands, maps: ScheuermannMaps, u: np.ndarray | None = None) -> np.ndarray | None:
     """The alpha texture per segment, at the mean u of its ends (`[E]`); None when it is 1
     everywhere (the opacity is then left untouched). `u`: `strand_position`, if known."""
-    if all(a == 1.0 for a in maps.alpha):
+    if all(a == 1.0 for a in maps.alpha_texture):
         return None
     u = strand_position(strands.points, strands.offsets) if u is None else u
     seg = strands.segments()
-    return _sample(maps.alpha, 0.5 * (u[seg[:, 0]] + u[seg[:, 1]]))
+    return _sample(maps.alpha_texture, 0.5 * (u[seg[:, 0]] + u[seg[:, 1]]))

@@ -210,8 +210,8 @@ def test_strand_normals_point_away_from_the_centre():
 
 def test_textures_and_noise_are_sampled_along_the_strand():
     strands = hj.Strands.from_list([[[0, 0, 0], [1, 0, 0], [2, 0, 0], [4, 0, 0]]] * 2)
-    maps = ScheuermannMaps(base=((0.0, 1.0, 2.0), (1.0, 1.0, 0.0)), occlusion=(0.5, 1.0),
-                           alpha=(1.0, 0.0), seed=3, shift_noise=0.4, mask_noise=0.5)
+    maps = ScheuermannMaps(base_texture=((0.0, 1.0, 2.0), (1.0, 1.0, 0.0)), occlusion=(0.5, 1.0),
+                           alpha_texture=(1.0, 0.0), texture_seed=3, shift_noise=0.4, mask_noise=0.5)
     tangent = np.tile([1.0, 0, 0], (8, 1))
     pts, factor, segment_alpha = scheuermann_inputs(strands, tangent, maps)
     u = np.array([0, 0.25, 0.5, 1.0] * 2)
@@ -247,7 +247,7 @@ def test_base_texture_and_occlusion_scale_the_colour():
     """base(u)·AO(u) multiplies the whole point colour: constant textures scale the hair's
     part of the image by their product, per channel (black background, no occluder)."""
     plain = np.asarray(hj.render(small_scene()))
-    scaled = np.asarray(hj.render(small_scene(base=((0.5, 0.25, 1.0),), occlusion=(0.5,))))
+    scaled = np.asarray(hj.render(small_scene(base_texture=((0.5, 0.25, 1.0),), occlusion=(0.5,))))
     np.testing.assert_allclose(scaled[..., :3], plain[..., :3] * [0.25, 0.125, 0.5], rtol=1e-12,
                                atol=1e-15)
     np.testing.assert_array_equal(scaled[..., 3], plain[..., 3])
@@ -257,7 +257,7 @@ def test_base_texture_and_occlusion_scale_the_colour():
 def test_constant_alpha_texture_equals_scaled_hair_alpha():
     """The alpha texture multiplies each segment's opacity in the camera pass and in the
     shadows: a constant ½ renders as hair alpha ½ as large."""
-    textured = small_scene(alpha=(0.5,))
+    textured = small_scene(alpha_texture=(0.5,))
     halved = small_scene()
     halved = halved.replace(strands=halved.strands.replace(alpha=halved.strands.alpha * 0.5))
     a, b = np.asarray(hj.render(textured)), np.asarray(hj.render(halved))
@@ -313,9 +313,9 @@ def test_invalid_parameters_are_refused():
                 dict(primary_color=-0.1), dict(secondary_shift=np.nan), dict(kappa=-1.0)):
         with pytest.raises(SceneError, match=next(iter(bad))):
             hj.Scene(hair, shading_model="scheuermann", params=ScheuermannParams(**bad))
-    for bad, key in ((dict(alpha=(1.2,)), "alpha_texture"), (dict(occlusion=()), "occlusion"),
-                     (dict(base=((1.0, 1.0),)), "base_texture"), (dict(mask_noise=2.0), "mask_noise"),
-                     (dict(shift_noise=-1.0), "shift_noise"), (dict(seed=-1), "texture_seed"),
+    for bad, key in ((dict(alpha_texture=(1.2,)), "alpha_texture"), (dict(occlusion=()), "occlusion"),
+                     (dict(base_texture=((1.0, 1.0),)), "base_texture"), (dict(mask_noise=2.0), "mask_noise"),
+                     (dict(shift_noise=-1.0), "shift_noise"), (dict(texture_seed=-1), "texture_seed"),
                      (dict(normal_center=(0.0, 1.0)), "normal_center")):
         with pytest.raises(SceneError, match=key):
             ScheuermannMaps(**bad)
@@ -344,7 +344,7 @@ def test_example_scene_reads_every_key():
     np.testing.assert_allclose(scene.params.secondary_color, [0.35, 0.25, 0.15])
     assert float(scene.params.primary_shift) == 0.1 and float(scene.params.secondary_shift) == -0.15
     maps = scene.scheuermann_maps
-    assert maps.normal_center == (0.0, 0.0, 0.0) and maps.seed == 7 and maps.alpha[-1] == 0.3
+    assert maps.normal_center == (0.0, 0.0, 0.0) and maps.texture_seed == 7 and maps.alpha_texture[-1] == 0.3
 
 
 # --------------------------------------------------------------------------- GL
