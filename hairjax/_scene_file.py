@@ -59,7 +59,8 @@ _HAIR_ONLY_FOR = {"inertia": "furball", "radius": "scalp", "coverage": "scalp"}
 _SHADING_KAJIYA_KAY = ("ks", "shininess")
 _SHADING_SCHEUERMANN = ("primary_color", "primary_exponent", "primary_shift", "secondary_color",
                         "secondary_exponent", "secondary_shift", "normal_center", "texture_seed",
-                        "shift_noise", "mask_noise", "base_texture", "alpha_texture", "occlusion")
+                        "shift_noise", "mask_noise", "base_texture", "alpha_texture", "occlusion",
+                        "hair_occlusion")
 
 TABLES: dict[str, tuple[str, ...]] = {
     "hair": _HAIR_COMMON + _HAIR_PROCEDURAL + tuple(_HAIR_ONLY_FOR),
@@ -417,6 +418,7 @@ def _read_scheuermann(table: _Table) -> tuple[ScheuermannParams, ScheuermannMaps
         base_texture=table.data.get("base_texture"),
         alpha_texture=table.data.get("alpha_texture"),
         occlusion=table.data.get("occlusion"),
+        hair_occlusion=table.number("hair_occlusion", lo=0),
     )
     try:
         return params, ScheuermannMaps(**maps)

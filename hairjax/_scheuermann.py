@@ -26,7 +26,16 @@ from ._vectors import safe_norm, safe_normalize
 __all__ = ["ScheuermannParams", "ScheuermannMaps", "ScheuermannPoints", "scheuermann",
            "shift_tangent", "strand_specular", "smoothstep_attenuation", "scheuermann_diffuse",
            "strand_normals", "strand_position", "scheuermann_inputs", "segment_alpha",
-           "check_scheuermann_params"]
+           "check_scheuermann_params", "hair_occlusion", "sphere_directions", "exact_omega_numpy"]
+
+
+# The light rasters of `hair_occlusion`: a strand of width w covers w texels of this many
+# across the hair, i.e. occludes as in a render of the hair at this resolution. Coarse on
+# purpose: ambient occlusion is the hair's large-scale density, not single strands.
+HAIR_OCCLUSION_RESOLUTION = 64
+# Directions `hair_occlusion` averages over: 16 on the sphere resolve the hair's shape (its
+# inside vs. its outside) at ~1/4 of the set-up time of a 64-map opacity-map shadow.
+HAIR_OCCLUSION_DIRECTIONS = 16
 
 
 def _rgb(x) -> Float[Array, 3]:
@@ -211,9 +220,13 @@ class ScheuermannMaps:
     - `shift_noise`: the shift texture's amplitude a: σ = a·(U − ½) per strand, U ~ U[0, 1)
       (a = 1 is the seed's tex − 0.5 for a texture spanning [0, 1]).
     - `mask_noise`: the noise mask's depth b: m = 1 − b·U per point (0: no mask).
-    - `base_texture`, `alpha_texture`, `occlusion`: 1-D textures over the position u ∈ [0, 1] along the
-      strand (root 0, tip 1), equally spaced samples, linearly interpolated: base colour
-      (RGB ≥ 0), opacity factor and ambient occlusion (each in [0, 1]).
+    - `base_texture`, `alpha_texture`, `occlusion`: 1-D textures over the position
+      u ∈ [0, 1] along the strand (root 0, tip 1), equally spaced samples, linearly
+      interpolated: base colour (RGB ≥ 0), opacity factor and ambient occlusion (each in
+      [0, 1]).
+    - `hair_occlusion`: κ_ao > 0 multiplies the ambient occlusion by the hair's own, the
+      mean of exp(−κ_ao·Ω) over directions spread on the sphere (`hair_occlusion`);
+      0: none (no work).
     """
 
     normal_center: tuple[float, float, float] | None = None
@@ -223,6 +236,7 @@ class ScheuermannMaps:
     base_texture: tuple = ((1.0, 1.0, 1.0),)
     alpha_texture: tuple = (1.0,)
     occlusion: tuple = (1.0,)
+    hair_occlusion: float = 0.0
 
     def __post_init__(self):
         if self.normal_center is not None:
@@ -244,6 +258,9 @@ class ScheuermannMaps:
         object.__setattr__(self, "base_texture", _table("base_texture", self.base_texture, 3))
         object.__setattr__(self, "alpha_texture", _table("alpha_texture", self.alpha_texture, None))
         object.__setattr__(self, "occlusion", _table("occlusion", self.occlusion, None))
+        if not (np.isfinite(self.hair_occlusion) and self.hair_occlusion >= 0):
+            raise SceneError(f"shading.hair_occlusion must be >= 0, got {self.hair_occlusion!r}")
+        object.__setattr__(self, "hair_occlusion", float(self.hair_occlusion))
 
 
 def strand_position(points: np.ndarray, offsets: np.ndarray) -> np.ndarray:
@@ -291,7 +308,7 @@ def scheuermann_inputs(strands, tangent: np.ndarray, maps: ScheuermannMaps):
     """The per-point inputs of the Scheuermann model, in NumPy.
 
     **Returns:** `(points, colour_factor [P, 3], segment_alpha [E] or None)`: the
-    `ScheuermannPoints` (N, σ, m), the factor base(u)·AO(u) that multiplies the per-point
+    `ScheuermannPoints` (N, σ, m), the factor base(u)·AO that multiplies the per-point
     colour, and the alpha texture per segment (at the mean u of its ends; None when the
     texture is 1 everywhere, so the opacity is left untouched).
     """
@@ -305,9 +322,13 @@ def scheuermann_inputs(strands, tangent: np.ndarray, maps: ScheuermannMaps):
     shift = maps.shift_noise * (rng.random(strands.num_strands) - 0.5)
     mask = 1.0 - maps.mask_noise * rng.random(strands.num_points)
     u = strand_position(points, offsets)
-    factor = _sample(maps.base_texture, u) * _sample(maps.occlusion, u)[:, None]
+    seg_alpha = segment_alpha(strands, maps, u)
+    occlusion = _sample(maps.occlusion, u)
+    if maps.hair_occlusion > 0:
+        occlusion = occlusion * hair_occlusion(strands, maps.hair_occlusion, seg_alpha)
+    factor = _sample(maps.base_texture, u) * occlusion[:, None]
     pts = ScheuermannPoints(normal=normal, shift=shift[strands.strand_of_point], mask=mask)
-    return pts, factor, segment_alpha(strands, maps, u)
+    return pts, factor, seg_alpha
 
 
 def segment_alpha(strands, maps: ScheuermannMaps, u: np.ndarray | None = None) -> np.ndarray | None:
@@ -318,3 +339,46 @@ def segment_alpha(strands, maps: ScheuermannMaps, u: np.ndarray | None = None) -
     u = strand_position(strands.points, strands.offsets) if u is None else u
     seg = strands.segments()
     return _sample(maps.alpha_texture, 0.5 * (u[seg[:, 0]] + u[seg[:, 1]]))
+
+
+def sphere_directions(n: int) -> np.ndarray:
+    """n unit vectors spread evenly over the sphere (the Fibonacci lattice, `[n, 3]`)."""
+    k = np.arange(n) + 0.5
+    y = 1.0 - 2.0 * k / n
+    r = np.sqrt(1.0 - y * y)
+    phi = np.pi * (3.0 - np.sqrt(5.0)) * k
+    return np.stack([r * np.cos(phi), y, r * np.sin(phi)], axis=1)
+
+
+def hair_occlusion(strands, density: float, seg_alpha: np.ndarray | None = None) -> np.ndarray:
+    """Ambient occlusion by the hair itself, per point (`[P]`, in (0, 1]): the mean over
+    HAIR_OCCLUSION_DIRECTIONS directions d (`sphere_directions`) of exp(−density·Ω_d), Ω_d
+    the summed alpha in front of the point seen from d: §7's `exact` Ω for a directional
+    light from d on a HAIR_OCCLUSION_RESOLUTION² raster, with the strands' opacity (and
+    alpha texture, `seg_alpha`). NumPy, precomputed: not differentiated in the opacity."""
+    from ._scene import Light  # _scene imports this module
+    from ._shadows import shadow_setup
+
+    segments = strands.segments()
+    seg_strand = strands.strand_of_point[segments[:, 0]]
+    total = np.zeros(strands.num_points)
+    for d in sphere_directions(HAIR_OCCLUSION_DIRECTIONS):
+        setup = shadow_setup(strands.points, segments, seg_strand, strands.width,
+                             Light(direction=tuple(-d)), "exact", 1, HAIR_OCCLUSION_RESOLUTION,
+                             seg_alpha)
+        omega = exact_omega_numpy(setup, strands.alpha[setup.frag_strand] * setup.frag_coverage)
+        total += np.exp(-density * omega)
+    return total / HAIR_OCCLUSION_DIRECTIONS
+
+
+def exact_omega_numpy(setup, frag_alpha: np.ndarray) -> np.ndarray:
+    """`_shadows.exact_opacity` in NumPy, for an `exact` ShadowSetup (`[P]`): per-texel
+    inclusive prefix sums of the fragments' alpha, nearest first, read at each point's
+    (2r + 1)² texels. (One set-up, many shapes: no JAX compilation per direction.)"""
+    if frag_alpha.size == 0:  # fires when no segment reaches the raster: Ω = 0
+        return np.zeros(setup.index.shape[0])
+    cum = np.cumsum(frag_alpha)
+    group = np.cumsum(setup.frag_first) - 1
+    starts = np.flatnonzero(setup.frag_first)
+    prefix = cum - (cum[starts] - frag_alpha[starts])[group]
+    return np.sum(setup.weight * prefix[setup.index], axis=1)

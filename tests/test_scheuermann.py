@@ -447,13 +447,14 @@ def test_value_and_gradients_finite_at_the_special_points():
 
     for dtype in ("float64", "float32"):
         with jax.enable_x64(dtype == "float64"):
+            f = jax.jit(jax.value_and_grad(total))
             for exponent in (0.5, 1e4):
                 params = jax.tree.map(lambda a: jnp.asarray(a, dtype), ScheuermannParams(
                     primary_exponent=exponent, secondary_exponent=exponent, primary_shift=0.0,
                     secondary_shift=0.0))
                 for t, n, light, eye in cases:
                     args = [jnp.asarray(np.asarray(a), dtype) for a in (t, n, light, eye)]
-                    value, grads = jax.value_and_grad(total)(params, *args)
+                    value, grads = f(params, *args)
                     assert np.isfinite(float(value))
                     for leaf in jax.tree_util.tree_leaves(grads):
                         assert np.all(np.isfinite(np.asarray(leaf))), (dtype, exponent, t, light, eye)
@@ -469,3 +470,44 @@ def test_a_scene_may_hold_traced_parameters():
         return jnp.sum(hj.render(base.replace(params=params)))
 
     assert np.isfinite(float(jax.grad(f)(0.1)))
+
+
+# --------------------------------------------------------------------------- hair occlusion
+
+
+def test_numpy_exact_omega_equals_the_renderers():
+    """exact_omega_numpy (hair_occlusion's Ω) against _shadows.exact_opacity (the renderer's
+    `exact` Ω, float64) on the same light-space set-up: equal to rounding."""
+    from hairjax._scheuermann import exact_omega_numpy
+    from hairjax._shadows import exact_opacity, shadow_setup
+
+    s = small_scene(strands=60).strands
+    segs = s.segments()
+    setup = shadow_setup(s.points, segs, s.strand_of_point[segs[:, 0]], s.width,
+                         hj.Light(direction=(0.3, -1.0, 0.2)), "exact", 1, 32)
+    alpha = s.alpha[setup.frag_strand] * setup.frag_coverage
+    ref = np.asarray(jax.jit(exact_opacity)(jnp.asarray(alpha), jnp.asarray(setup.frag_first),
+                                            jnp.asarray(setup.index), jnp.asarray(setup.weight)))
+    assert ref.max() > 1.0  # the points are really occluded
+    np.testing.assert_allclose(exact_omega_numpy(setup, alpha), ref, rtol=1e-12, atol=1e-12)
+
+
+def test_hair_occlusion_darkens_the_inside_of_the_hair():
+    """A dense clump and, far from it, one lone strand: the clump's centre is occluded
+    from every direction, the lone strand from almost none; values in (0, 1]; a denser
+    κ_ao darkens; κ_ao = 0 computes nothing."""
+    from hairjax._scheuermann import hair_occlusion
+
+    rng = np.random.default_rng(2)
+    clump = [rng.normal(scale=0.15, size=(4, 3)) for _ in range(150)]
+    lone = [np.array([[5.0, 0, 0], [5.0, 0.2, 0], [5.0, 0.4, 0]])]
+    strands = hj.Strands.from_list(clump + lone, alpha=0.5)
+    ao = hair_occlusion(strands, 1.0)
+    assert np.all((ao > 0) & (ao <= 1))
+    centre = np.argsort(np.linalg.norm(strands.points[:600], axis=1))[:20]
+    assert ao[centre].mean() < 0.5 and ao[600:].min() > 0.8
+    assert np.all(hair_occlusion(strands, 3.0)[centre] < ao[centre])
+    maps = ScheuermannMaps()
+    assert maps.hair_occlusion == 0  # default off; scheuermann_inputs then skips it:
+    _, factor, _ = scheuermann_inputs(strands, np.tile([0.0, 1, 0], (strands.num_points, 1)), maps)
+    assert np.all(factor == 1)

@@ -140,7 +140,7 @@ float scheuermann_diffuse(vec3 N, vec3 L) {
     return dot(N, N) > 0.5 ? wrapped : 0.0;
 }
 
-// §13: c·(ambient + τ·light·(Kd·D + C₁·S(T₁) + m·C₂·S(T₂))), c = colour·base(u)·AO(u).
+// §13: c·(ambient + τ·light·(Kd·D + C₁·S(T₁) + m·C₂·S(T₂))), c = colour·base(u)·AO.
 vec3 shade_scheuermann(Scheuermann s, vec3 T, vec3 N, vec3 L, vec3 V, float shift, float mask,
                        vec3 base, vec3 light_rgb, float tau) {
     vec3 diffuse = s.kd * scheuermann_diffuse(N, L);
