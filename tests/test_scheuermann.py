@@ -511,3 +511,17 @@ def test_hair_occlusion_darkens_the_inside_of_the_hair():
     assert maps.hair_occlusion == 0  # default off; scheuermann_inputs then skips it:
     _, factor, _ = scheuermann_inputs(strands, np.tile([0.0, 1, 0], (strands.num_points, 1)), maps)
     assert np.all(factor == 1)
+
+
+def test_gl_matches_jax_point_light(gl):
+    """A point light (L varies per point, so H does) with `exact` shadows, default textures."""
+    from hairjax.gl import render_gl
+
+    scene = small_scene(size=48, strands=80, shadows="exact").replace(
+        light=hj.Light(kind="point", position=(1.2, 1.5, 1.8)))
+    geom = geometry_stage(scene)
+    jax_image = np.asarray(hj.shading_stage(geom, scene.params))
+    result = render_gl(scene, omega=np.asarray(geom.omega))
+    bad, band = unexplained_pixels(scene, result.image, jax_image)
+    assert bad.size == 0 and band.mean() <= MAX_BAND
+    assert jax_image[..., :3].max() > 0.1
