@@ -525,3 +525,48 @@ def test_gl_matches_jax_point_light(gl):
     bad, band = unexplained_pixels(scene, result.image, jax_image)
     assert bad.size == 0 and band.mean() <= MAX_BAND
     assert jax_image[..., :3].max() > 0.1
+
+
+def test_equals_the_seeds_shader_on_random_inputs():
+    """slide 12's HairLighting ported to NumPy line by line (normalize, sqrt(1 − dotTH²),
+    pow, smoothstep, lerp, saturate) is the oracle for `scheuermann` on random unit T, L, V,
+    N ⟂ T, shifts, texture values and masks (float64: agreement to rounding; the seed's
+    sqrt(1 − cos²) is exact enough at these exponents)."""
+    rng = np.random.default_rng(11)
+    n = 400
+
+    def units(k):
+        v = rng.normal(size=(k, 3))
+        return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+    t, light, eye = units(n), units(n), units(n)
+    nrm = units(n)
+    nrm -= np.sum(nrm * t, axis=1, keepdims=True) * t
+    nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+    shift_tex, mask = rng.uniform(-0.5, 0.5, n), rng.uniform(0, 1, n)
+    p = PARAMS
+
+    def normalize(x):
+        return x / np.linalg.norm(x, axis=-1, keepdims=True)
+
+    def strand_specular_seed(T, V, L, exponent):
+        H = normalize(L + V)
+        dot_th = np.sum(T * H, axis=-1)
+        sin_th = np.sqrt(1.0 - dot_th * dot_th)
+        x = np.clip((dot_th + 1.0) / 1.0, 0, 1)
+        dir_atten = x * x * (3 - 2 * x)  # smoothstep(−1, 0, dot(T, H))
+        return dir_atten * sin_th**exponent
+
+    t1 = normalize(t + (float(p.primary_shift) + shift_tex)[:, None] * nrm)
+    t2 = normalize(t + (float(p.secondary_shift) + shift_tex)[:, None] * nrm)
+    nl = np.sum(nrm * light, axis=1)
+    diffuse = np.clip(0.25 + nl * (1.0 - 0.25), 0, 1)[:, None] * np.asarray(p.kd)
+    s1 = strand_specular_seed(t1, eye, light, float(p.primary_exponent))
+    s2 = strand_specular_seed(t2, eye, light, float(p.secondary_exponent))
+    specular = (np.asarray(p.primary_color) * s1[:, None]
+                + np.asarray(p.secondary_color) * (mask * s2)[:, None])
+    d, s = jax.vmap(scheuermann, in_axes=(0, 0, 0, 0, 0, 0, None))(
+        *(jnp.asarray(x) for x in (t, nrm, light, eye, shift_tex, mask)), p)
+    np.testing.assert_allclose(d, diffuse, rtol=1e-13, atol=1e-15)
+    np.testing.assert_allclose(s, specular, rtol=1e-9, atol=1e-13)
+    assert specular.max() > 0.5 and np.mean(specular[:, 0] > 1e-3) > 0.2  # lobes are hit
