@@ -602,7 +602,7 @@ def test_fit_recovers_every_parameter():
     room for the tolerance rtol = 1e-8), with finite standard errors and a JSON report."""
     import json
 
-    scene = small_scene(size=24, strands=40)
+    scene = small_scene(size=16, strands=20)
     truth = scene.params
     target = np.asarray(hj.render(scene, truth))
     start = ScheuermannParams(kd=0.3, ambient=truth.ambient, primary_color=0.2, primary_exponent=15.0,
