@@ -57,6 +57,8 @@ from ._scene import (
 )
 from ._scene_file import default_scene_path as default_scene_path
 from ._scene_file import load_scene as load_scene
+from ._scheuermann import ScheuermannMaps as ScheuermannMaps
+from ._scheuermann import ScheuermannParams as ScheuermannParams
 from ._shading import ShadingParams as ShadingParams
 from ._shading import kajiya_kay as kajiya_kay
 from ._sources import furball as furball

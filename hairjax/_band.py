@@ -39,6 +39,7 @@ from ._occluder import interpolation_bound, occluder_hits, silhouette_pixels
 from ._raster import Fragments, rasterize
 from ._render import geometry_stage, visibility_order
 from ._scene import Scene
+from ._scheuermann import segment_alpha
 from ._shadows import light_frame
 
 __all__ = ["renderer_band", "camera_band", "shadow_band", "omega_uncertainty", "occluder_light_uncertainty",
@@ -152,7 +153,7 @@ def omega_uncertainty(scene: Scene) -> np.ndarray:
     width = s.width[s.strand_of_point[a]]
     xy, z = frame.xy, frame.depth
     frags, near_end = end_band(xy[a], xy[b], z[a], z[b], width, r, r, frame.view.perspective)
-    opacity = s.alpha[s.strand_of_point[a[frags.segment]]] * frags.coverage
+    opacity = _segment_opacity(scene)[ids[frags.segment]] * frags.coverage
     # Clipped before the cast: unseen points of a light at the hair's centre lie at ~1e300.
     tx = np.floor(np.clip(xy[:, 0], -1, r)).astype(np.int64)
     ty = np.floor(np.clip(xy[:, 1], -1, r)).astype(np.int64)
@@ -320,6 +321,15 @@ def _risk(scene: Scene, shadows: bool) -> tuple[np.ndarray, np.ndarray]:
     return cache["camera"], cache["always"]
 
 
+def _segment_opacity(scene: Scene) -> np.ndarray:
+    """Each segment's opacity: its strand's a, times the alpha texture of a Scheuermann
+    scene (docs/model.md §17) — a smaller α in front lets more weight through behind."""
+    s = scene.strands
+    opacity = s.alpha[s.strand_of_point[s.segments()[:, 0]]]
+    texture = segment_alpha(s, scene.scheuermann_maps) if scene.shading_model == "scheuermann" else None
+    return opacity if texture is None else opacity * texture
+
+
 def _camera_risk(scene: Scene) -> dict:
     cam = scene.camera
     hw = cam.width * cam.height
@@ -332,7 +342,7 @@ def _camera_risk(scene: Scene) -> dict:
     sort = np.argsort(frags.pixel, kind="stable")  # front to back within a pixel
     pixel = frags.pixel[sort]
     seg = frags.segment[sort]
-    alpha = scene.strands.alpha[strand[seg]] * frags.coverage[sort]
+    alpha = _segment_opacity(scene)[near_first[seg]] * frags.coverage[sort]
     weights = over_weights_numpy(alpha, pixel)
     near_end = near_end[sort]
     always = np.zeros(hw, bool)

@@ -108,7 +108,8 @@ class FitResult:
             v = np.asarray(getattr(p, name), dtype=float)
             return v.tolist() if v.ndim else float(v)
 
-        names = ("kd", "ks", "shininess", "kappa", "ambient")
+        # The parameters' fields: kd, ks, shininess, kappa, ambient for ShadingParams.
+        names = [f.name for f in dataclasses.fields(self.params)]
         return {
             "params": {n: value(self.params, n) for n in names},
             "initial": {n: value(self.initial, n) for n in names},
@@ -632,7 +633,10 @@ def fit(
     **Arguments:**
     - `scene`: a Scene, or one per target (the same hair under several views or lights).
     - `targets`: an `[H, W, 3|4]` linear image, or a list of them (alpha is ignored).
-    - `fit`: names among kd, ks, shininess, kappa; the rest stay at `init`.
+    - `fit`: names among kd, ks, shininess, kappa; the rest stay at `init`. For a
+      Scheuermann scene (docs/model.md §17): among kd, primary_color, primary_exponent,
+      primary_shift, secondary_color, secondary_exponent, secondary_shift, kappa (default:
+      all), fitted by the solver directly (`separable` does not apply).
     - `init`: starting (and fixed) parameters, default the first scene's.
     - `solver`: levenberg-marquardt (lm), gauss-newton, dogleg, or bfgs (on ½‖r‖²).
     - `masks`, `weights`: optional per-target `[H, W]` pixel masks and weights.
@@ -657,6 +661,9 @@ def fit(
         raise FitError(f"{len(scenes)} scenes for {len(target_list)} targets")
     mask_list = [None] * len(scenes) if masks is None else list(masks)
     weight_list = [None] * len(scenes) if weights is None else list(weights)
+    if any(s.shading_model == "scheuermann" for s in scenes):  # docs/model.md §17
+        return _fit_scheuermann(scenes, target_list, mask_list, weight_list, fit, init, solver,
+                                scalar, max_steps, rtol, atol, progress)
     names = _check_names(fit, scalar)
     double = jnp.result_type(float) == jnp.float64
     rtol = (1e-8 if double else 1e-5) if rtol is None else rtol
@@ -765,6 +772,24 @@ def fit(
     return FitResult(params=fitted, initial=init, fitted=names, loss=losses, steps=steps,
                      time_s=elapsed, geometry_s=geometry_s, termination=termination,
                      std_error=std_error, undetermined=undetermined, rmse=rmse, restarts=restarts)
+
+
+def _fit_scheuermann(scenes, target_list, mask_list, weight_list, names, init, solver, scalar,
+                     max_steps, rtol, atol, progress) -> FitResult:
+    """`fit` for Scheuermann scenes (every scene must be one): `_fit_scheuermann.py`."""
+    from ._fit_scheuermann import SCHEUERMANN_FITTABLE, check_names, fit_scheuermann
+
+    if any(s.shading_model != "scheuermann" for s in scenes):
+        raise FitError("scenes of one fit share a shading model; got Scheuermann and Kajiya-Kay")
+    names = SCHEUERMANN_FITTABLE if names is FITTABLE else names  # the default: all of them
+    names = check_names(names, scalar)
+    double = jnp.result_type(float) == jnp.float64
+    rtol = (1e-8 if double else 1e-5) if rtol is None else rtol
+    atol = (1e-10 if double else 1e-7) if atol is None else atol
+    opt, least_squares = _solver(solver, rtol, atol)
+    arrays = [_target_arrays(s, t, m, w) for s, t, m, w in zip(scenes, target_list, mask_list, weight_list)]
+    init = scenes[0].params if init is None else init
+    return fit_scheuermann(scenes, arrays, names, init, opt, least_squares, scalar, max_steps, progress)
 
 
 def _to_space(params: ShadingParams, names, scalar, transforms) -> dict:

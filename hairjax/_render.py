@@ -33,6 +33,7 @@ from ._ordering import draw_order, segment_depth, stable_argsort_uint32
 from ._projection import View, camera_view
 from ._raster import rasterize
 from ._scene import Scene
+from ._scheuermann import ScheuermannParams, ScheuermannPoints, scheuermann, scheuermann_inputs
 from ._shading import ShadingParams, kajiya_kay
 from ._shadows import ShadowSetup, exact_opacity, opacity_maps, point_opacity, shadow_setup
 from ._streaks import strand_coordinates, streak_factor, streak_prefix, streak_texture
@@ -92,6 +93,7 @@ class Setup:
     occluder_visibility: np.ndarray | None = None  # [Q] V there: 0 where it shadows itself
     occluder_color: np.ndarray | None = None    # [3] k
     light_visibility: np.ndarray | None = None  # [P] V: 0 where the occluder shadows a strand point
+    scheuermann: ScheuermannPoints | None = None  # NumPy; Scheuermann scenes only (§17)
 
 
 class Geometry(eqx.Module):
@@ -122,6 +124,7 @@ class Geometry(eqx.Module):
     model: str = eqx.field(static=True)
     lookup_size: int = eqx.field(static=True, default=0)  # lookup models' table size (§14)
     streak: Float[Array, " P"] | None = None  # §16's factor per point; None without streaks
+    scheuermann: ScheuermannPoints | None = None  # Scheuermann scenes only (§17)
 
 
 _SETUP_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -202,6 +205,14 @@ def _prepare(scene: Scene, order=None) -> Setup:
     seg_strand = strands.strand_of_point[segments[:, 0]]
     lap("project+order")
 
+    tangent = tangents(points, strands.offsets)
+    base_color = strands.color if strands.color is not None else np.ones_like(points)
+    extra, segment_alpha = None, None
+    if scene.shading_model == "scheuermann":  # §17's per-point inputs: this model only
+        extra, factor, segment_alpha = scheuermann_inputs(strands, tangent, scene.scheuermann_maps)
+        base_color = base_color * factor
+        lap("scheuermann inputs")
+
     # Rasterise nearest-first, then a stable sort by pixel gives front-to-back per pixel.
     near_first = order[::-1]
     s0, s1 = segments[near_first, 0], segments[near_first, 1]
@@ -236,6 +247,8 @@ def _prepare(scene: Scene, order=None) -> Setup:
     sort = stable_argsort_uint32(frags.pixel)
     pixel, frag_coverage, frag_t = frags.pixel[sort], frags.coverage[sort], frags.t[sort]
     seg = near_first[frags.segment[sort]]
+    if segment_alpha is not None:  # §17's alpha texture scales the segment's opacity
+        frag_coverage = frag_coverage * segment_alpha[seg]
     del frags
     first = np.ones(pixel.size, bool)
     first[1:] = pixel[1:] != pixel[:-1]
@@ -248,7 +261,7 @@ def _prepare(scene: Scene, order=None) -> Setup:
         receivers = surface if occluder else None
         shadow = shadow_setup(points, segments, seg_strand, strands.width, light,
                               scene.shadows.method, scene.shadows.maps, scene.shadows.resolution,
-                              receivers)
+                              receivers, segment_alpha)
         lap("shadow set-up")
         if occluder:
             # §13: the occluder's shadow, a depth test in the light's view.
@@ -259,14 +272,13 @@ def _prepare(scene: Scene, order=None) -> Setup:
             occluder["occluder_visibility"] = occluder_visibility(light_view, depth_map, surface)
             lap("occluder shadow")
 
-    base_color = strands.color if strands.color is not None else np.ones_like(points)
     return Setup(
-        view=view, tangent=tangents(points, strands.offsets), to_light=to_light(light, points),
+        view=view, tangent=tangent, to_light=to_light(light, points),
         to_eye=_unit(view.origin - points), base_color=base_color, light_rgb=light_rgb,
         frag_pixel=pixel, frag_i0=segments[seg, 0].astype(np.int32), frag_t=frag_t,
         frag_strand=seg_strand[seg].astype(np.int32), frag_coverage=frag_coverage,
         frag_first=first, frag_last=last, backdrop=backdrop, opaque=opaque, shadow=shadow,
-        timings=timings, **occluder,
+        timings=timings, scheuermann=extra, **occluder,
     )
 
 
@@ -370,6 +382,8 @@ def _geometry_stage(scene: Scene, alpha, order=None) -> Geometry:
         alpha_channel=alpha_channel, height=scene.camera.height, width=scene.camera.width,
         model=scene.shading_model, lookup_size=scene.lookup_size,
         streak=None if scene.streaks is None else _streak_factors(scene, dtype),
+        scheuermann=None if setup.scheuermann is None else jax.tree.map(
+            lambda x: jnp.asarray(x, dtype), setup.scheuermann),
     )
 
 
@@ -383,24 +397,38 @@ def _streak_factors(scene: Scene, dtype) -> Float[Array, " P"]:
         jnp.asarray(u, dtype), streaks.width)
 
 
-def point_colors(geometry: Geometry, params: ShadingParams) -> Float[Array, "P 3"]:
+def point_colors(geometry: Geometry, params: ShadingParams | ScheuermannParams) -> Float[Array, "P 3"]:
     """Shaded colour at every strand point (Gouraud, kim-2003 §5):
-    ambient·c + τ · light · (Kd·sin(T, L)·c + Ks·spec), with c the per-point colour."""
-    if geometry.model in LOOKUP_MODELS:  # §14: the same terms read from a table
-        diffuse, specular = kajiya_kay_lookup(geometry.tangent, geometry.to_light, geometry.to_eye,
-                                              params, geometry.lookup_size, geometry.model)
+    ambient·c + τ·V · light · (Kd·sin(T, L)·c + Ks·spec), with c the per-point colour;
+    for the Scheuermann model (§17) c · (ambient + τ·V · light · (diffuse + specular));
+    either times the streak factor (§16)."""
+    if geometry.model == "scheuermann":
+        colors = _scheuermann_colors(geometry, params)
     else:
-        diffuse, specular = jax.vmap(kajiya_kay, in_axes=(0, 0, 0, None, None))(
-            geometry.tangent, geometry.to_light, geometry.to_eye, params, geometry.model)
-    lit = geometry.light_rgb[None, :] * (diffuse * geometry.base_color + specular)
-    if geometry.omega is not None:
-        lit = lit * jnp.exp(-params.kappa * geometry.omega)[:, None]
-    if geometry.light_visibility is not None:  # §13: the occluder's shadow
-        lit = lit * geometry.light_visibility[:, None]
-    colors = params.ambient[None, :] * geometry.base_color + lit
+        if not isinstance(params, ShadingParams):
+            raise TypeError(f"shading model {geometry.model!r} takes ShadingParams, "
+                            f"got {type(params).__name__}")
+        if geometry.model in LOOKUP_MODELS:  # §14: the same terms read from a table
+            diffuse, specular = kajiya_kay_lookup(geometry.tangent, geometry.to_light,
+                                                  geometry.to_eye, params, geometry.lookup_size,
+                                                  geometry.model)
+        else:
+            diffuse, specular = jax.vmap(kajiya_kay, in_axes=(0, 0, 0, None, None))(
+                geometry.tangent, geometry.to_light, geometry.to_eye, params, geometry.model)
+        lit = geometry.light_rgb[None, :] * (diffuse * geometry.base_color + specular)
+        colors = params.ambient[None, :] * geometry.base_color + _shadowed(geometry, lit, params.kappa)
     if geometry.streak is not None:  # §16: the streak texture modulates the whole colour
         colors = colors * geometry.streak[:, None]
     return colors
+
+
+def _shadowed(geometry: Geometry, lit: Float[Array, "P 3"], kappa) -> Float[Array, "P 3"]:
+    """The direct light at the points times τ = exp(−κΩ) (§7) and the occluder's V (§13)."""
+    if geometry.omega is not None:
+        lit = lit * jnp.exp(-kappa * geometry.omega)[:, None]
+    if geometry.light_visibility is not None:
+        lit = lit * geometry.light_visibility[:, None]
+    return lit
 
 
 def occluder_colors(geometry: Geometry, params: ShadingParams) -> Float[Array, "Q 3"]:
@@ -412,6 +440,16 @@ def occluder_colors(geometry: Geometry, params: ShadingParams) -> Float[Array, "
     if geometry.occluder_visibility is not None:
         direct = direct * geometry.occluder_visibility[:, None]
     return params.ambient[None, :] * geometry.occluder_color[None, :] + direct
+
+
+def _scheuermann_colors(geometry: Geometry, params: ScheuermannParams) -> Float[Array, "P 3"]:
+    if not isinstance(params, ScheuermannParams):
+        raise TypeError(f"shading model 'scheuermann' takes ScheuermannParams, got {type(params).__name__}")
+    pts = geometry.scheuermann
+    diffuse, specular = jax.vmap(scheuermann, in_axes=(0, 0, 0, 0, 0, 0, None))(
+        geometry.tangent, pts.normal, geometry.to_light, geometry.to_eye, pts.shift, pts.mask, params)
+    lit = geometry.light_rgb[None, :] * (diffuse + specular)
+    return geometry.base_color * (params.ambient[None, :] + _shadowed(geometry, lit, params.kappa))
 
 
 def composite(geometry: Geometry, colors: Float[Array, "P C"]) -> Float[Array, "HW C"]:

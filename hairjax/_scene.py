@@ -14,6 +14,7 @@ import numpy as np
 
 from ._errors import SceneError
 from ._lookup import LOOKUP_MODELS
+from ._scheuermann import ScheuermannMaps, ScheuermannParams, check_scheuermann_params
 from ._shading import SHADING_MODELS, ShadingParams
 from ._strands import Strands
 from ._streaks import Streaks
@@ -240,7 +241,9 @@ class Scene:
     `params` holds the differentiable shading parameters; `shading_model` picks the
     Kajiya-Kay convention (`"kajiya-kay"` or `"kajiya-kay-mirror"`, see docs/model.md) or
     the seed's convention read from a `lookup_size` × `lookup_size` table
-    (`"kajiya-kay-lookup"`, §14; `lookup_size` is unused by the other models).
+    (`"kajiya-kay-lookup"`, §14; `lookup_size` is unused by the other models), each with a
+    `ShadingParams`; or `"scheuermann"` (docs/model.md §17) with a `ScheuermannParams`;
+    `scheuermann_maps` (used by that model only) says how its per-point inputs are made.
     `streaks`: wenzel-2002's streak texture along the hairs (§16), or None.
     """
 
@@ -256,6 +259,7 @@ class Scene:
     name: str = "scene"
     lookup_size: int = 256
     streaks: Streaks | None = None
+    scheuermann_maps: ScheuermannMaps = ScheuermannMaps()
 
     def __post_init__(self):
         if not isinstance(self.strands, Strands):
@@ -270,6 +274,12 @@ class Scene:
         object.__setattr__(self, "lookup_size", int(n))
         if self.streaks is not None and not isinstance(self.streaks, Streaks):
             raise SceneError("scene.streaks must be a Streaks or None")
+        wanted = ScheuermannParams if self.shading_model == "scheuermann" else ShadingParams
+        if not isinstance(self.params, wanted):
+            raise SceneError(f"shading model {self.shading_model!r} takes {wanted.__name__}, "
+                             f"got {type(self.params).__name__}")
+        if wanted is ScheuermannParams:
+            check_scheuermann_params(self.params)
         object.__setattr__(self, "background", _rgb("background.color", self.background))
 
     def replace(self, **changes) -> Scene:

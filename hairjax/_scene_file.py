@@ -37,6 +37,7 @@ from ._scene import (
     Scene,
     Shadows,
 )
+from ._scheuermann import ScheuermannMaps, ScheuermannParams
 from ._shading import ShadingParams
 from ._sources import furball, scalp
 from ._strands import Strands
@@ -59,11 +60,18 @@ _HAIR_COMMON = ("source", "alpha", "width", "scale", "translate", "color")
 _HAIR_PROCEDURAL = ("strands", "points", "seed", "length", "gravity")
 _HAIR_ONLY_FOR = {"inertia": "furball", "radius": "scalp", "coverage": "scalp"}
 
+# [shading] keys by the models that accept them (the rest are common: model, kd, kappa, ambient).
+_SHADING_KAJIYA_KAY = ("ks", "shininess")
+_SHADING_SCHEUERMANN = ("primary_color", "primary_exponent", "primary_shift", "secondary_color",
+                        "secondary_exponent", "secondary_shift", "normal_center", "texture_seed",
+                        "shift_noise", "mask_noise", "base_texture", "alpha_texture", "occlusion",
+                        "hair_occlusion")
+
 TABLES: dict[str, tuple[str, ...]] = {
     "hair": _HAIR_COMMON + _HAIR_PROCEDURAL + tuple(_HAIR_ONLY_FOR),
     "camera": ("eye", "target", "up", "fov", "width", "height", "near"),
     "light": ("kind", "direction", "position", "color"),
-    "shading": ("model", "kd", "ks", "shininess", "kappa", "ambient", "lookup_size"),
+    "shading": ("model", "kd", "ks", "shininess", "kappa", "ambient", "lookup_size") + _SHADING_SCHEUERMANN,
     "shadows": ("method", "maps", "resolution"),
     "ordering": ("method", "bins"),
     "occluder": ("kind", "center", "radius", "color", "path"),
@@ -127,7 +135,7 @@ def scene_from_dict(
 
     camera = _build(where, Camera, **_read_camera(tables["camera"]))
     light = _build(where, Light, **_read_light(tables["light"]))
-    model, params = _read_shading(tables["shading"])
+    model, params, maps = _read_shading(tables["shading"])
     lookup_size = _read_lookup_size(tables["shading"], model)
     shadows = _build(where, Shadows, **_read_shadows(tables["shadows"]))
     ordering = _build(where, Ordering, **_read_ordering(tables["ordering"]))
@@ -143,7 +151,7 @@ def scene_from_dict(
     strands = _read_hair(tables["hair"], Path(base_dir))
 
     scene_args = _given(shading_model=model, background=background, lookup_size=lookup_size,
-                        streaks=streaks)
+                        streaks=streaks, scheuermann_maps=maps)
     return _build(where, Scene, strands=strands, camera=camera, light=light, params=params,
                   shadows=shadows, ordering=ordering, occluder=occluder, name=scene_name,
                   **scene_args)
@@ -368,10 +376,18 @@ def _read_light(table: _Table) -> dict[str, Any]:
                   position=table.vec3("position"), color=table.rgb("color"))
 
 
-def _read_shading(table: _Table) -> tuple[str | None, ShadingParams]:
+def _read_shading(table: _Table):
     # ShadingParams does not validate (it is a pytree that gradients flow through), so the
     # ranges are checked here.
     model = table.choice("model", MODELS)
+    # Keys of the other model would be silently ignored: say so instead.
+    other = _SHADING_KAJIYA_KAY if model == "scheuermann" else _SHADING_SCHEUERMANN
+    for key in table.data:
+        if key in other:
+            raise SceneError(f"{table.where}: shading.{key} is not a key of model = "
+                             f"{model or 'kajiya-kay'!r}")
+    if model == "scheuermann":
+        return model, *_read_scheuermann(table)
     params = ShadingParams(**_given(
         kd=table.rgb("kd", scalar=True),
         ks=table.rgb("ks", scalar=True),
@@ -379,7 +395,48 @@ def _read_shading(table: _Table) -> tuple[str | None, ShadingParams]:
         kappa=table.number("kappa", lo=0),
         ambient=table.rgb("ambient", scalar=True),
     ))
-    return model, params
+    return model, params, None
+
+
+def _read_scheuermann(table: _Table) -> tuple[ScheuermannParams, ScheuermannMaps]:
+    """[shading] with model = "scheuermann" (docs/model.md §17)."""
+    params = ScheuermannParams(**_given(
+        kd=table.rgb("kd", scalar=True),
+        ambient=table.rgb("ambient", scalar=True),
+        kappa=table.number("kappa", lo=0),
+        primary_color=table.rgb("primary_color", scalar=True),
+        primary_exponent=table.number("primary_exponent", lo=0, lo_open=True),
+        primary_shift=table.number("primary_shift"),
+        secondary_color=table.rgb("secondary_color", scalar=True),
+        secondary_exponent=table.number("secondary_exponent", lo=0, lo_open=True),
+        secondary_shift=table.number("secondary_shift"),
+    ))
+    # Types here (TOML booleans are not numbers); ranges are ScheuermannMaps' checks.
+    for key, rgb in (("base_texture", True), ("alpha_texture", False), ("occlusion", False)):
+        value = table.data.get(key)
+        if value is None:
+            continue
+        rows = value if isinstance(value, list) else None
+        items = [x for row in rows for x in (row if isinstance(row, list) else [None])] \
+            if rgb and rows is not None else rows
+        if not rows or not all(_is_number(x) for x in items) \
+                or (rgb and not all(len(row) == 3 for row in rows)):
+            raise table.error(key, "a non-empty array of [r, g, b] arrays" if rgb
+                              else "a non-empty array of numbers", value)
+    maps = _given(
+        normal_center=table.vec3("normal_center"),
+        texture_seed=table.integer("texture_seed", lo=0),
+        shift_noise=table.number("shift_noise", lo=0),
+        mask_noise=table.number("mask_noise", lo=0, hi=1),
+        base_texture=table.data.get("base_texture"),
+        alpha_texture=table.data.get("alpha_texture"),
+        occlusion=table.data.get("occlusion"),
+        hair_occlusion=table.number("hair_occlusion", lo=0),
+    )
+    try:
+        return params, ScheuermannMaps(**maps)
+    except SceneError as e:  # the tables' checks (ScheuermannMaps): add the file path
+        raise SceneError(f"{table.where}: {e}") from e
 
 
 def _read_lookup_size(table: _Table, model: str | None) -> int | None:

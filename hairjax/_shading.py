@@ -14,7 +14,8 @@ from ._vectors import safe_norm
 
 __all__ = ["ShadingParams", "kajiya_kay", "kajiya_kay_terms", "specular_power", "SHADING_MODELS"]
 
-SHADING_MODELS = ("kajiya-kay", "kajiya-kay-mirror")
+# "scheuermann" is implemented in _scheuermann.py (its own parameters, ScheuermannParams).
+SHADING_MODELS = ("kajiya-kay", "kajiya-kay-mirror", "scheuermann")
 
 
 def _rgb(x) -> Float[Array, 3]:

@@ -121,10 +121,13 @@ def with_receivers(frame: LightFrame, receivers: np.ndarray | None) -> LightFram
 
 
 def shadow_setup(points, segments, seg_strand, width, light, method: str, maps: int,
-                 resolution: int, receivers: np.ndarray | None = None) -> ShadowSetup:
+                 resolution: int, receivers: np.ndarray | None = None,
+                 segment_alpha: np.ndarray | None = None) -> ShadowSetup:
     """Rasterise the strands from the light (same ribbons as the camera pass; width in
     texels = the strand's width in pixels) and plan Ω at every point, then at every
-    point of `receivers` (`[Q, 3]`, optional: the per-point arrays get P + Q entries)."""
+    point of `receivers` (`[Q, 3]`, optional: the per-point arrays get P + Q entries).
+    `segment_alpha` (optional, `[E]`): a factor on each segment's opacity (the alpha
+    texture, §17)."""
     if method == "opacity-maps" and (maps + 1) * resolution**2 > MAX_MAP_CELLS:
         raise ValueError(f"{maps} maps of {resolution}² exceed {MAX_MAP_CELLS} cells; "
                          "use fewer maps or a lower resolution")
@@ -141,8 +144,11 @@ def shadow_setup(points, segments, seg_strand, width, light, method: str, maps: 
     tx = np.floor(np.clip(xy[:, 0], -1, resolution)).astype(np.int64)
     ty = np.floor(np.clip(xy[:, 1], -1, resolution)).astype(np.int64)
     inside = seen & (tx >= 0) & (tx < resolution) & (ty >= 0) & (ty < resolution)
+    coverage = frags.coverage
+    if segment_alpha is not None:
+        coverage = coverage * segment_alpha[seg_ids[frags.segment]]
     common = dict(view=view, frag_strand=seg_strand[seg_ids[frags.segment]],
-                  frag_coverage=frags.coverage)
+                  frag_coverage=coverage)
 
     if method == "opacity-maps":
         # A fragment in [D_j, D_{j+1}) counts towards planes j + 1 … N (strictly nearer).

@@ -156,6 +156,13 @@ def scene_digest(scene: Scene) -> str:
             h.update(np.ascontiguousarray(a).tobytes())
     h.update(repr((scene.camera, scene.light, scene.shading_model, scene.shadows, scene.ordering,
                    scene.occluder, scene.background)).encode())
+    if scene.shading_model == "scheuermann":  # §17: its own parameters and per-point inputs
+        import jax
+
+        h.update(repr(scene.scheuermann_maps).encode())
+        for leaf in jax.tree_util.tree_leaves(scene.params):
+            h.update(np.asarray(leaf, np.float64).tobytes())
+        return h.hexdigest()[:16]
     h.update(np.asarray([np.asarray(x, np.float64).ravel() for x in
                          (scene.params.kd, scene.params.ks, scene.params.ambient)]).tobytes())
     h.update(np.asarray([scene.params.shininess, scene.params.kappa], np.float64).tobytes())

@@ -75,14 +75,11 @@ def _fit(args) -> int:
 
     from ._files import write_json
     from ._fit import FITTABLE, FitError, fit
+    from ._fit_scheuermann import SCHEUERMANN_FITTABLE
     from ._image import read_image, write_image
     from ._render import render
     from ._scene_file import default_scene_path, load_scene
 
-    names = tuple(n.strip() for n in args.fit.split(",") if n.strip())
-    unknown = [n for n in names if n not in FITTABLE]
-    if unknown:
-        raise FitError(f"unknown parameter {unknown[0]!r} in --fit; fittable: {', '.join(FITTABLE)}")
     if len(args.scenes) >= len(args.target):
         raise FitError(f"{1 + len(args.scenes)} scenes for {len(args.target)} targets: "
                        "each extra --scene goes with one extra --target")
@@ -91,6 +88,12 @@ def _fit(args) -> int:
     first = load_scene(args.scene or default_scene_path())
     extra = [load_scene(s) for s in args.scenes]
     scenes = [first, *extra, *[first] * (len(targets) - 1 - len(extra))]
+    # Each shading model has its parameters (docs/model.md §17 for Scheuermann's).
+    fittable = SCHEUERMANN_FITTABLE if first.shading_model == "scheuermann" else FITTABLE
+    names = fittable if args.fit is None else tuple(n.strip() for n in args.fit.split(",") if n.strip())
+    unknown = [n for n in names if n not in fittable]
+    if unknown:
+        raise FitError(f"unknown parameter {unknown[0]!r} in --fit; fittable: {', '.join(fittable)}")
 
     def progress(step, loss, elapsed):
         print(f"  step {step:4d}   loss {loss:.6e}   {elapsed:7.2f} s", file=sys.stderr, flush=True)
@@ -100,7 +103,7 @@ def _fit(args) -> int:
     result = fit(scenes, targets, fit=names, solver=args.solver, max_steps=args.max_steps,
                  progress=progress)
     rows = []
-    for name in ("kd", "ks", "shininess", "kappa"):
+    for name in fittable:
         fmt = lambda v: " ".join(f"{x:.6g}" for x in np.atleast_1d(np.asarray(v, float)))  # noqa: E731
         se = result.std_error.get(name)
         se_text = ("undetermined" if name in result.undetermined
@@ -208,7 +211,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="target image (.exr linear, or .png sRGB); repeat for several")
     p.add_argument("--scene", dest="scenes", action="append", type=Path, default=[],
                    help="scene of the next extra --target (default: the first scene)")
-    p.add_argument("--fit", default="kd,ks,shininess,kappa", help="parameters to fit")
+    p.add_argument("--fit", default=None,
+                   help="parameters to fit (default: kd,ks,shininess,kappa, or all of a Scheuermann scene's)")
     p.add_argument("--solver", default="lm", help="lm, gauss-newton, dogleg or bfgs")
     p.add_argument("--max-steps", type=int, default=100)
     p.add_argument("--json", type=Path, help="write params, initial, steps, loss, … as JSON")

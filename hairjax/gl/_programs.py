@@ -13,7 +13,7 @@ from ._context import GLError
 
 __all__ = ["programs", "constants_glsl", "shader_source"]
 
-SHADING_MODEL_IDS = {"kajiya-kay": 0, "kajiya-kay-mirror": 1, "kajiya-kay-lookup": 2}
+SHADING_MODEL_IDS = {"kajiya-kay": 0, "kajiya-kay-mirror": 1, "kajiya-kay-lookup": 2, "scheuermann": 3}
 
 
 def constants_glsl() -> str:

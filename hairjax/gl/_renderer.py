@@ -20,6 +20,7 @@ from .._occluder import drawable_triangles, occluder_extent, occluder_light_view
 from .._projection import View
 from .._render import tangents, visibility_order
 from .._scene import Scene
+from .._scheuermann import ScheuermannParams, scheuermann_inputs
 from .._shading import ShadingParams
 from .._shadows import LightFrame, light_frame, point_planes, with_receivers
 from .._streaks import strand_coordinates, streak_prefix, streak_texture
@@ -103,25 +104,37 @@ class _Strands:
         self.ctx = ctx
         self.count = s.num_points
         f4 = lambda a: ctx.buffer(np.ascontiguousarray(a, dtype="f4").tobytes())  # noqa: E731
+        tangent = tangents(s.points, s.offsets)
+        color = s.color if s.color is not None else np.ones_like(s.points)
+        alpha = s.alpha[per_point]
+        self.segments = s.segments()
+        self.extra = []  # per-point inputs of §17 (Scheuermann) and §16 (streaks), when used
+        if scene.shading_model == "scheuermann":
+            pts, factor, segment_alpha = scheuermann_inputs(s, tangent, scene.scheuermann_maps)
+            color = color * factor
+            if segment_alpha is not None:
+                # ribbon.geom takes a segment's alpha from its first point.
+                alpha = alpha.copy()
+                alpha[self.segments[:, 0]] *= segment_alpha
+            self.extra = [(f4(pts.normal), "3f", "in_normal"),
+                          (f4(np.stack([pts.shift, pts.mask], axis=1)), "2f", "in_maps")]
         self.position = f4(s.points)
-        self.tangent = f4(tangents(s.points, s.offsets))
-        self.color = f4(s.color if s.color is not None else np.ones_like(s.points))
-        self.alpha = f4(s.alpha[per_point])
+        self.tangent = f4(tangent)
+        self.color = f4(color)
+        self.alpha = f4(alpha)
         self.width = f4(s.width[per_point])
         self.omega = f4(np.zeros(s.num_points))
         self.visibility = f4(np.ones(s.num_points))
-        self.segments = s.segments()
-        self.streak = None  # §16: each point's hair coordinate u_i, only for scenes with streaks
-        if scene.streaks is not None:
-            self.streak = f4(strand_coordinates(scene.streaks, s.num_strands)[per_point])
+        if scene.streaks is not None:  # §16: each point's hair coordinate u_i
+            u = strand_coordinates(scene.streaks, s.num_strands)[per_point]
+            self.extra.append((f4(u), "f", "in_streak"))
 
     def vertex_array(self, prog, index_buffer):
-        streak = [] if self.streak is None else [(self.streak, "f", "in_streak")]
         return self.ctx.vertex_array(prog, [
             (self.position, "3f", "in_position"), (self.tangent, "3f", "in_tangent"),
             (self.color, "3f", "in_color"), (self.alpha, "f", "in_alpha"),
             (self.width, "f", "in_width"), (self.omega, "f", "in_omega"),
-            (self.visibility, "f", "in_visibility"), *streak,
+            (self.visibility, "f", "in_visibility"), *self.extra,
         ], index_buffer=index_buffer, index_element_size=4, skip_errors=True)
 
     def index_buffer(self, segment_ids: np.ndarray):
@@ -131,12 +144,11 @@ class _Strands:
 
     def release(self):
         for b in (self.position, self.tangent, self.color, self.alpha, self.width, self.omega,
-                  self.visibility, self.streak):
-            if b is not None:
-                b.release()
+                  self.visibility, *(buffer for buffer, _, _ in self.extra)):
+            b.release()
 
 
-def render_gl(scene: Scene, params: ShadingParams | None = None, *,
+def render_gl(scene: Scene, params: ShadingParams | ScheuermannParams | None = None, *,
               clip_slices: bool = True, omega: np.ndarray | None = None,
               order: np.ndarray | None = None, occluder: OccluderLight | None = None) -> GLResult:
     """Render `scene` with OpenGL.
@@ -351,7 +363,7 @@ def _light_uniforms(scene: Scene) -> dict:
             "light_rgb": _vec(light.color)}
 
 
-def _camera_pass(ctx, progs, scene: Scene, params: ShadingParams, strands, view: View, order,
+def _camera_pass(ctx, progs, scene: Scene, params, strands, view: View, order,
                  depth_far: float, surface: _OccluderSurface | None,
                  occluder: OccluderLight | None) -> np.ndarray:
     import moderngl
@@ -411,12 +423,7 @@ def _camera_pass(ctx, progs, scene: Scene, params: ShadingParams, strands, view:
                           moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA)
         ctx.blend_equation = moderngl.FUNC_ADD
         prog = progs["camera"]
-        _set(prog, shade=True, eye=_vec(view.origin),
-             **{"shading.kd": _vec(params.kd),
-                "shading.ks": _vec(params.ks),
-                "shading.ambient": _vec(params.ambient),
-                "shading.shininess": float(params.shininess), "shading.kappa": float(params.kappa),
-                "shading.model": SHADING_MODEL_IDS[scene.shading_model]}, **common)
+        _set(prog, shade=True, eye=_vec(view.origin), **_shading_uniforms(scene, params), **common)
         if table is not None:
             table.use(0)
             _set(prog, kajiya_kay_table=0)
@@ -460,6 +467,23 @@ def _streak_texture(ctx, scene: Scene):
     texture = streak_texture(scene.streaks)
     data = np.stack([np.append(texture, texture[0]), streak_prefix(texture)], axis=1)
     return ctx.texture((len(data), 1), 2, np.ascontiguousarray(data, dtype="f4").tobytes(), dtype="f4")
+
+
+def _shading_uniforms(scene: Scene, params) -> dict:
+    """The `shading` (and for §17 the `scheuermann`) uniforms of the camera pass."""
+    uniforms = {"shading.model": SHADING_MODEL_IDS[scene.shading_model],
+                "shading.kappa": float(params.kappa)}
+    if scene.shading_model == "scheuermann":
+        if not isinstance(params, ScheuermannParams):
+            raise TypeError("shading model 'scheuermann' takes ScheuermannParams, "
+                            f"got {type(params).__name__}")
+        for name in ("kd", "ambient", "primary_color", "secondary_color"):
+            uniforms[f"scheuermann.{name}"] = _vec(getattr(params, name))
+        for name in ("primary_exponent", "secondary_exponent", "primary_shift", "secondary_shift"):
+            uniforms[f"scheuermann.{name}"] = float(getattr(params, name))
+        return uniforms
+    return {**uniforms, "shading.kd": _vec(params.kd), "shading.ks": _vec(params.ks),
+            "shading.ambient": _vec(params.ambient), "shading.shininess": float(params.shininess)}
 
 
 def _light_pass_uniforms(scene: Scene, frame: LightFrame) -> dict:

@@ -83,7 +83,7 @@ struct Shading {
     vec3 ambient;
     float shininess;
     float kappa;
-    int model;  // SHADING_KAJIYA_KAY, SHADING_KAJIYA_KAY_MIRROR or SHADING_KAJIYA_KAY_LOOKUP (§14)
+    int model;  // SHADING_KAJIYA_KAY, SHADING_KAJIYA_KAY_MIRROR, SHADING_KAJIYA_KAY_LOOKUP (§14) or SHADING_SCHEUERMANN (§17)
 };
 
 // §8: ambient·c + τ·light·(Kd sin(T, L)·c + Ks·max(b, 0)^p).
@@ -134,4 +134,56 @@ float streak_factor(sampler2D streak, int m, float u, float width) {
 // §7: the slice of depth z, (z − D₀)·N/span clamped to [0, N] (fires by float32 rounding at D₀, D_N).
 int slice_of(float z, float zmin, float span, int maps) {
     return int(clamp(floor((z - zmin) * float(maps) / span), 0.0, float(maps)));
+}
+
+// §17 Scheuermann (scheuermann-2004 slides 10–12), as hairjax/_scheuermann.py.
+struct Scheuermann {
+    vec3 kd;
+    vec3 ambient;
+    vec3 primary_color;
+    vec3 secondary_color;
+    float primary_exponent;
+    float secondary_exponent;
+    float primary_shift;
+    float secondary_shift;
+};
+
+// normalize(T + shift·N): N ⟂ T, both unit (or both 0), so |T + shift·N| = √(1 + shift²).
+vec3 shift_tangent(vec3 T, vec3 N, float shift) {
+    return (T + shift * N) / sqrt(1.0 + shift * shift);
+}
+
+// smoothstep(−1, 0, x) written out (as _scheuermann.py), t = clamp(x + 1, 0, 1).
+float smoothstep_attenuation(float x) {
+    float t = clamp(x + 1.0, 0.0, 1.0);
+    return t * t * (3.0 - 2.0 * t);
+}
+
+// smoothstep(−1, 0, T·H)·sin(T, H)^p, the power from the gap 1 − sin = cos²/(1 + sin).
+// Fires where T or H is the zero vector (no tangent; L = −V): cos² + sin² = 0, power 0.
+float strand_specular(vec3 T, vec3 H, float p) {
+    float c = dot(T, H);
+    float s = safe_norm(cross(T, H));
+    float gap = c * c + s * s > 0.5 ? c * c / (1.0 + s) : 1.0;
+    return smoothstep_attenuation(c) * specular_power(gap, p);
+}
+
+// saturate(lerp(0.25, 1, N·L)); fires at points without tangent (N = 0): ambient only.
+float scheuermann_diffuse(vec3 N, vec3 L) {
+    float wrapped = clamp(SCHEUERMANN_DIFFUSE_FLOOR + (1.0 - SCHEUERMANN_DIFFUSE_FLOOR) * dot(N, L), 0.0, 1.0);
+    return dot(N, N) > 0.5 ? wrapped : 0.0;
+}
+
+// §17: c·(ambient + τ·light·(Kd·D + C₁·S(T₁) + m·C₂·S(T₂))), c = colour·base(u)·AO.
+vec3 shade_scheuermann(Scheuermann s, vec3 T, vec3 N, vec3 L, vec3 V, float shift, float mask,
+                       vec3 base, vec3 light_rgb, float tau) {
+    vec3 diffuse = s.kd * scheuermann_diffuse(N, L);
+    vec3 LV = L + V;
+    float n = safe_norm(LV);
+    vec3 H = LV / (n > 0.0 ? n : 1.0);  // fires for L = −V: H = 0, no highlight
+    vec3 t1 = shift_tangent(T, N, s.primary_shift + shift);
+    vec3 t2 = shift_tangent(T, N, s.secondary_shift + shift);
+    vec3 specular = s.primary_color * strand_specular(t1, H, s.primary_exponent)
+                  + s.secondary_color * (mask * strand_specular(t2, H, s.secondary_exponent));
+    return base * (s.ambient + tau * light_rgb * (diffuse + specular));
 }

@@ -11,10 +11,13 @@ in float in_width;
 in float in_omega;
 in float in_visibility;  // §13: 0 where the occluder shadows the point
 in float in_streak;        // §16: the hair's streak coordinate u_i (bound only with streaks)
+in vec3 in_normal;         // §17 (Scheuermann scenes only): strand normal
+in vec2 in_maps;           // §17: shift texture σ, noise mask m
 
 uniform View view;
 uniform bool shade;        // camera pass: shade points; light passes: geometry only
 uniform Shading shading;
+uniform Scheuermann scheuermann;  // used when shading.model == SHADING_SCHEUERMANN
 uniform vec3 light_rgb;
 uniform vec3 light_vector; // −direction (directional) or the light's position (point)
 uniform bool point_light;
@@ -48,9 +51,13 @@ void main() {
         vec3 L = point_light ? safe_normalize(light_vector - in_position) : light_vector;
         vec3 V = safe_normalize(eye - in_position);
         float tau = exp(-shading.kappa * in_omega) * in_visibility;
-        vout.color = shading.model == SHADING_KAJIYA_KAY_LOOKUP
-            ? shade_point_lookup(shading, kajiya_kay_table, in_tangent, L, V, in_color, light_rgb, tau)
-            : shade_point(shading, in_tangent, L, V, in_color, light_rgb, tau);
+        if (shading.model == SHADING_SCHEUERMANN)
+            vout.color = shade_scheuermann(scheuermann, in_tangent, in_normal, L, V, in_maps.x,
+                                           in_maps.y, in_color, light_rgb, tau);
+        else if (shading.model == SHADING_KAJIYA_KAY_LOOKUP)
+            vout.color = shade_point_lookup(shading, kajiya_kay_table, in_tangent, L, V, in_color, light_rgb, tau);
+        else
+            vout.color = shade_point(shading, in_tangent, L, V, in_color, light_rgb, tau);
         if (streaks) vout.color *= streak_factor(streak_texture, streak_texels, in_streak, streak_width);
     }
     gl_Position = vec4(0.0, 0.0, 0.0, 1.0);  // the geometry shader places the ribbon

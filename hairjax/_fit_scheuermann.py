@@ -1,0 +1,218 @@
+"""`hairjax.fit` for Scheuermann scenes (docs/model.md §17, docs/fitting.md).
+
+The Kajiya-Kay fit (`_fit.py`) is built on that model's terms: Kd and Ks solved for by
+variable projection, b precomputed per point. Here the solver iterates on every fitted
+parameter through the differentiable shading stage; the geometry stage runs once per
+target. Colours are fitted through a softplus (≥ 0), exponents and κ through exp
+(scale-free, > 0), shifts as they are.
+"""
+
+from __future__ import annotations
+
+import time
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ._fit import (
+    _FLOOR,
+    _NULL_RATIO,
+    FitError,
+    FitResult,
+    _init,
+    _softplus,
+    _softplus_inv,
+    _step,
+    _terminate,
+)
+from ._render import geometry_stage, shading_stage
+from ._scheuermann import ScheuermannParams
+
+__all__ = ["SCHEUERMANN_FITTABLE", "fit_scheuermann"]
+
+SCHEUERMANN_FITTABLE = ("kd", "primary_color", "primary_exponent", "primary_shift",
+                        "secondary_color", "secondary_exponent", "secondary_shift", "kappa")
+_COLOURS = ("kd", "primary_color", "secondary_color")
+_FIELDS = ("kd", "ambient", "primary_color", "primary_exponent", "primary_shift",
+           "secondary_color", "secondary_exponent", "secondary_shift", "kappa")
+
+
+def _identity(x):
+    return x
+
+
+# (forward, inverse) from the solver's z to the parameter, and the space of the standard
+# errors (the colours themselves, 0 included; log exponent and κ; shifts as they are).
+_TRANSFORMS = {**{n: (_softplus, _softplus_inv) for n in _COLOURS},
+               **{n: (jnp.exp, jnp.log) for n in ("primary_exponent", "secondary_exponent", "kappa")},
+               **{n: (_identity, _identity) for n in ("primary_shift", "secondary_shift")}}
+_ERROR_SPACE = {**{n: (_identity, _identity) for n in _COLOURS},
+                **{n: (jnp.exp, jnp.log) for n in ("primary_exponent", "secondary_exponent", "kappa")},
+                **{n: (_identity, _identity) for n in ("primary_shift", "secondary_shift")}}
+
+
+def check_names(names, scalar) -> tuple[str, ...]:
+    names = tuple(names)
+    for n in (*names, *scalar):
+        if n not in SCHEUERMANN_FITTABLE:
+            raise FitError(f"unknown parameter {n!r} for a Scheuermann scene; fittable: "
+                           f"{', '.join(SCHEUERMANN_FITTABLE)}")
+    if len(set(names)) != len(names) or not names:
+        raise FitError(f"fit needs distinct parameter names, got {names!r}")
+    for n in scalar:
+        if n not in _COLOURS:
+            raise FitError(f"only {', '.join(_COLOURS)} can be fitted as one grey value, not {n!r}")
+    return names
+
+
+class _Problem(eqx.Module):
+    geometries: list
+    targets: list
+    sqrt_weights: list
+    init: ScheuermannParams
+    names: tuple[str, ...] = eqx.field(static=True)
+    scalar: tuple[str, ...] = eqx.field(static=True)
+
+
+def _size(name, scalar) -> int:
+    return 3 if name in _COLOURS and name not in scalar else 1
+
+
+def _to_flat(params: ScheuermannParams, names, scalar, space) -> jax.Array:
+    parts = []
+    for n in names:
+        x = jnp.asarray(getattr(params, n))
+        if space is _TRANSFORMS and n not in ("primary_shift", "secondary_shift"):
+            x = jnp.maximum(x, _FLOOR)  # the inverse transforms need x > 0
+        if n in scalar:
+            x = jnp.mean(x, keepdims=True)
+        parts.append(jnp.ravel(space[n][1](x)))
+    return jnp.concatenate(parts)
+
+
+def _from_flat(z, base: ScheuermannParams, names, scalar, space) -> ScheuermannParams:
+    values, i = {n: getattr(base, n) for n in _FIELDS}, 0
+    for n in names:
+        k = _size(n, scalar)
+        x = space[n][0](z[i:i + k])
+        values[n] = jnp.broadcast_to(x, (3,)) if n in _COLOURS else jnp.reshape(x, ())
+        i += k
+    return ScheuermannParams(**values)
+
+
+def _residuals_at(p: ScheuermannParams, problem: _Problem) -> jax.Array:
+    r = [sw * (shading_stage(g, p)[..., :3].reshape(-1, 3) - t)
+         for g, t, sw in zip(problem.geometries, problem.targets, problem.sqrt_weights)]
+    return jnp.concatenate([x.ravel() for x in r])
+
+
+def _residuals(z, problem: _Problem) -> jax.Array:
+    return _residuals_at(_from_flat(z, problem.init, problem.names, problem.scalar, _TRANSFORMS),
+                         problem)
+
+
+def _residual_fn(z, problem):
+    return _residuals(z, problem), None
+
+
+def _loss_fn(z, problem):
+    return 0.5 * jnp.sum(_residuals(z, problem) ** 2), None
+
+
+_jit_loss = eqx.filter_jit(lambda z, problem: _loss_fn(z, problem)[0])
+
+
+def fit_scheuermann(scenes, arrays, names, init, opt, least_squares, scalar, max_steps,
+                    progress) -> FitResult:
+    """`hairjax.fit` for Scheuermann scenes: `arrays` are `_target_arrays`' (target,
+    √weight) per scene; the rest as `fit` passes them."""
+    import optimistix as optx
+
+    if not isinstance(init, ScheuermannParams):
+        raise FitError(f"a Scheuermann scene is fitted from ScheuermannParams, got {type(init).__name__}")
+    names = check_names(names, scalar)
+    scalar = tuple(scalar)
+    start = time.perf_counter()
+    geometries = [geometry_stage(s) for s in scenes]
+    jax.block_until_ready(geometries)
+    geometry_s = time.perf_counter() - start
+    problem = _Problem(geometries, [jnp.asarray(t) for t, _ in arrays],
+                       [jnp.asarray(sw) for _, sw in arrays], init, names, scalar)
+    z = _to_flat(init, names, scalar, _TRANSFORMS)
+    fn = _residual_fn if least_squares else _loss_fn
+    losses = [float(0.5 * jnp.sum(_residuals_at(init, problem) ** 2))]
+
+    # The loop of `_fit.fit` (kept separate so the Kajiya-Kay path is untouched).
+    steps, diverged, termination = 0, False, "converged"
+    state = _init(opt, fn, z, problem)
+    done, result = _terminate(opt, fn, z, problem, state)
+    last_finite = z
+    while not bool(done) and steps < max_steps:
+        z, state = _step(opt, fn, z, problem, state)
+        steps += 1
+        losses.append(float(_jit_loss(z, problem)))
+        if progress is not None:
+            progress(steps, losses[-1], time.perf_counter() - start - geometry_s)
+        if not np.isfinite(losses[-1]):
+            # Fires for a solver that accepts a non-finite loss: keep the last finite point.
+            z, diverged = last_finite, True
+            break
+        last_finite = z
+        done, result = _terminate(opt, fn, z, problem, state)
+    if bool(done):
+        termination = ("converged" if result == optx.RESULTS.successful
+                       else f"stopped: {optx.RESULTS[result]}")
+    elif diverged:
+        termination = "stopped: diverged (the loss became non-finite); kept the last finite point"
+    else:
+        termination = f"stopped: reached max_steps = {max_steps}"
+    fitted = _from_flat(z, init, names, scalar, _TRANSFORMS)
+    elapsed = time.perf_counter() - start - geometry_s
+    std_error, undetermined = _standard_errors(fitted, problem)
+    n_pixels = float(sum(np.count_nonzero(np.asarray(sw)) for _, sw in arrays)) * 3
+    final_loss = float(_jit_loss(z, problem)) if diverged else losses[-1]
+    return FitResult(params=fitted, initial=init, fitted=names, loss=losses, steps=steps,
+                     time_s=elapsed, geometry_s=geometry_s, termination=termination,
+                     std_error=std_error, undetermined=undetermined,
+                     rmse=float(np.sqrt(2 * final_loss / max(n_pixels, 1.0))))
+
+
+@eqx.filter_jit
+def _error_jacobian(u, fitted, problem: _Problem):
+    def residuals(u):
+        return _residuals_at(_from_flat(u, fitted, problem.names, problem.scalar, _ERROR_SPACE), problem)
+
+    return jax.jacfwd(residuals)(u), residuals(u)
+
+
+def _standard_errors(fitted: ScheuermannParams, problem: _Problem):
+    """σ²(JᵀJ)⁻¹ in the error space, mapped to the parameters (delta method); directions
+    with JᵀJ eigenvalue ≤ _NULL_RATIO²·λ_max or ≤ m·1e-12 are undetermined (as `_fit`)."""
+    names, scalar = problem.names, problem.scalar
+    u = _to_flat(fitted, names, scalar, _ERROR_SPACE)
+    jac, r = _error_jacobian(u, fitted, problem)
+    jac, r = np.asarray(jac, np.float64), np.asarray(r, np.float64)
+    if not (np.all(np.isfinite(jac)) and np.all(np.isfinite(r))):
+        # Fires where the image or its derivatives overflow: nothing is known.
+        return {n: None for n in names}, names
+    m, k = jac.shape
+    evals, evecs = np.linalg.eigh(jac.T @ jac)
+    null = (evals <= _NULL_RATIO**2 * max(evals.max(initial=0.0), 1e-300)) | (evals <= m * 1e-12)
+    var_u = float(r @ r) / max(m - k, 1) * np.diag((evecs[:, ~null] / evals[~null]) @ evecs[:, ~null].T)
+    in_null = (np.abs(evecs[:, null]) > 0.1).any(axis=1) if null.any() else np.zeros(k, bool)
+    std, undetermined, i = {}, [], 0
+    u = np.asarray(u)
+    for n in names:
+        sl = slice(i, i + _size(n, scalar))
+        i = sl.stop
+        if in_null[sl].any():
+            std[n] = None
+            undetermined.append(n)
+            continue
+        # dx/du: 1 for colours and shifts, x for the log-space exponents and κ.
+        dxdu = np.exp(u[sl]) if _ERROR_SPACE[n][0] is jnp.exp else np.ones(sl.stop - sl.start)
+        value = dxdu * np.sqrt(np.maximum(var_u[sl], 0.0))
+        std[n] = np.broadcast_to(value, (3,)).copy() if n in _COLOURS else np.asarray(value[0])
+    return std, tuple(undetermined)

@@ -1,0 +1,384 @@
+"""Scheuermann hair shading (scheuermann-2004 slides 9–13, docs/model.md §17).
+
+Two parts, one concept:
+- the per-point maths (JAX, pure, written for one point; the renderer vmaps it):
+  `scheuermann`, `shift_tangent`, `strand_specular`, `scheuermann_diffuse`;
+- the NumPy set-up of its per-point inputs, computed only for scenes that use it:
+  `strand_normals`, `strand_position` and `scheuermann_inputs` (normals, shift texture,
+  noise mask, base/alpha/occlusion textures along the strand).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, ArrayLike, Float
+
+from ._constants import SCHEUERMANN_DIFFUSE_FLOOR
+from ._errors import SceneError
+from ._shading import specular_power
+from ._vectors import safe_norm, safe_normalize
+
+__all__ = ["ScheuermannParams", "ScheuermannMaps", "ScheuermannPoints", "scheuermann",
+           "shift_tangent", "strand_specular", "smoothstep_attenuation", "scheuermann_diffuse",
+           "strand_normals", "strand_position", "scheuermann_inputs", "segment_alpha",
+           "check_scheuermann_params", "hair_occlusion", "sphere_directions", "exact_omega_numpy"]
+
+
+# The light rasters of `hair_occlusion`: a strand of width w covers w texels of this many
+# across the hair, i.e. occludes as in a render of the hair at this resolution. Coarse on
+# purpose: ambient occlusion is the hair's large-scale density, not single strands.
+HAIR_OCCLUSION_RESOLUTION = 64
+# Directions `hair_occlusion` averages over: 16 on the sphere resolve the hair's shape (its
+# inside vs. its outside) at ~1/4 of the set-up time of a 64-map opacity-map shadow.
+HAIR_OCCLUSION_DIRECTIONS = 16
+
+
+def _rgb(x) -> Float[Array, 3]:
+    return jnp.broadcast_to(jnp.asarray(x, dtype=jnp.result_type(float)), (3,))
+
+
+def _scalar(x) -> Float[Array, ""]:
+    return jnp.asarray(x, dtype=jnp.result_type(float))
+
+
+class ScheuermannParams(eqx.Module):
+    """The differentiable parameters of the Scheuermann model (a pytree of arrays).
+
+    **Fields:** `kd`, `ambient`, `primary_color`, `secondary_color`: RGB `[3]` (a scalar
+    broadcasts); `primary_exponent`, `secondary_exponent`: the lobes' exponents p₁, p₂;
+    `primary_shift`, `secondary_shift`: the tangent shifts s₁, s₂ along the strand normal
+    (docs/model.md §17 says which way each moves the highlight); `kappa`: κ in τ = exp(−κΩ).
+    Like `ShadingParams` it does not validate (gradients flow through it); a `Scene`
+    checks its values (`check_scheuermann_params`).
+    """
+
+    kd: Float[Array, 3]
+    ambient: Float[Array, 3]
+    primary_color: Float[Array, 3]
+    primary_exponent: Float[Array, ""]
+    primary_shift: Float[Array, ""]
+    secondary_color: Float[Array, 3]
+    secondary_exponent: Float[Array, ""]
+    secondary_shift: Float[Array, ""]
+    kappa: Float[Array, ""]
+
+    def __init__(self, kd: ArrayLike = 0.6, ambient: ArrayLike = 0.0,
+                 primary_color: ArrayLike = 0.3, primary_exponent: ArrayLike = 80.0,
+                 primary_shift: ArrayLike = 0.1, secondary_color: ArrayLike = 0.2,
+                 secondary_exponent: ArrayLike = 20.0, secondary_shift: ArrayLike = -0.1,
+                 kappa: ArrayLike = 1.0):
+        self.kd = _rgb(kd)
+        self.ambient = _rgb(ambient)
+        self.primary_color = _rgb(primary_color)
+        self.primary_exponent = _scalar(primary_exponent)
+        self.primary_shift = _scalar(primary_shift)
+        self.secondary_color = _rgb(secondary_color)
+        self.secondary_exponent = _scalar(secondary_exponent)
+        self.secondary_shift = _scalar(secondary_shift)
+        self.kappa = _scalar(kappa)
+
+
+def check_scheuermann_params(params: ScheuermannParams) -> None:
+    """Raise `SceneError` naming the field unless every value is finite, colours ≥ 0,
+    exponents > 0 and κ ≥ 0 (for concrete parameters, e.g. a scene's; traced ones, which
+    have no values yet, pass)."""
+    if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(params)):
+        return
+    for name in ("kd", "ambient", "primary_color", "secondary_color"):
+        v = np.asarray(getattr(params, name))
+        if not (np.all(np.isfinite(v)) and np.all(v >= 0)):
+            raise SceneError(f"shading.{name} must be ≥ 0 and finite, got {v.tolist()}")
+    for name in ("primary_exponent", "secondary_exponent"):
+        v = float(getattr(params, name))
+        if not (np.isfinite(v) and v > 0):
+            raise SceneError(f"shading.{name} must be > 0 and finite, got {v}")
+    for name in ("primary_shift", "secondary_shift"):
+        if not np.isfinite(float(getattr(params, name))):
+            raise SceneError(f"shading.{name} must be finite, got {float(getattr(params, name))}")
+    if not (np.isfinite(float(params.kappa)) and float(params.kappa) >= 0):
+        raise SceneError(f"shading.kappa must be ≥ 0 and finite, got {float(params.kappa)}")
+
+
+# --------------------------------------------------------------------------- per point (JAX)
+
+
+def scheuermann_diffuse(normal: Float[Array, 3], to_light: Float[Array, 3]) -> Float[Array, ""]:
+    """saturate(lerp(0.25, 1, N·L)) (slide 12); 0 for a point without normal (N = 0, §1's
+    points without tangent: ambient only)."""
+    wrapped = jnp.clip(SCHEUERMANN_DIFFUSE_FLOOR + (1 - SCHEUERMANN_DIFFUSE_FLOOR)
+                       * jnp.dot(normal, to_light), 0.0, 1.0)
+    # Fires at points without tangent (N = 0 there by construction): no lit terms.
+    return jnp.where(jnp.dot(normal, normal) > 0.5, wrapped, 0.0)
+
+
+def shift_tangent(tangent: Float[Array, 3], normal: Float[Array, 3],
+                  shift: Float[Array, ""]) -> Float[Array, 3]:
+    """normalize(T + shift·N) (slide 10). N ⟂ T and both unit (or both 0) by construction
+    (`strand_normals`), so |T + shift·N| = √(1 + shift²) and no guard is needed: a point
+    without tangent keeps T' = 0."""
+    return (tangent + shift * normal) / jnp.sqrt(1 + shift * shift)
+
+
+def smoothstep_attenuation(x: Float[Array, ""]) -> Float[Array, ""]:
+    """smoothstep(−1, 0, x) = t²(3 − 2t), t = clamp(x + 1, 0, 1) (slide 11's dirAtten).
+    A polynomial of a clamp: value and gradient finite everywhere (the gradient is 0 at
+    both clamp edges, so it is continuous)."""
+    t = jnp.clip(x + 1.0, 0.0, 1.0)
+    return t * t * (3.0 - 2.0 * t)
+
+
+def strand_specular(tangent: Float[Array, 3], half: Float[Array, 3],
+                    exponent: Float[Array, ""]) -> Float[Array, ""]:
+    """smoothstep(−1, 0, T·H) · sin(T, H)^p (slide 11) for unit T and H; 0 when either is
+    the zero vector.
+
+    sin(T, H) = ‖T × H‖ and, as for Kajiya-Kay (docs/model.md §8), the power is taken from
+    the gap 1 − sin = cos²/(1 + sin), cos = T·H, without cancellation: near the peak
+    (T ⟂ H) cos is small and its absolute rounding of a few u errs sin^p by ~2√p·u relative,
+    not the ~p·u of rounding sin itself. 1 + sin ≥ 1, so the quotient never divides by 0.
+    """
+    cos = jnp.dot(tangent, half)
+    sin = safe_norm(jnp.cross(tangent, half))
+    # Fires where T or H is the zero vector (a point without tangent; L = −V, where the half
+    # vector does not exist): cos² + sin² = 0 there, and the quotient would claim the peak.
+    unit = cos * cos + sin * sin > 0.5
+    gap = jnp.where(unit, cos * cos / (1 + sin), 1.0)
+    return smoothstep_attenuation(cos) * specular_power(gap, exponent)
+
+
+class ScheuermannPoints(eqx.Module):
+    """The per-point inputs only the Scheuermann model needs (JAX arrays in `Geometry`,
+    NumPy arrays from `scheuermann_inputs`): unit strand normal N ⟂ T (0 where T = 0),
+    the shift texture's value σ and the noise mask m."""
+
+    normal: Float[Array, "P 3"]
+    shift: Float[Array, " P"]
+    mask: Float[Array, " P"]
+
+
+def scheuermann(
+    tangent: Float[Array, 3],
+    normal: Float[Array, 3],
+    to_light: Float[Array, 3],
+    to_eye: Float[Array, 3],
+    shift: Float[Array, ""],
+    mask: Float[Array, ""],
+    params: ScheuermannParams,
+) -> tuple[Float[Array, 3], Float[Array, 3]]:
+    """Unshadowed Scheuermann terms at one point (slide 12).
+
+    **Arguments:** unit `tangent` T (root to tip), unit strand `normal` N ⟂ T, unit
+    `to_light` L and `to_eye` V (from the point), the shift texture's value `shift` σ, the
+    noise `mask` m, `params`.
+
+    **Returns:** `(diffuse, specular)`, each RGB:
+    Kd·saturate(lerp(0.25, 1, N·L)) and
+    C₁·S(T₁, H, p₁) + m·C₂·S(T₂, H, p₂), with H = normalize(L + V),
+    Tᵢ = normalize(T + (sᵢ + σ)N) and S the strand specular (`strand_specular`).
+    The renderer multiplies both by the point's base colour (docs/model.md §17).
+    """
+    diffuse = params.kd * scheuermann_diffuse(normal, to_light)
+    # safe_normalize fires for L = −V (light exactly behind the point as seen): H = 0,
+    # and strand_specular gives 0.
+    half = safe_normalize(to_light + to_eye)
+    t1 = shift_tangent(tangent, normal, params.primary_shift + shift)
+    t2 = shift_tangent(tangent, normal, params.secondary_shift + shift)
+    specular = (params.primary_color * strand_specular(t1, half, params.primary_exponent)
+                + params.secondary_color * (mask * strand_specular(t2, half, params.secondary_exponent)))
+    return diffuse, specular
+
+
+# --------------------------------------------------------------------------- set-up (NumPy)
+
+
+def _table(name: str, value, width: int | None) -> tuple:
+    """A 1-D texture: a non-empty list of numbers in [0, 1] (width None) or of RGB ≥ 0."""
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        arr = np.full((0,), np.nan)
+    shape_ok = arr.ndim == 1 if width is None else (arr.ndim == 2 and arr.shape[1] == width)
+    if not shape_ok or len(arr) < 1 or not np.all(np.isfinite(arr)) or np.any(arr < 0) \
+            or (width is None and np.any(arr > 1)):
+        what = "numbers in [0, 1]" if width is None else "RGB triples of numbers ≥ 0"
+        raise SceneError(f"shading.{name} must be a non-empty list of {what}, got {value!r}")
+    return tuple(tuple(float(x) for x in row) for row in arr) if width else tuple(float(x) for x in arr)
+
+
+@dataclasses.dataclass(frozen=True)
+class ScheuermannMaps:
+    """How the Scheuermann model's per-point inputs are made (docs/model.md §17).
+
+    - `normal_center`: the strand normal points away from this point (default None: the
+      centre of the roots' bounding box).
+    - `texture_seed`: the seed of the shift texture and the noise mask.
+    - `shift_noise`: the shift texture's amplitude a: σ = a·(U − ½) per strand, U ~ U[0, 1)
+      (a = 1 is the seed's tex − 0.5 for a texture spanning [0, 1]).
+    - `mask_noise`: the noise mask's depth b: m = 1 − b·U per point (0: no mask).
+    - `base_texture`, `alpha_texture`, `occlusion`: 1-D textures over the position
+      u ∈ [0, 1] along the strand (root 0, tip 1), equally spaced samples, linearly
+      interpolated: base colour (RGB ≥ 0), opacity factor and ambient occlusion (each in
+      [0, 1]).
+    - `hair_occlusion`: κ_ao > 0 multiplies the ambient occlusion by the hair's own, the
+      mean of exp(−κ_ao·Ω) over directions spread on the sphere (`hair_occlusion`);
+      0: none (no work).
+    """
+
+    normal_center: tuple[float, float, float] | None = None
+    texture_seed: int = 0
+    shift_noise: float = 1.0
+    mask_noise: float = 1.0
+    base_texture: tuple = ((1.0, 1.0, 1.0),)
+    alpha_texture: tuple = (1.0,)
+    occlusion: tuple = (1.0,)
+    hair_occlusion: float = 0.0
+
+    def __post_init__(self):
+        if self.normal_center is not None:
+            c = np.asarray(self.normal_center, dtype=np.float64)
+            if c.shape != (3,) or not np.all(np.isfinite(c)):
+                raise SceneError("shading.normal_center must be 3 finite numbers, "
+                                 f"got {self.normal_center!r}")
+            object.__setattr__(self, "normal_center", tuple(float(x) for x in c))
+        seed = self.texture_seed
+        if isinstance(seed, bool) or int(seed) != seed or seed < 0:
+            raise SceneError(f"shading.texture_seed must be an integer >= 0, got {seed!r}")
+        object.__setattr__(self, "texture_seed", int(seed))
+        if not (np.isfinite(self.shift_noise) and self.shift_noise >= 0):
+            raise SceneError(f"shading.shift_noise must be >= 0, got {self.shift_noise!r}")
+        if not (0 <= self.mask_noise <= 1):
+            raise SceneError(f"shading.mask_noise must be in [0, 1], got {self.mask_noise!r}")
+        object.__setattr__(self, "shift_noise", float(self.shift_noise))
+        object.__setattr__(self, "mask_noise", float(self.mask_noise))
+        object.__setattr__(self, "base_texture", _table("base_texture", self.base_texture, 3))
+        object.__setattr__(self, "alpha_texture", _table("alpha_texture", self.alpha_texture, None))
+        object.__setattr__(self, "occlusion", _table("occlusion", self.occlusion, None))
+        if not (np.isfinite(self.hair_occlusion) and self.hair_occlusion >= 0):
+            raise SceneError(f"shading.hair_occlusion must be >= 0, got {self.hair_occlusion!r}")
+        object.__setattr__(self, "hair_occlusion", float(self.hair_occlusion))
+
+
+def strand_position(points: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """u ∈ [0, 1] per point: arc length from the root over the strand's length (`[P]`);
+    0 on strands of length 0."""
+    seg = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    starts = offsets[:-1]
+    seg[offsets[1:-1] - 1] = 0.0  # the gap between one strand's tip and the next root
+    cum = np.concatenate([[0.0], np.cumsum(seg)])
+    strand = np.repeat(np.arange(len(starts)), np.diff(offsets))
+    arc = cum - cum[starts][strand]
+    total = (cum[offsets[1:] - 1] - cum[starts])[strand]
+    # Fires on strands of length 0 (one point, or all points equal): u = 0.
+    return np.where(total > 0, arc / np.where(total > 0, total, 1.0), 0.0)
+
+
+def strand_normals(points: np.ndarray, tangent: np.ndarray, center) -> np.ndarray:
+    """Unit N ⟂ T pointing away from `center`: r − (r·T)T normalised, r = p − centre
+    (`[P, 3]`); 0 where T = 0."""
+    r = points - np.asarray(center, dtype=np.float64)
+    n = r - np.sum(r * tangent, axis=1, keepdims=True) * tangent
+    norm = np.linalg.norm(n, axis=1)
+    # Fallback fires where the strand runs straight at or away from the centre (r ∥ T, e.g. a
+    # fur ball's roots, or r = 0): no "away" there, so any perpendicular will do; we take the
+    # world axis least aligned with T, made perpendicular.
+    degenerate = norm <= 1e-9 * np.maximum(np.linalg.norm(r, axis=1), 1e-300)
+    axis = np.eye(3)[np.argmin(np.abs(tangent), axis=1)]
+    fallback = axis - np.sum(axis * tangent, axis=1, keepdims=True) * tangent
+    n = np.where(degenerate[:, None], fallback, n)
+    norm = np.linalg.norm(n, axis=1, keepdims=True)
+    has_tangent = np.sum(tangent * tangent, axis=1, keepdims=True) > 0.5
+    # Fires at points without tangent (norm 0 there too): N = 0, ambient only.
+    return np.where(has_tangent, n / np.where(has_tangent, norm, 1.0), 0.0)
+
+
+def _sample(table: tuple, u: np.ndarray) -> np.ndarray:
+    values = np.asarray(table, dtype=np.float64)
+    grid = np.linspace(0.0, 1.0, len(values))
+    if values.ndim == 1:
+        return np.interp(u, grid, values)
+    return np.stack([np.interp(u, grid, values[:, c]) for c in range(values.shape[1])], axis=1)
+
+
+def scheuermann_inputs(strands, tangent: np.ndarray, maps: ScheuermannMaps):
+    """The per-point inputs of the Scheuermann model, in NumPy.
+
+    **Returns:** `(points, colour_factor [P, 3], segment_alpha [E] or None)`: the
+    `ScheuermannPoints` (N, σ, m), the factor base(u)·AO that multiplies the per-point
+    colour, and the alpha texture per segment (at the mean u of its ends; None when the
+    texture is 1 everywhere, so the opacity is left untouched).
+    """
+    points, offsets = strands.points, strands.offsets
+    centre = maps.normal_center
+    if centre is None:
+        roots = points[offsets[:-1]]
+        centre = 0.5 * (roots.min(axis=0) + roots.max(axis=0))
+    normal = strand_normals(points, tangent, centre)
+    rng = np.random.default_rng(maps.texture_seed)
+    shift = maps.shift_noise * (rng.random(strands.num_strands) - 0.5)
+    mask = 1.0 - maps.mask_noise * rng.random(strands.num_points)
+    u = strand_position(points, offsets)
+    seg_alpha = segment_alpha(strands, maps, u)
+    occlusion = _sample(maps.occlusion, u)
+    if maps.hair_occlusion > 0:
+        occlusion = occlusion * hair_occlusion(strands, maps.hair_occlusion, seg_alpha)
+    factor = _sample(maps.base_texture, u) * occlusion[:, None]
+    pts = ScheuermannPoints(normal=normal, shift=shift[strands.strand_of_point], mask=mask)
+    return pts, factor, seg_alpha
+
+
+def segment_alpha(strands, maps: ScheuermannMaps, u: np.ndarray | None = None) -> np.ndarray | None:
+    """The alpha texture per segment, at the mean u of its ends (`[E]`); None when it is 1
+    everywhere (the opacity is then left untouched). `u`: `strand_position`, if known."""
+    if all(a == 1.0 for a in maps.alpha_texture):
+        return None
+    u = strand_position(strands.points, strands.offsets) if u is None else u
+    seg = strands.segments()
+    return _sample(maps.alpha_texture, 0.5 * (u[seg[:, 0]] + u[seg[:, 1]]))
+
+
+def sphere_directions(n: int) -> np.ndarray:
+    """n unit vectors spread evenly over the sphere (the Fibonacci lattice, `[n, 3]`)."""
+    k = np.arange(n) + 0.5
+    y = 1.0 - 2.0 * k / n
+    r = np.sqrt(1.0 - y * y)
+    phi = np.pi * (3.0 - np.sqrt(5.0)) * k
+    return np.stack([r * np.cos(phi), y, r * np.sin(phi)], axis=1)
+
+
+def hair_occlusion(strands, density: float, seg_alpha: np.ndarray | None = None) -> np.ndarray:
+    """Ambient occlusion by the hair itself, per point (`[P]`, in (0, 1]): the mean over
+    HAIR_OCCLUSION_DIRECTIONS directions d (`sphere_directions`) of exp(−density·Ω_d), Ω_d
+    the summed alpha in front of the point seen from d: §7's `exact` Ω for a directional
+    light from d on a HAIR_OCCLUSION_RESOLUTION² raster, with the strands' opacity (and
+    alpha texture, `seg_alpha`). NumPy, precomputed: not differentiated in the opacity."""
+    from ._scene import Light  # _scene imports this module
+    from ._shadows import shadow_setup
+
+    segments = strands.segments()
+    seg_strand = strands.strand_of_point[segments[:, 0]]
+    total = np.zeros(strands.num_points)
+    for d in sphere_directions(HAIR_OCCLUSION_DIRECTIONS):
+        setup = shadow_setup(strands.points, segments, seg_strand, strands.width,
+                             Light(direction=tuple(-d)), "exact", 1, HAIR_OCCLUSION_RESOLUTION,
+                             seg_alpha)
+        omega = exact_omega_numpy(setup, strands.alpha[setup.frag_strand] * setup.frag_coverage)
+        total += np.exp(-density * omega)
+    return total / HAIR_OCCLUSION_DIRECTIONS
+
+
+def exact_omega_numpy(setup, frag_alpha: np.ndarray) -> np.ndarray:
+    """`_shadows.exact_opacity` in NumPy, for an `exact` ShadowSetup (`[P]`): per-texel
+    inclusive prefix sums of the fragments' alpha, nearest first, read at each point's
+    (2r + 1)² texels. (One set-up, many shapes: no JAX compilation per direction.)"""
+    if frag_alpha.size == 0:  # fires when no segment reaches the raster: Ω = 0
+        return np.zeros(setup.index.shape[0])
+    cum = np.cumsum(frag_alpha)
+    group = np.cumsum(setup.frag_first) - 1
+    starts = np.flatnonzero(setup.frag_first)
+    prefix = cum - (cum[starts] - frag_alpha[starts])[group]
+    return np.sum(setup.weight * prefix[setup.index], axis=1)
