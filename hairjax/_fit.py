@@ -537,8 +537,13 @@ def _point(z, problem: _Problem):
     return _replace(p, _unpack_linear(c, problem.linear, problem.scalar)), phi @ c - rhs
 
 
+def _residuals(z, problem: _Problem):
+    """The weighted residuals at the solver's z, flat."""
+    return _point(z, problem)[1]
+
+
 def _loss(z, problem: _Problem):
-    return 0.5 * jnp.sum(_point(z, problem)[1] ** 2)
+    return 0.5 * jnp.sum(_residuals(z, problem) ** 2)
 
 
 def _residual_fn(z, problem: _Problem):
@@ -552,18 +557,25 @@ def _loss_fn(z, problem: _Problem):
 
 
 @eqx.filter_jit
-def _stationarity(z, problem: _Problem):
-    """(decrease, effect) at z. `decrease`: the loss a Gauss-Newton step from z would remove
-    were the residuals linear, ½‖U_kᵀ r‖², U_k the left singular vectors of J = ∂r/∂z above
-    _NULL_RATIO (JΔ = −U_k U_kᵀ r for the least-squares step Δ). It is 0 exactly at a
-    stationary point, whatever the solver's state; the solvers' own tests look at the last
-    step's size instead, which a poor curvature estimate (BFGS) or a shrunken trust region
-    makes small far from one. `effect`: ‖∂r/∂z_i‖ per entry of z."""
-    r, jvp = jax.linearize(lambda z: _point(z, problem)[1], z)
+def _stationarity(residuals: Callable, z, problem):
+    """(decrease, effect) at z for the residual function `residuals(z, problem)`.
+    `decrease`: the loss a Gauss-Newton step from z would remove were the residuals linear,
+    ½‖U_kᵀ r‖², U_k the left singular vectors of J = ∂r/∂z above _NULL_RATIO (JΔ = −U_k U_kᵀ r
+    for the least-squares step Δ). It is 0 exactly at a stationary point, whatever the
+    solver's state; the solvers' own tests look at the last step's size instead, which a
+    poor curvature estimate (BFGS) or a shrunken trust region makes small far from one.
+    `effect`: ‖∂r/∂z_i‖ per entry of z."""
+    r, jvp = jax.linearize(lambda z: residuals(z, problem), z)
     jac = jax.vmap(jvp, out_axes=1)(jnp.eye(z.size, dtype=z.dtype))
     u, sv, _ = jnp.linalg.svd(jac, full_matrices=False)
     keep = sv > _NULL_RATIO * sv[0]
     return 0.5 * jnp.sum(jnp.where(keep, u.T @ r, 0.0) ** 2), jnp.linalg.norm(jac, axis=0)
+
+
+@eqx.filter_jit
+def _half_square(residuals: Callable, z, problem):
+    """½‖r‖² at z for the residual function `residuals(z, problem)`."""
+    return 0.5 * jnp.sum(residuals(z, problem) ** 2)
 
 
 def _plateau_exit(z, problem: _Problem, effect, loss: float, rtol: float, atol: float):
@@ -584,7 +596,106 @@ def _plateau_exit(z, problem: _Problem, effect, loss: float, rtol: float, atol: 
 
 
 _jit_point = eqx.filter_jit(_point)
-_jit_loss = eqx.filter_jit(_loss)
+
+
+def _jit_loss(z, problem: _Problem):
+    """½‖r‖² at z, compiled (the same function as `_solve`'s losses)."""
+    return _half_square(_residuals, z, problem)
+
+
+def _solve(opt, fn, residuals: Callable, z, problem, losses: list, *, max_steps: int, rtol: float,
+           atol: float, report: Callable[[int, float], None], plateau: Callable | None = None):
+    """Step the optimistix solver `opt` (on `fn`, whose residuals are `residuals(z,
+    problem)`) from z until the convergence test confirms a stationary point, or it stops
+    for a stated reason. Appends each step's loss to `losses` and calls `report(step,
+    loss)`. `plateau(z, effect, loss)`: a z to restart from where a parameter has no effect
+    at a stationary point (or None). Returns (z, steps, termination, restarts, diverged).
+
+    The convergence test (docs/fitting.md, "When a fit has converged"): Gauss-Newton's
+    predicted decrease (`_stationarity`) within rtol·loss + atol. It is applied when the
+    solver's own test passes (if it fails, the solver restarts from its point, at most
+    _MAX_RESTARTS times) and when no step has lowered the loss for _STALL_STEPS steps."""
+    import optimistix as optx
+
+    steps, restarts = 0, 0
+    state = _init(opt, fn, z, problem)
+    done, result = _terminate(opt, fn, z, problem, state)
+    last_finite, confirmed, unconfirmed, stalled, diverged = z, False, False, False, False
+    while True:
+        if bool(done) and result != optx.RESULTS.successful:
+            break
+        restart = False
+        if bool(done) or stalled:
+            decrease, effect = _stationarity(residuals, z, problem)
+            loss = float(_half_square(residuals, z, problem))
+            if float(decrease) <= rtol * loss + atol:
+                # A stationary point, unless a parameter has no effect there (`plateau`).
+                lower = None if restarts == _MAX_RESTARTS or plateau is None else plateau(
+                    z, np.asarray(effect), loss)
+                if lower is None:
+                    confirmed = True
+                    break
+                z, restart = lower, True
+            elif bool(done):
+                # The solver's test passed away from a stationary point (seen: BFGS with p
+                # still 4.5× off, its curvature estimate stale): start it afresh here.
+                if restarts == _MAX_RESTARTS:
+                    unconfirmed = True
+                    break
+                restart = True
+            # (Stalled short of a stationary point: keep stepping.)
+        if restart:
+            restarts += 1
+            state = _init(opt, fn, z, problem)
+        if steps >= max_steps:
+            break
+        z, state = _step(opt, fn, z, problem, state)
+        steps += 1
+        losses.append(float(_half_square(residuals, z, problem)))
+        report(steps, losses[-1])
+        if not np.isfinite(losses[-1]):
+            # Fires for a solver that accepts every step (none of ours: trust regions and
+            # Armijo reject a non-finite loss): stop, return the last finite point.
+            z, diverged = last_finite, True
+            break
+        last_finite = z
+        done, result = _terminate(opt, fn, z, problem, state)
+        # No lower loss in _STALL_STEPS steps (a trust region at the float32 floor rejects
+        # every step): converged if the test above finds nothing left to gain.
+        recent = losses[-_STALL_STEPS - 1:]
+        stalled = (steps % _STALL_STEPS == 0 and len(recent) > _STALL_STEPS
+                   and min(recent[1:]) >= recent[0])
+    if diverged:
+        termination = "stopped: diverged (the loss became non-finite); kept the last finite point"
+    elif confirmed:
+        termination = "converged"
+    elif unconfirmed:
+        termination = (f"stopped: the solver's tolerance test passed {restarts + 1} times where "
+                       "Gauss-Newton still predicts a decrease beyond the tolerances")
+    elif bool(done):
+        termination = f"stopped: {optx.RESULTS[result]}"
+    else:
+        termination = f"stopped: reached max_steps = {max_steps}"
+    return z, steps, termination, restarts, diverged
+
+
+def _covariance(jac, r):
+    """From J and r at a fit's point: (σ²·diag (JᵀJ)⁺ over the determined directions, which
+    entries have weight in an undetermined one), σ² = ‖r‖²/(m − n); None where J or r is not
+    finite. A direction is undetermined when its JᵀJ eigenvalue is ≤ _NULL_RATIO²·λ_max
+    (numerically singular) or ≤ m·1e-12 (one unit along it moves the m residuals by under
+    1e-6 RMS, below float32 resolution of an image)."""
+    jac, r = np.asarray(jac, dtype=np.float64), np.asarray(r, dtype=np.float64)
+    if not (np.all(np.isfinite(jac)) and np.all(np.isfinite(r))):
+        # Fires at a point where the image or its derivatives overflow: nothing is known.
+        return None
+    m, n = jac.shape
+    evals, evecs = np.linalg.eigh(jac.T @ jac)
+    null = (evals <= _NULL_RATIO**2 * max(evals.max(initial=0.0), 1e-300)) | (evals <= m * 1e-12)
+    sigma2 = float(r @ r) / max(m - n, 1)
+    var = sigma2 * np.diag((evecs[:, ~null] / evals[~null]) @ evecs[:, ~null].T)
+    in_null = (np.abs(evecs[:, null]) > 0.1).any(axis=1) if null.any() else np.zeros(n, bool)
+    return var, in_null
 
 
 @eqx.filter_jit
@@ -651,8 +762,6 @@ def fit(
 
     **Returns:** a `FitResult`.
     """
-    import optimistix as optx
-
     scenes = [scene] if isinstance(scene, Scene) else list(scene)
     target_list = [targets] if np.ndim(targets) == 3 else list(targets)
     if len(scenes) == 1 and len(target_list) > 1:
@@ -686,82 +795,20 @@ def fit(
     # loss[0] is the loss at `init` itself, its gains included (not at the solved gains).
     losses = [float(_jit_plain_loss(init, terms))]
 
-    steps, diverged, termination, restarts = 0, False, "converged", 0
-
-    def stationary(z):
-        """The convergence test (Gauss-Newton predicts no decrease beyond the tolerances),
-        the loss at z, and each entry's effect on the residuals."""
-        decrease, effect = _stationarity(z, problem)
-        loss = float(_jit_loss(z, problem))
-        return float(decrease) <= rtol * loss + atol, loss, np.asarray(effect)
+    def report(step, loss):
+        if progress is not None:
+            progress(step, loss, time.perf_counter() - start - geometry_s)
 
     if not solved:
         # Only gains are fitted: one linear least-squares solve is the whole fit.
-        steps = 1
+        steps, termination, restarts, diverged = 1, "converged", 0, False
         losses.append(float(_jit_loss(z, problem)))
-        if progress is not None:
-            progress(steps, losses[-1], time.perf_counter() - start - geometry_s)
+        report(steps, losses[-1])
     else:
-        state = _init(opt, fn, z, problem)
-        done, result = _terminate(opt, fn, z, problem, state)
-        last_finite, confirmed, unconfirmed, stalled = z, False, False, False
-        while True:
-            if bool(done) and result != optx.RESULTS.successful:
-                break
-            restart = False
-            if bool(done) or stalled:
-                settled, loss, effect = stationary(z)
-                if settled:
-                    # A stationary point, unless p has no effect there: then the best p on a
-                    # grid, if lower (seen: Gauss-Newton and dogleg from a start 100× off
-                    # stopped with Ks = 0, Kd 43 % off, and every p "optimal").
-                    lower = None if restarts == _MAX_RESTARTS else _plateau_exit(
-                        z, problem, effect, loss, rtol, atol)
-                    if lower is None:
-                        confirmed = True
-                        break
-                    z, restart = lower, True
-                elif bool(done):
-                    # The solver's test passed away from a stationary point (seen: BFGS with
-                    # p still 4.5× off, its curvature estimate stale): start it afresh here.
-                    if restarts == _MAX_RESTARTS:
-                        unconfirmed = True
-                        break
-                    restart = True
-                # (Stalled short of a stationary point: keep stepping.)
-            if restart:
-                restarts += 1
-                state = _init(opt, fn, z, problem)
-            if steps >= max_steps:
-                break
-            z, state = _step(opt, fn, z, problem, state)
-            steps += 1
-            losses.append(float(_jit_loss(z, problem)))
-            if progress is not None:
-                progress(steps, losses[-1], time.perf_counter() - start - geometry_s)
-            if not np.isfinite(losses[-1]):
-                # Fires for a solver that accepts every step (none of ours: trust regions and
-                # Armijo reject a non-finite loss): stop, return the last finite point.
-                z, diverged = last_finite, True
-                break
-            last_finite = z
-            done, result = _terminate(opt, fn, z, problem, state)
-            # No lower loss in _STALL_STEPS steps (a trust region at the float32 floor rejects
-            # every step): converged if the test above finds nothing left to gain.
-            recent = losses[-_STALL_STEPS - 1:]
-            stalled = (steps % _STALL_STEPS == 0 and len(recent) > _STALL_STEPS
-                       and min(recent[1:]) >= recent[0])
-        if diverged:
-            termination = "stopped: diverged (the loss became non-finite); kept the last finite point"
-        elif confirmed:
-            termination = "converged"
-        elif unconfirmed:
-            termination = (f"stopped: the solver's tolerance test passed {restarts + 1} times where "
-                           "Gauss-Newton still predicts a decrease beyond the tolerances")
-        elif bool(done):
-            termination = f"stopped: {optx.RESULTS[result]}"
-        else:
-            termination = f"stopped: reached max_steps = {max_steps}"
+        z, steps, termination, restarts, diverged = _solve(
+            opt, fn, _residuals, z, problem, losses, max_steps=max_steps, rtol=rtol, atol=atol,
+            report=report, plateau=lambda z, effect, loss: _plateau_exit(z, problem, effect, loss,
+                                                                         rtol, atol))
     fitted = _jit_point(z, problem)[0]
     elapsed = time.perf_counter() - start - geometry_s
 
@@ -789,7 +836,8 @@ def _fit_scheuermann(scenes, target_list, mask_list, weight_list, names, init, s
     opt, least_squares = _solver(solver, rtol, atol)
     arrays = [_target_arrays(s, t, m, w) for s, t, m, w in zip(scenes, target_list, mask_list, weight_list)]
     init = scenes[0].params if init is None else init
-    return fit_scheuermann(scenes, arrays, names, init, opt, least_squares, scalar, max_steps, progress)
+    return fit_scheuermann(scenes, arrays, names, init, opt, least_squares, scalar, max_steps,
+                           rtol, atol, progress)
 
 
 def _to_space(params: ShadingParams, names, scalar, transforms) -> dict:
@@ -846,32 +894,20 @@ def _error_jacobian(u, fitted: ShadingParams, terms, names, scalar):
 
 def _standard_errors(terms, fitted: ShadingParams, names, scalar):
     """Standard errors from σ²(JᵀJ)⁻¹, J taken in the gains Kd, Ks and in log p, log κ,
-    mapped to the parameters by the transforms' derivatives (delta method).
-
-    A direction is not determined by the data when its JᵀJ eigenvalue λ is below
-    _NULL_RATIO²·λ_max = 1e-10·λ_max (numerically singular) or below m·1e-12: moving along it by one unit (an
-    e-fold of shininess or κ, a unit of gain) changes the m residuals by under 1e-6 RMS,
-    below float32 resolution of an image. Parameters with weight in such a direction get
-    no error."""
+    mapped to the parameters by the transforms' derivatives (delta method). Parameters
+    with weight in a direction the data do not determine (`_covariance`: one unit along it,
+    an e-fold of shininess or κ or a unit of gain, moves the residuals by under 1e-6 RMS, or
+    it is numerically singular) get no error."""
     space = _to_space(fitted, names, scalar, _ERROR_SPACE)
     for n in _LINEAR:  # the gains as fitted, a value at 0 included (no floor)
         if n in space:
             x = jnp.asarray(getattr(fitted, n))
             space[n] = jnp.mean(x, keepdims=True) if n in scalar else x
     flat = _flatten(space, names)
-    jac, r = _error_jacobian(flat, fitted, terms, tuple(names), tuple(scalar))
-    jac, r = np.asarray(jac, dtype=np.float64), np.asarray(r, dtype=np.float64)
-    m, n = jac.shape
-    if not (np.all(np.isfinite(jac)) and np.all(np.isfinite(r))):
-        # Fires at a point where the image or its derivatives overflow: nothing is known.
+    covariance = _covariance(*_error_jacobian(flat, fitted, terms, tuple(names), tuple(scalar)))
+    if covariance is None:
         return {name: None for name in names}, tuple(names)
-    jtj = jac.T @ jac
-    evals, evecs = np.linalg.eigh(jtj)
-    null = (evals <= _NULL_RATIO**2 * max(evals.max(initial=0.0), 1e-300)) | (evals <= m * 1e-12)
-    sigma2 = float(r @ r) / max(m - n, 1)
-    inv = (evecs[:, ~null] / evals[~null]) @ evecs[:, ~null].T
-    var_u = sigma2 * np.diag(inv)
-    in_null = (np.abs(evecs[:, null]) > 0.1).any(axis=1) if null.any() else np.zeros(n, bool)
+    var_u, in_null = covariance
     u = _unflatten(flat, names, scalar)
     std, undetermined, i = {}, [], 0
     for name in names:

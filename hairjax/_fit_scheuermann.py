@@ -18,14 +18,12 @@ import numpy as np
 
 from ._fit import (
     _FLOOR,
-    _NULL_RATIO,
     FitError,
     FitResult,
-    _init,
+    _covariance,
     _softplus,
     _softplus_inv,
-    _step,
-    _terminate,
+    _solve,
 )
 from ._render import geometry_stage, shading_stage
 from ._scheuermann import ScheuermannParams
@@ -125,11 +123,9 @@ _jit_loss = eqx.filter_jit(lambda z, problem: _loss_fn(z, problem)[0])
 
 
 def fit_scheuermann(scenes, arrays, names, init, opt, least_squares, scalar, max_steps,
-                    progress) -> FitResult:
+                    rtol, atol, progress) -> FitResult:
     """`hairjax.fit` for Scheuermann scenes: `arrays` are `_target_arrays`' (target,
     √weight) per scene; the rest as `fit` passes them."""
-    import optimistix as optx
-
     if not isinstance(init, ScheuermannParams):
         raise FitError(f"a Scheuermann scene is fitted from ScheuermannParams, got {type(init).__name__}")
     names = check_names(names, scalar)
@@ -144,30 +140,13 @@ def fit_scheuermann(scenes, arrays, names, init, opt, least_squares, scalar, max
     fn = _residual_fn if least_squares else _loss_fn
     losses = [float(0.5 * jnp.sum(_residuals_at(init, problem) ** 2))]
 
-    # The loop of `_fit.fit` (kept separate so the Kajiya-Kay path is untouched).
-    steps, diverged, termination = 0, False, "converged"
-    state = _init(opt, fn, z, problem)
-    done, result = _terminate(opt, fn, z, problem, state)
-    last_finite = z
-    while not bool(done) and steps < max_steps:
-        z, state = _step(opt, fn, z, problem, state)
-        steps += 1
-        losses.append(float(_jit_loss(z, problem)))
+    def report(step, loss):
         if progress is not None:
-            progress(steps, losses[-1], time.perf_counter() - start - geometry_s)
-        if not np.isfinite(losses[-1]):
-            # Fires for a solver that accepts a non-finite loss: keep the last finite point.
-            z, diverged = last_finite, True
-            break
-        last_finite = z
-        done, result = _terminate(opt, fn, z, problem, state)
-    if bool(done):
-        termination = ("converged" if result == optx.RESULTS.successful
-                       else f"stopped: {optx.RESULTS[result]}")
-    elif diverged:
-        termination = "stopped: diverged (the loss became non-finite); kept the last finite point"
-    else:
-        termination = f"stopped: reached max_steps = {max_steps}"
+            progress(step, loss, time.perf_counter() - start - geometry_s)
+
+    z, steps, termination, restarts, diverged = _solve(
+        opt, fn, _residuals, z, problem, losses, max_steps=max_steps, rtol=rtol, atol=atol,
+        report=report)
     fitted = _from_flat(z, init, names, scalar, _TRANSFORMS)
     elapsed = time.perf_counter() - start - geometry_s
     std_error, undetermined = _standard_errors(fitted, problem)
@@ -176,7 +155,7 @@ def fit_scheuermann(scenes, arrays, names, init, opt, least_squares, scalar, max
     return FitResult(params=fitted, initial=init, fitted=names, loss=losses, steps=steps,
                      time_s=elapsed, geometry_s=geometry_s, termination=termination,
                      std_error=std_error, undetermined=undetermined,
-                     rmse=float(np.sqrt(2 * final_loss / max(n_pixels, 1.0))))
+                     rmse=float(np.sqrt(2 * final_loss / max(n_pixels, 1.0))), restarts=restarts)
 
 
 @eqx.filter_jit
@@ -188,20 +167,14 @@ def _error_jacobian(u, fitted, problem: _Problem):
 
 
 def _standard_errors(fitted: ScheuermannParams, problem: _Problem):
-    """σ²(JᵀJ)⁻¹ in the error space, mapped to the parameters (delta method); directions
-    with JᵀJ eigenvalue ≤ _NULL_RATIO²·λ_max or ≤ m·1e-12 are undetermined (as `_fit`)."""
+    """σ²(JᵀJ)⁻¹ in the error space, mapped to the parameters (delta method); undetermined
+    directions as `_fit._covariance` decides them."""
     names, scalar = problem.names, problem.scalar
     u = _to_flat(fitted, names, scalar, _ERROR_SPACE)
-    jac, r = _error_jacobian(u, fitted, problem)
-    jac, r = np.asarray(jac, np.float64), np.asarray(r, np.float64)
-    if not (np.all(np.isfinite(jac)) and np.all(np.isfinite(r))):
-        # Fires where the image or its derivatives overflow: nothing is known.
+    covariance = _covariance(*_error_jacobian(u, fitted, problem))
+    if covariance is None:
         return {n: None for n in names}, names
-    m, k = jac.shape
-    evals, evecs = np.linalg.eigh(jac.T @ jac)
-    null = (evals <= _NULL_RATIO**2 * max(evals.max(initial=0.0), 1e-300)) | (evals <= m * 1e-12)
-    var_u = float(r @ r) / max(m - k, 1) * np.diag((evecs[:, ~null] / evals[~null]) @ evecs[:, ~null].T)
-    in_null = (np.abs(evecs[:, null]) > 0.1).any(axis=1) if null.any() else np.zeros(k, bool)
+    var_u, in_null = covariance
     std, undetermined, i = {}, [], 0
     u = np.asarray(u)
     for n in names:

@@ -414,7 +414,7 @@ def test_predicted_decrease_is_the_gauss_newton_step_of_the_residuals(scene, tar
     step = np.linalg.lstsq(jac, -r, rcond=None)[0]
     expected = 0.5 * np.sum((jac @ step) ** 2)
     assert expected > 1e-6 * 0.5 * np.sum(r**2)  # far from the optimum: a real decrease
-    decrease, effect = fit_mod._stationarity(z, problem)
+    decrease, effect = fit_mod._stationarity(fit_mod._residuals, z, problem)
     assert float(decrease) == pytest.approx(expected, rel=1e-6)
     np.testing.assert_allclose(effect, np.linalg.norm(jac, axis=0), rtol=1e-6)
 
