@@ -19,12 +19,12 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import statistics
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
+
+from hairjax._compare import image_stats, median_time
 
 DEFAULT_SIZES = (4, 8, 16, 32, 64, 128, 256, 512, 1024)
 CSV_COLUMNS = ("size", "rmse", "max_abs", "shading_s", "analytic_shading_s",
@@ -54,21 +54,10 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
-def median_time(fn, repeats: int) -> float:
-    """Median wall time of `repeats` calls of `fn` after one untimed call."""
-    fn()
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
-
-
 def errors(image, reference) -> tuple[float, float]:
     """RMSE and largest absolute difference over the RGB channels."""
-    d = np.asarray(image, np.float64)[..., :3] - np.asarray(reference, np.float64)[..., :3]
-    return float(np.sqrt(np.mean(d * d))), float(np.abs(d).max(initial=0.0))
+    stats = image_stats(np.asarray(image)[..., :3], np.asarray(reference)[..., :3])
+    return stats["rmse"], stats["max_abs"]
 
 
 def measure(scene, sizes, repeats: int, gl: bool) -> list[dict]:

@@ -261,7 +261,7 @@ def _prepare(scene: Scene, order=None) -> Setup:
         receivers = surface if occluder else None
         shadow = shadow_setup(points, segments, seg_strand, strands.width, light,
                               scene.shadows.method, scene.shadows.maps, scene.shadows.resolution,
-                              receivers, segment_alpha)
+                              receivers=receivers, segment_alpha=segment_alpha)
         lap("shadow set-up")
         if occluder:
             # §13: the occluder's shadow, a depth test in the light's view.

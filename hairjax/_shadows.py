@@ -121,7 +121,7 @@ def with_receivers(frame: LightFrame, receivers: np.ndarray | None) -> LightFram
 
 
 def shadow_setup(points, segments, seg_strand, width, light, method: str, maps: int,
-                 resolution: int, receivers: np.ndarray | None = None,
+                 resolution: int, *, receivers: np.ndarray | None = None,
                  segment_alpha: np.ndarray | None = None) -> ShadowSetup:
     """Rasterise the strands from the light (same ribbons as the camera pass; width in
     texels = the strand's width in pixels) and plan Ω at every point, then at every

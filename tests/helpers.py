@@ -50,3 +50,30 @@ def unexplained_pixels(scene, gl_image, jax_image):
     # toggled fragment changes a pixel by at most its weight times that.
     band = camera_band(scene, colour_bound=float(np.max(jax_image[..., :3])))
     return np.flatnonzero((diff > PIXEL_TOL) & ~band), band
+
+
+def render_gl_with_edited_shader(scene, omega, old: str, new: str, occluder=None):
+    """`render_gl(scene, omega=omega, occluder=occluder).image` with `old` replaced by `new` in model.glsl
+    (which must contain it): a wrong shader, for tests that the cross-checks catch one.
+    The shader cache is cleared before and after, so later renders use the real shader."""
+    import pytest
+
+    from hairjax.gl import _programs, render_gl
+
+    original = _programs.shader_source
+
+    def edited(name):
+        text = original(name)
+        if name == "model.glsl":
+            assert old in text
+            text = text.replace(old, new)
+        return text
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(_programs, "shader_source", edited)
+        _programs.clear_cache()
+        try:
+            return render_gl(scene, omega=omega, occluder=occluder).image
+        finally:
+            patch.undo()
+            _programs.clear_cache()

@@ -29,7 +29,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import DATA, MAX_BAND, PIXEL_TOL, TAU_TOL, shadow_band, unexplained_pixels
+from helpers import (
+    DATA,
+    MAX_BAND,
+    PIXEL_TOL,
+    TAU_TOL,
+    render_gl_with_edited_shader,
+    shadow_band,
+    unexplained_pixels,
+)
 
 import hairjax as hj
 
@@ -124,29 +132,15 @@ def test_both_shading_conventions(gl, model):
     assert bad.size == 0
 
 
-def test_a_wrong_shader_fails_the_check(gl, references, monkeypatch):
+def test_a_wrong_shader_fails_the_check(gl, references):
     """Flip the sign of the seed's specular term in GLSL: the check must catch it."""
-    from hairjax.gl import _programs, render_gl
-
     scene, jax_image, omega = references("point_light")
-    original = _programs.shader_source
-
-    def flipped(name):
-        text = original(name)
-        if name == "model.glsl":
-            assert "tl * tv + sin_tl * sin_tv" in text
-            text = text.replace("tl * tv + sin_tl * sin_tv", "tl * tv - sin_tl * sin_tv")
-        return text
-
-    monkeypatch.setattr(_programs, "shader_source", flipped)
-    _programs.clear_cache()
-    try:
-        wrong = render_gl(scene, omega=omega).image
-    finally:
-        monkeypatch.undo()
-        _programs.clear_cache()
+    wrong = render_gl_with_edited_shader(scene, omega, "tl * tv + sin_tl * sin_tv",
+                                         "tl * tv - sin_tl * sin_tv")
     bad, _ = unexplained_pixels(scene, wrong, jax_image)
     assert bad.size > 100
     # And the correct shader passes again afterwards.
+    from hairjax.gl import render_gl
+
     bad, _ = unexplained_pixels(scene, render_gl(scene, omega=omega).image, jax_image)
     assert bad.size == 0

@@ -10,7 +10,14 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from helpers import MAX_BAND, PIXEL_TOL, TAU_TOL, shadow_band, unexplained_pixels
+from helpers import (
+    MAX_BAND,
+    PIXEL_TOL,
+    TAU_TOL,
+    render_gl_with_edited_shader,
+    shadow_band,
+    unexplained_pixels,
+)
 
 import hairjax as hj
 from hairjax._errors import SceneError
@@ -361,9 +368,13 @@ def gl_scene():
 
 @pytest.fixture(scope="module")
 def gl_reference():
+    """The scene, JAX's image, Ω and occluder light (the sphere head casts and receives)."""
+    from hairjax.gl import occluder_light
+
     scene = gl_scene()
     geom = geometry_stage(scene)
-    return scene, np.asarray(hj.shading_stage(geom, scene.params)), np.asarray(geom.omega)
+    return (scene, np.asarray(hj.shading_stage(geom, scene.params)), np.asarray(geom.omega),
+            occluder_light(scene, geom))
 
 
 def test_gl_matches_jax(gl, gl_reference):
@@ -371,8 +382,8 @@ def test_gl_matches_jax(gl, gl_reference):
     the bands that float32 boundary decisions explain."""
     from hairjax.gl import render_gl
 
-    scene, jax_image, omega = gl_reference
-    result = render_gl(scene, omega=omega)
+    scene, jax_image, omega, occluder = gl_reference
+    result = render_gl(scene, omega=omega, occluder=occluder)
     bad, band = unexplained_pixels(scene, result.image, jax_image)
     assert bad.size == 0, f"{bad.size} pixels differ by > {PIXEL_TOL} with no boundary nearby"
     assert band.mean() <= MAX_BAND
@@ -383,27 +394,11 @@ def test_gl_matches_jax(gl, gl_reference):
     assert np.flatnonzero((dtau > TAU_TOL) & ~shadow_band(scene)).size == 0
 
 
-def test_a_wrong_scheuermann_shader_fails_the_check(gl, gl_reference, monkeypatch):
+def test_a_wrong_scheuermann_shader_fails_the_check(gl, gl_reference):
     """Flip the sign of the tangent shift in GLSL: the cross-check must catch it."""
-    from hairjax.gl import _programs, render_gl
-
-    scene, jax_image, omega = gl_reference
-    original = _programs.shader_source
-
-    def flipped(name):
-        text = original(name)
-        if name == "model.glsl":
-            assert "(T + shift * N)" in text
-            text = text.replace("(T + shift * N)", "(T - shift * N)")
-        return text
-
-    monkeypatch.setattr(_programs, "shader_source", flipped)
-    _programs.clear_cache()
-    try:
-        wrong = render_gl(scene, omega=omega).image
-    finally:
-        monkeypatch.undo()
-        _programs.clear_cache()
+    scene, jax_image, omega, occluder = gl_reference
+    wrong = render_gl_with_edited_shader(scene, omega, "(T + shift * N)", "(T - shift * N)",
+                                         occluder=occluder)
     bad, _ = unexplained_pixels(scene, wrong, jax_image)
     assert bad.size > 50
 
