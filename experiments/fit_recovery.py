@@ -106,7 +106,7 @@ def main(argv=None) -> int:
                     weak = [n for n in PARAMS if n not in r.undetermined and np.max(
                         np.asarray(r.std_error[n]) / np.abs(np.asarray(getattr(r.params, n)))) > bound / 2]
                     rows.append(dict(scene=scene_name, set=k, noise=noise, solver=solver,
-                                     masked=float(1 - mask.mean()), steps=r.steps,
+                                     masked=float(1 - mask.mean()), steps=r.steps, restarts=r.restarts,
                                      time_s=time.perf_counter() - start, termination=r.termination,
                                      undetermined=" ".join([*r.undetermined, *weak]),
                                      **{f"err_{n}": errors[n] for n in PARAMS},
