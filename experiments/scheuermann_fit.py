@@ -54,10 +54,12 @@ def run(size: int = 96, strands: int = 1000, target: str = "gl", max_steps: int 
     truth = params_of(TRUE, scene.params)
     geometry = hj.geometry_stage(scene)
     if target == "gl":
-        from hairjax.gl import render_gl
+        from hairjax.gl import occluder_light, render_gl
 
-        # Ω from the JAX geometry stage, so only the camera pass differs (float32 shading).
-        image = render_gl(scene, truth, omega=np.asarray(geometry.omega)).image
+        # Ω and the occluder's light from the JAX geometry stage, so only the camera pass
+        # differs (float32 shading).
+        image = render_gl(scene, truth, omega=np.asarray(geometry.omega),
+                          occluder=occluder_light(scene, geometry)).image
     else:
         image = np.asarray(hj.shading_stage(geometry, truth))
     result = hj.fit(scene, image, fit=NAMES, init=params_of(START, scene.params),
