@@ -29,7 +29,7 @@ from jaxtyping import Array, Float
 from ._composite import over_weights
 from ._lookup import LOOKUP_MODELS, kajiya_kay_lookup
 from ._occluder import occluder_hits, occluder_light_view, occluder_visibility, sphere_hits
-from ._ordering import draw_order, segment_depth, stable_argsort_uint32
+from ._ordering import draw_order, hair_centre, segment_depth, stable_argsort_uint32, static_order
 from ._projection import View, camera_view
 from ._raster import rasterize
 from ._scene import Scene
@@ -168,6 +168,10 @@ def visibility_order(scene: Scene, order=None):
     drawable_mask = (depth[segments[:, 0]] > cam.near) & (depth[segments[:, 1]] > cam.near)
     if order is not None:
         order = _given_order(order, len(segments))
+        return view, xy, depth, segments, order[drawable_mask[order]]
+    if scene.ordering.method == "static":  # the same for every view: no depths needed
+        order = static_order(scene.strands.points, segments,
+                             hair_centre(scene.strands.points, scene.strands.offsets))
         return view, xy, depth, segments, order[drawable_mask[order]]
     drawable = np.flatnonzero(drawable_mask)
     order = drawable[draw_order(segment_depth(depth, segments[drawable]),

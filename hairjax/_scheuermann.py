@@ -20,6 +20,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from ._constants import SCHEUERMANN_DIFFUSE_FLOOR
 from ._errors import SceneError
+from ._ordering import hair_centre
 from ._shading import specular_power
 from ._vectors import safe_norm, safe_normalize
 
@@ -315,8 +316,7 @@ def scheuermann_inputs(strands, tangent: np.ndarray, maps: ScheuermannMaps):
     points, offsets = strands.points, strands.offsets
     centre = maps.normal_center
     if centre is None:
-        roots = points[offsets[:-1]]
-        centre = 0.5 * (roots.min(axis=0) + roots.max(axis=0))
+        centre = hair_centre(points, offsets)
     normal = strand_normals(points, tangent, centre)
     rng = np.random.default_rng(maps.texture_seed)
     shift = maps.shift_noise * (rng.random(strands.num_strands) - 0.5)
