@@ -149,9 +149,10 @@ def test_static_scene_file_loads_and_renders(tmp_path):
 def test_static_order_gl_matches_jax(gl):
     """GL draws in the same static order: its image equals JAX's but for the band of
     boundary pixels (tests/helpers.py `unexplained_pixels`, tolerances in hairjax/_band.py)."""
+    from helpers import small_furball_scene, unexplained_pixels
+
     import hairjax as hj
     from hairjax.gl import render_gl
-    from helpers import small_furball_scene, unexplained_pixels
 
     scene = small_furball_scene(strands=60, size=40, ordering=hj.Ordering("static"))
     jax_image = np.asarray(hj.render(scene))
