@@ -142,35 +142,35 @@ def _plot(rows, timing_rows, path: Path, title: str) -> None:
     import matplotlib.pyplot as plt
 
     scenes = list(dict.fromkeys(r["scene"] for r in rows))
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    labels = list(dict.fromkeys(_label(r["method"], r["bins"]) for r in rows))
+    lines = ["-", "--", ":", "-."]
+    markers = ["o", "s", "^", "D"]
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.4))
     for si, scene in enumerate(scenes):
-        color = f"C{si}"
-        labels = list(dict.fromkeys(_label(r["method"], r["bins"]) for r in rows if r["scene"] == scene))
-        for label in labels:
+        for li, label in enumerate(labels):
             sel = sorted((r for r in rows if r["scene"] == scene
                           and _label(r["method"], r["bins"]) == label), key=lambda r: r["angle"])
-            axes[0].plot([r["angle"] for r in sel], [r["rmse"] for r in sel], marker=".",
-                         label=f"{scene}: {label}", alpha=0.8)
+            axes[0].plot([r["angle"] for r in sel], [r["rmse"] for r in sel], color=f"C{li}",
+                         linestyle=lines[si % 4], marker=".", label=f"{scene}: {label}")
         for t in timing_rows:
-            if t["scene"] != scene:
+            if t["scene"] != scene or t["method"] == "exact":  # the reference: error 0
                 continue
-            # The exact order is the reference: its error is 0 by definition.
-            err = 0.0 if t["method"] == "exact" else np.median(
-                [r["rmse"] for r in rows if r["scene"] == scene
-                 and (r["method"], r["bins"]) == (t["method"], t["bins"])])
+            li = labels.index(_label(t["method"], t["bins"]))
+            err = np.median([r["rmse"] for r in rows if r["scene"] == scene
+                             and (r["method"], r["bins"]) == (t["method"], t["bins"])])
             once = t["when"] == "once"
-            axes[1].scatter(t["order_s"], err, color=color, marker="o",
-                            facecolors="none" if once else color)
-            axes[1].annotate(_label(t["method"], t["bins"]) + (" (once)" if once else ""),
-                             (t["order_s"], err), fontsize=7, xytext=(3, 3), textcoords="offset points")
+            axes[1].scatter(t["order_s"], err, color=f"C{li}", marker=markers[si % 4],
+                            facecolors="none" if once else f"C{li}",
+                            label=f"{scene}: {_label(t['method'], t['bins'])}")
     axes[0].set_xlabel("camera turned by (degrees)")
     axes[0].set_ylabel("RMSE against the exact order")
-    axes[0].set_yscale("symlog", linthresh=1e-5)
-    axes[0].legend(fontsize=6, ncol=2)
+    axes[0].set_yscale("log")
+    axes[0].legend(fontsize=5, ncol=3)
     axes[1].set_xscale("log")
-    axes[1].set_yscale("symlog", linthresh=1e-5)
+    axes[1].set_yscale("log")
     axes[1].set_xlabel("time to compute the order (s; hollow: once, filled: every view)")
     axes[1].set_ylabel("median RMSE over the views")
+    axes[1].legend(fontsize=5, ncol=2)
     for ax in axes:
         ax.grid(True, alpha=0.3)
     fig.suptitle(title, fontsize=9)
