@@ -365,7 +365,7 @@ def hair_occlusion(strands, density: float, seg_alpha: np.ndarray | None = None)
     for d in sphere_directions(HAIR_OCCLUSION_DIRECTIONS):
         setup = shadow_setup(strands.points, segments, seg_strand, strands.width,
                              Light(direction=tuple(-d)), "exact", 1, HAIR_OCCLUSION_RESOLUTION,
-                             segment_alpha=seg_alpha)
+                             segment_alpha=seg_alpha, width_units=strands.width_units)
         omega = exact_omega_numpy(setup, strands.alpha[setup.frag_strand] * setup.frag_coverage)
         total += np.exp(-density * omega)
     return total / HAIR_OCCLUSION_DIRECTIONS
