@@ -36,7 +36,7 @@ import numpy as np
 
 from ._constants import SHADOW_FILTER_RADIUS
 from ._occluder import interpolation_bound, occluder_hits, silhouette_pixels
-from ._raster import Fragments, rasterize
+from ._raster import Fragments, rasterize, ribbon_widths
 from ._render import geometry_stage, visibility_order
 from ._scene import Scene
 from ._scheuermann import segment_alpha
@@ -147,11 +147,12 @@ def omega_uncertainty(scene: Scene) -> np.ndarray:
         return np.zeros(s.num_points)
     r = scene.shadows.resolution
     segs = s.segments()
-    frame = light_frame(s.points, segs, s.width, scene.light, r)
+    frame = light_frame(s.points, segs, s.width, scene.light, r, s.width_units)
     ids = frame.drawable
     a, b = segs[ids, 0], segs[ids, 1]
-    width = s.width[s.strand_of_point[a]]
     xy, z = frame.xy, frame.depth
+    width = ribbon_widths(s.width[s.strand_of_point[a]], s.width_units, z[a], z[b],
+                          frame.view.focal, frame.view.perspective)
     frags, near_end = end_band(xy[a], xy[b], z[a], z[b], width, r, r, frame.view.perspective)
     opacity = _segment_opacity(scene)[ids[frags.segment]] * frags.coverage
     # Clipped before the cast: unseen points of a light at the hair's centre lie at ~1e300.
@@ -280,7 +281,8 @@ def occluder_light_uncertainty(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     # Fires where the texel holds no occluder (∞): no threshold to be near.
     gap = np.where(np.isfinite(blocker), z - blocker - shadow_bias(view, z), np.inf)
     unsure = near_edge(xy) | outline[texel] | (np.abs(gap) < 1e-5 * np.maximum(np.abs(z), 1e-300))
-    frame = with_receivers(light_frame(s.points, s.segments(), s.width, scene.light, r), surface)
+    frame = with_receivers(light_frame(s.points, s.segments(), s.width, scene.light, r, s.width_units),
+                           surface)
     receiver = slice(s.num_points, None)
     unsure[receiver] |= near_edge(frame.xy[receiver])
     if scene.shadows.method == "opacity-maps":
@@ -337,8 +339,9 @@ def _camera_risk(scene: Scene) -> dict:
     near_first = order[::-1]
     s0, s1 = segments[near_first, 0], segments[near_first, 1]
     strand = scene.strands.strand_of_point[s0]
-    frags, near_end = end_band(xy[s0], xy[s1], depth[s0], depth[s1],
-                               scene.strands.width[strand], cam.width, cam.height, True)
+    width = ribbon_widths(scene.strands.width[strand], scene.strands.width_units, depth[s0],
+                          depth[s1], view.focal, view.perspective)
+    frags, near_end = end_band(xy[s0], xy[s1], depth[s0], depth[s1], width, cam.width, cam.height, True)
     sort = np.argsort(frags.pixel, kind="stable")  # front to back within a pixel
     pixel = frags.pixel[sort]
     seg = frags.segment[sort]

@@ -1,4 +1,5 @@
-"""Visibility ordering of segments (kim-2003 §3): depth bins, exact sort, or none.
+"""Visibility ordering of segments (kim-2003 §3): depth bins, exact sort, or none; and
+the static inside-to-outside order of scheuermann-2004 slide 14, from the geometry alone.
 
 Returns a draw order: segment indices, the first drawn first (farthest first).
 """
@@ -7,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["bin_index", "draw_order", "segment_depth"]
+__all__ = ["bin_index", "draw_order", "hair_centre", "segment_depth", "static_order"]
 
 
 def segment_depth(depth: np.ndarray, segments: np.ndarray) -> np.ndarray:
@@ -50,6 +51,29 @@ def draw_order(seg_depth: np.ndarray, method: str, bins: int = 256) -> np.ndarra
             key = key.astype(np.uint16)
         return np.argsort(key, kind="stable").astype(np.int64)
     raise ValueError(f"unknown ordering method {method!r}")
+
+
+def hair_centre(points: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """The centre of the roots' bounding box (`[3]`): the "inside" of the hair (and the point
+    the Scheuermann strand normal points away from, docs/model.md §17)."""
+    roots = np.asarray(points, np.float64)[np.asarray(offsets)[:-1]]
+    return 0.5 * (roots.min(axis=0) + roots.max(axis=0))
+
+
+def static_order(points: np.ndarray, segments: np.ndarray, centre: np.ndarray) -> np.ndarray:
+    """scheuermann-2004 slide 14: a draw order computed once, from the geometry alone.
+
+    Segments are drawn **inside to outside**: by increasing distance from `centre` of their
+    endpoint nearer to it (the inside analogue of kim-2003's "larger depth"), ties by index.
+    For a viewer outside the hair, what is farther inside is mostly behind, so "over" in this
+    order approximates back to front from every side.
+
+    **Arguments:** `points` `[P, 3]`, `segments` `[E, 2]` (point indices), `centre` `[3]`.
+    **Returns:** `int64` `[E]`, a permutation of the segment indices, the first drawn first.
+    """
+    radius = np.linalg.norm(np.asarray(points, np.float64) - np.asarray(centre, np.float64), axis=1)
+    key = np.minimum(radius[segments[:, 0]], radius[segments[:, 1]])
+    return np.argsort(key, kind="stable").astype(np.int64)
 
 
 def stable_argsort_uint32(keys: np.ndarray) -> np.ndarray:

@@ -7,6 +7,8 @@ d = |(c − p0) × u| from its line, is covered by
     coverage = clamp(min(d + ½, w/2) − max(d − ½, −w/2), 0, 1)   if 0 ≤ s < L, else 0,
 
 the overlap of a unit pixel box aligned with the ribbon and the ribbon's cross-section.
+The width may differ at the two ends (ribbons of world-space width, `ribbon_widths`): then
+w = (1 − t)·w₀ + t·w₁ at the pixel centre's t = s/L.
 Along the segment, the half-open interval [0, L) gives every pixel to exactly one of two
 collinear neighbours: a straight strand drawn as 1 or 8 segments covers the same pixels
 with the same coverage (no double-covered joints, no gaps).
@@ -26,7 +28,7 @@ import numpy as np
 
 from ._constants import PIXEL_HALF_EXTENT
 
-__all__ = ["Fragments", "rasterize", "ribbon_coverage"]
+__all__ = ["Fragments", "rasterize", "ribbon_coverage", "ribbon_widths"]
 
 _CHUNK = 1 << 20  # columns per kernel call: bounds peak memory to a few hundred MB
 
@@ -37,6 +39,28 @@ def ribbon_coverage(d, width):
     half = 0.5 * width
     return jnp.clip(jnp.minimum(d + PIXEL_HALF_EXTENT, half) - jnp.maximum(d - PIXEL_HALF_EXTENT, -half),
                     0.0, 1.0)
+
+
+def ribbon_widths(width: np.ndarray, units: str, depth0: np.ndarray, depth1: np.ndarray,
+                  focal: float, perspective: bool) -> np.ndarray:
+    """Each segment's ribbon width in the view's pixels at its two ends (`[E, 2]`,
+    docs/model.md §5).
+
+    **Arguments:** `width` per segment (`[E]`) in `units`; the ends' depths (`[E]`); the
+    view's `focal` (pixels per unit of lateral offset / depth, or per world unit for an
+    orthographic view) and whether it is a perspective view. `"pixels"`: `width` at both
+    ends; `"world"`: w·f/D at depth D in perspective, w·f orthographic.
+    """
+    width = np.asarray(width, np.float64)
+    if units == "pixels":
+        return np.stack([width, width], axis=1)
+    if units != "world":
+        raise ValueError(f"width units must be 'pixels' or 'world', got {units!r}")
+    if not perspective:
+        return np.stack([width * focal, width * focal], axis=1)
+    # Drawn segments lie beyond the near plane (D > 0); the caller culls the others.
+    return np.stack([width * focal / np.asarray(depth0, np.float64),
+                     width * focal / np.asarray(depth1, np.float64)], axis=1)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -69,7 +93,8 @@ def rasterize(xy0: np.ndarray, xy1: np.ndarray, z0: np.ndarray, z1: np.ndarray,
     """All (segment, pixel) pairs with positive coverage, segment after segment.
 
     **Arguments:** per segment `xy0`, `xy1` (`[E, 2]` pixel coordinates), depths `z0`, `z1`
-    (`[E]`), ribbon `width` (`[E]`, pixels); the raster size; whether depth is
+    (`[E]`), ribbon `width` (`[E]` pixels, or `[E, 2]`: at each end, `ribbon_widths`); the
+    raster size; whether depth is
     interpolated perspective-correctly (1/z linear in screen space) or linearly.
 
     Columns along each segment's major axis are laid out here in NumPy; the per-pixel
@@ -79,7 +104,9 @@ def rasterize(xy0: np.ndarray, xy1: np.ndarray, z0: np.ndarray, z1: np.ndarray,
     xy0 = np.asarray(xy0, np.float64)
     xy1 = np.asarray(xy1, np.float64)
     n = xy0.shape[0]
-    width = np.broadcast_to(np.asarray(width, np.float64), (n,))
+    width = np.asarray(width, np.float64)
+    widths = np.broadcast_to(width if width.ndim == 2 else width[..., None], (n, 2))
+    width = widths.max(axis=1)  # the wider end bounds the footprint
     z0 = np.broadcast_to(np.asarray(z0, np.float64), (n,))
     z1 = np.broadcast_to(np.asarray(z1, np.float64), (n,))
     delta = xy1 - xy0
@@ -100,8 +127,8 @@ def rasterize(xy0: np.ndarray, xy1: np.ndarray, z0: np.ndarray, z1: np.ndarray,
     rows = int(np.ceil(2 * float(reach.max(initial=0.0)) * np.sqrt(2))) + 1  # initial: no segments
 
     # Per segment, what the kernel needs (float64 here; the kernel casts).
-    seg_data = np.stack([xy0[:, 0], xy0[:, 1], delta[:, 0], delta[:, 1], length, width,
-                         z0, z1, lo, x_major.astype(np.float64), reach], axis=1)
+    seg_data = np.stack([xy0[:, 0], xy0[:, 1], delta[:, 0], delta[:, 1], length, widths[:, 0],
+                         z0, z1, lo, x_major.astype(np.float64), reach, widths[:, 1]], axis=1)
     # Columns are independent once they carry their segment's data, so they are cut into
     # chunks of exactly _CHUNK (only the last is padded): the kernel compiles for one size.
     seg_of_col = np.repeat(np.arange(n, dtype=np.int32), columns)
@@ -136,12 +163,12 @@ def _candidates(columns, rows, image_width, image_height, perspective):
 
     Coverage 0 marks a candidate that is not drawn (outside the ribbon, the image, or
     padding). A column is the pixel column k (row, for y-major segments) of one segment,
-    given as that segment's (x0, y0, dx, dy, L, w, z0, z1, k, x-major, reach); its
+    given as that segment's (x0, y0, dx, dy, L, w₀, z0, z1, k, x-major, reach, w₁); its
     candidates are the `rows` pixels around the segment's line there.
     """
     dtype = jnp.result_type(float)
     c = columns.astype(dtype)
-    x0, y0, dx, dy, length, width, za, zb, k, xm, reach = (c[:, i, None] for i in range(11))
+    x0, y0, dx, dy, length, w0, za, zb, k, xm, reach, w1 = (c[:, i, None] for i in range(12))
     xm = xm > 0
     da = jnp.where(xm, dx, dy)
     db = jnp.where(xm, dy, dx)
@@ -157,12 +184,13 @@ def _candidates(columns, rows, image_width, image_height, perspective):
     ry = py + 0.5 - y0
     s = (rx * dx + ry * dy) * inv_len
     dist = jnp.abs(rx * dy - ry * dx) * inv_len
-    cov = ribbon_coverage(dist, width)
+    t = s * inv_len
+    # w₀ + t(w₁ − w₀) is exactly w₀ for ribbons of constant width (pixel widths).
+    cov = ribbon_coverage(dist, w0 + t * (w1 - w0))
     inside = (px >= 0) & (px < image_width) & (py >= 0) & (py < image_height)
     # Padding columns have length 0 and fail s < L.
     valid = inside & (s >= 0) & (s < length)
     cov = jnp.where(valid, cov, 0.0)
-    t = s * inv_len
     if perspective:
         # Fires only on padding (depth 0); drawn segments lie beyond the near plane.
         inv = (1 - t) / jnp.where(za != 0, za, 1.0) + t / jnp.where(zb != 0, zb, 1.0)

@@ -29,9 +29,9 @@ from jaxtyping import Array, Float
 from ._composite import over_weights
 from ._lookup import LOOKUP_MODELS, kajiya_kay_lookup
 from ._occluder import occluder_hits, occluder_light_view, occluder_visibility, sphere_hits
-from ._ordering import draw_order, segment_depth, stable_argsort_uint32
+from ._ordering import draw_order, hair_centre, segment_depth, stable_argsort_uint32, static_order
 from ._projection import View, camera_view
-from ._raster import rasterize
+from ._raster import rasterize, ribbon_widths
 from ._scene import Scene
 from ._scheuermann import ScheuermannParams, ScheuermannPoints, scheuermann, scheuermann_inputs
 from ._shading import ShadingParams, kajiya_kay
@@ -169,6 +169,10 @@ def visibility_order(scene: Scene, order=None):
     if order is not None:
         order = _given_order(order, len(segments))
         return view, xy, depth, segments, order[drawable_mask[order]]
+    if scene.ordering.method == "static":  # the same for every view: no depths needed
+        order = static_order(scene.strands.points, segments,
+                             hair_centre(scene.strands.points, scene.strands.offsets))
+        return view, xy, depth, segments, order[drawable_mask[order]]
     drawable = np.flatnonzero(drawable_mask)
     order = drawable[draw_order(segment_depth(depth, segments[drawable]),
                                 scene.ordering.method, scene.ordering.bins)]
@@ -216,8 +220,9 @@ def _prepare(scene: Scene, order=None) -> Setup:
     # Rasterise nearest-first, then a stable sort by pixel gives front-to-back per pixel.
     near_first = order[::-1]
     s0, s1 = segments[near_first, 0], segments[near_first, 1]
-    frags = rasterize(xy[s0], xy[s1], depth[s0], depth[s1], strands.width[seg_strand[near_first]],
-                      cam.width, cam.height, True)
+    widths = ribbon_widths(strands.width[seg_strand[near_first]], strands.width_units, depth[s0],
+                           depth[s1], view.focal, view.perspective)
+    frags = rasterize(xy[s0], xy[s1], depth[s0], depth[s1], widths, cam.width, cam.height, True)
     lap("rasterize")
 
     hw = cam.width * cam.height
@@ -261,7 +266,8 @@ def _prepare(scene: Scene, order=None) -> Setup:
         receivers = surface if occluder else None
         shadow = shadow_setup(points, segments, seg_strand, strands.width, light,
                               scene.shadows.method, scene.shadows.maps, scene.shadows.resolution,
-                              receivers=receivers, segment_alpha=segment_alpha)
+                              receivers=receivers, segment_alpha=segment_alpha,
+                              width_units=strands.width_units)
         lap("shadow set-up")
         if occluder:
             # §13: the occluder's shadow, a depth test in the light's view.

@@ -122,7 +122,7 @@ class Light:
 
 
 SHADOW_METHODS = ("none", "opacity-maps", "exact")
-ORDERING_METHODS = ("bins", "exact", "none")
+ORDERING_METHODS = ("bins", "exact", "none", "static")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -147,9 +147,10 @@ class Shadows:
 
 @dataclasses.dataclass(frozen=True)
 class Ordering:
-    """Visibility order: depth `bins` (kim-2003 §3), `exact` depth sort, or `none` (index order)."""
+    """Visibility order: depth `bins` (kim-2003 §3), `exact` depth sort, `none` (index order),
+    or `static`: inside to outside, from the geometry alone (scheuermann-2004 slide 14)."""
 
-    method: Literal["bins", "exact", "none"] = "bins"
+    method: Literal["bins", "exact", "none", "static"] = "bins"
     bins: int = 256
 
     def __post_init__(self):

@@ -40,7 +40,7 @@ from ._scene import (
 from ._scheuermann import ScheuermannMaps, ScheuermannParams
 from ._shading import ShadingParams
 from ._sources import furball, scalp
-from ._strands import Strands
+from ._strands import WIDTH_UNITS, Strands
 from ._streaks import Streaks
 
 __all__ = ["load_scene", "scene_from_dict", "default_scene_path"]
@@ -56,7 +56,7 @@ DEFAULT_HAIR_ALPHA = 0.5
 DEFAULT_HAIR_WIDTH = 1.0
 
 # [hair] keys by the sources that accept them.
-_HAIR_COMMON = ("source", "alpha", "width", "scale", "translate", "color")
+_HAIR_COMMON = ("source", "alpha", "width", "width_units", "scale", "translate", "color")
 _HAIR_PROCEDURAL = ("strands", "points", "seed", "length", "gravity")
 _HAIR_ONLY_FOR = {"inertia": "furball", "radius": "scalp", "coverage": "scalp"}
 
@@ -306,6 +306,9 @@ def _read_hair(table: _Table, base_dir: Path) -> Strands:
                                       (0.0, 0.0, 0.0) if translate is None else translate)
     if color is not None:
         strands = strands.replace(color=color)  # Strands broadcasts it to every point.
+    units = table.choice("width_units", WIDTH_UNITS)
+    if units is not None:  # `width` is then in the scene's units, after `scale`
+        strands = strands.replace(width_units=units)
     return strands
 
 

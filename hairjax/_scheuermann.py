@@ -20,6 +20,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from ._constants import SCHEUERMANN_DIFFUSE_FLOOR
 from ._errors import SceneError
+from ._ordering import hair_centre
 from ._shading import specular_power
 from ._vectors import safe_norm, safe_normalize
 
@@ -315,8 +316,7 @@ def scheuermann_inputs(strands, tangent: np.ndarray, maps: ScheuermannMaps):
     points, offsets = strands.points, strands.offsets
     centre = maps.normal_center
     if centre is None:
-        roots = points[offsets[:-1]]
-        centre = 0.5 * (roots.min(axis=0) + roots.max(axis=0))
+        centre = hair_centre(points, offsets)
     normal = strand_normals(points, tangent, centre)
     rng = np.random.default_rng(maps.texture_seed)
     shift = maps.shift_noise * (rng.random(strands.num_strands) - 0.5)
@@ -365,7 +365,7 @@ def hair_occlusion(strands, density: float, seg_alpha: np.ndarray | None = None)
     for d in sphere_directions(HAIR_OCCLUSION_DIRECTIONS):
         setup = shadow_setup(strands.points, segments, seg_strand, strands.width,
                              Light(direction=tuple(-d)), "exact", 1, HAIR_OCCLUSION_RESOLUTION,
-                             segment_alpha=seg_alpha)
+                             segment_alpha=seg_alpha, width_units=strands.width_units)
         omega = exact_omega_numpy(setup, strands.alpha[setup.frag_strand] * setup.frag_coverage)
         total += np.exp(-density * omega)
     return total / HAIR_OCCLUSION_DIRECTIONS

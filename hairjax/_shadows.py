@@ -26,7 +26,7 @@ from jaxtyping import Array, Float, Int
 from ._composite import segmented_scan
 from ._constants import PIXEL_HALF_EXTENT, SHADOW_FILTER_RADIUS
 from ._projection import View, light_view
-from ._raster import rasterize
+from ._raster import rasterize, ribbon_widths
 
 __all__ = ["ShadowSetup", "LightFrame", "light_frame", "point_planes", "shadow_setup", "with_receivers",
            "opacity_maps", "point_opacity", "MAX_MAP_CELLS"]
@@ -65,6 +65,26 @@ def map_margin(width: np.ndarray) -> int:
     return int(np.ceil(0.5 * float(np.max(width, initial=1.0)) + PIXEL_HALF_EXTENT)) + SHADOW_FILTER_RADIUS
 
 
+def _world_width_view(view: View, light, points, width, resolution: int) -> View:
+    """The light's view with a margin for ribbons `width` world units wide (§7).
+
+    Their width in texels depends on the view's scale, which depends on the margin: the
+    view framed with the pixel-width margin gives texel widths, and the margin is widened
+    to them. A wider margin only lowers the scale (fewer usable texels over the same
+    extent or angle), so the ribbons are then no wider than the new margin allows for."""
+    _, depth = view.project(points)
+    seen = depth > view.near if view.perspective else np.ones(len(points), bool)
+    scale = view.focal / depth[seen] if view.perspective else np.full(int(seen.sum()), view.focal)
+    texels = float(np.max(width, initial=0.0)) * scale  # an upper bound per point: the widest strand
+    margin = map_margin(texels)
+    if 2 * margin >= resolution:
+        raise ValueError(f"ribbons {float(np.max(width)):g} world units wide are up to "
+                         f"{float(np.max(texels, initial=0.0)):.3g} texels wide in the light's "
+                         f"{resolution}² view: too wide for its border; use a higher "
+                         "shadows.resolution or a smaller hair.width")
+    return light_view(light, points, resolution, margin)
+
+
 @dataclasses.dataclass(frozen=True)
 class LightFrame:
     """The light's raster and depth range, shared by the JAX and GL renderers.
@@ -88,8 +108,13 @@ class LightFrame:
         return (z - self.zmin) * maps / self.span
 
 
-def light_frame(points, segments, width, light, resolution: int) -> LightFrame:
+def light_frame(points, segments, width, light, resolution: int,
+                width_units: str = "pixels") -> LightFrame:
+    """The light's view (docs/model.md §7) of strands of per-strand `width` (`[S]` or, in
+    pixels, any array whose max matters) in `width_units`."""
     view = light_view(light, points, resolution, map_margin(width))
+    if width_units == "world":
+        view = _world_width_view(view, light, points, width, resolution)
     xy, depth = view.project(points)
     seen = np.ones(len(points), bool)
     if view.perspective:
@@ -122,20 +147,23 @@ def with_receivers(frame: LightFrame, receivers: np.ndarray | None) -> LightFram
 
 def shadow_setup(points, segments, seg_strand, width, light, method: str, maps: int,
                  resolution: int, *, receivers: np.ndarray | None = None,
-                 segment_alpha: np.ndarray | None = None) -> ShadowSetup:
+                 segment_alpha: np.ndarray | None = None, width_units: str = "pixels") -> ShadowSetup:
     """Rasterise the strands from the light (same ribbons as the camera pass; width in
-    texels = the strand's width in pixels) and plan Ω at every point, then at every
+    texels = the strand's width in pixels, or its world width seen from the light,
+    `ribbon_widths`) and plan Ω at every point, then at every
     point of `receivers` (`[Q, 3]`, optional: the per-point arrays get P + Q entries).
     `segment_alpha` (optional, `[E]`): a factor on each segment's opacity (the alpha
     texture, §17)."""
     if method == "opacity-maps" and (maps + 1) * resolution**2 > MAX_MAP_CELLS:
         raise ValueError(f"{maps} maps of {resolution}² exceed {MAX_MAP_CELLS} cells; "
                          "use fewer maps or a lower resolution")
-    frame = light_frame(points, segments, width, light, resolution)
+    frame = light_frame(points, segments, width, light, resolution, width_units)
     seg_ids = frame.drawable
     s0, s1 = segments[seg_ids, 0], segments[seg_ids, 1]
+    widths = ribbon_widths(width[seg_strand[seg_ids]], width_units, frame.depth[s0], frame.depth[s1],
+                           frame.view.focal, frame.view.perspective)
     frags = rasterize(frame.xy[s0], frame.xy[s1], frame.depth[s0], frame.depth[s1],
-                      width[seg_strand[seg_ids]], resolution, resolution, frame.view.perspective)
+                      widths, resolution, resolution, frame.view.perspective)
     frame = with_receivers(frame, receivers)
     view, xy, depth, seen, zmin, span = (frame.view, frame.xy, frame.depth, frame.seen,
                                          frame.zmin, frame.span)

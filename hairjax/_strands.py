@@ -11,7 +11,9 @@ from collections.abc import Mapping
 
 import numpy as np
 
-__all__ = ["Strands"]
+__all__ = ["Strands", "WIDTH_UNITS"]
+
+WIDTH_UNITS = ("pixels", "world")
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -24,7 +26,9 @@ class Strands:
     - `offsets`: `int64[S + 1]`; strand `s` is `points[offsets[s]:offsets[s + 1]]`.
       Every strand has at least one point.
     - `alpha`: `float64[S]`, opacity a ∈ (0, 1] per strand.
-    - `width`: `float64[S]`, ribbon width in pixels per strand (> 0).
+    - `width`: `float64[S]`, ribbon width per strand (> 0), in `width_units`.
+    - `width_units`: `"pixels"` (default: the ribbon is `width` pixels wide in every view)
+      or `"world"` (`width` world units: w·f/D pixels at depth D, docs/model.md §5).
     - `color`: optional `float64[P, 3]` per-point colour (multiplies the diffuse term).
     - `attributes`: other arrays a file carried, by name (e.g. `"thickness"`,
       `"transparency"`, `"strand_uv"`); kept for `hairjax info`, not used for shading.
@@ -36,8 +40,11 @@ class Strands:
     width: np.ndarray
     color: np.ndarray | None = None
     attributes: Mapping[str, np.ndarray] = dataclasses.field(default_factory=dict)
+    width_units: str = "pixels"
 
     def __post_init__(self):
+        if self.width_units not in WIDTH_UNITS:
+            raise ValueError(f"width_units must be one of {WIDTH_UNITS}, got {self.width_units!r}")
         points = np.asarray(self.points, dtype=np.float64)
         offsets = np.asarray(self.offsets, dtype=np.int64)
         if points.ndim != 2 or points.shape[1] != 3:

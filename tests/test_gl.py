@@ -36,6 +36,7 @@ from helpers import (
     TAU_TOL,
     render_gl_with_edited_shader,
     shadow_band,
+    small_furball_scene,
     unexplained_pixels,
 )
 
@@ -144,3 +145,29 @@ def test_a_wrong_shader_fails_the_check(gl, references):
 
     bad, _ = unexplained_pixels(scene, render_gl(scene, omega=omega).image, jax_image)
     assert bad.size == 0
+
+
+@pytest.mark.parametrize("light", ["directional", "point"])
+def test_world_width_ribbons_match(gl, light):
+    """Ribbons of world width (docs/model.md §5, §7): GL's camera pass with JAX's Ω equals
+    JAX's image but for the band (tolerances in hairjax/_band.py), and GL's own Ω gives τ
+    within TAU_TOL but where a light-side boundary explains it; in both views."""
+    from hairjax.gl import render_gl
+
+    scene = small_furball_scene(strands=60, size=40, shadows="opacity-maps", maps=8, resolution=32)
+    if light == "point":
+        scene = scene.replace(light=hj.Light(kind="point", position=(2.0, 2.5, 1.5)))
+    # 0.06 world units is ~0.8 px at the ball's depth (f = 48 px, D ≈ 3.5) and 1–2 texels
+    # in the light's views: the width varies along segments in both.
+    scene = scene.replace(strands=scene.strands.replace(width=0.06, width_units="world"))
+    geometry = hj.geometry_stage(scene)
+    jax_image = np.asarray(hj.shading_stage(geometry, scene.params))
+    omega = np.asarray(geometry.omega)
+    bad, band = unexplained_pixels(scene, render_gl(scene, omega=omega).image, jax_image)
+    assert bad.size == 0 and band.mean() <= MAX_BAND
+    kappa = float(scene.params.kappa)
+    dtau = np.abs(np.exp(-kappa * render_gl(scene).omega.astype(np.float64)) - np.exp(-kappa * omega))
+    assert np.flatnonzero((dtau > TAU_TOL) & ~shadow_band(scene)).size == 0
+    # The check sees the width: the same strands 1 pixel wide render visibly differently.
+    pixels = scene.replace(strands=scene.strands.replace(width=1.0, width_units="pixels"))
+    assert np.abs(np.asarray(hj.render(pixels)) - jax_image).max() > 1e-2

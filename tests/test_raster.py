@@ -86,3 +86,92 @@ def test_perspective_correct_depth():
                   np.array([3.0]), np.ones(1), 2, 1, True)
     # Centres at x = 0.5, 1.5: t = ¼, ¾.
     np.testing.assert_allclose(np.sort(f.depth), [1 / (0.75 + 0.25 / 3), 1 / (0.25 + 0.75 / 3)])
+
+
+# --- ribbons of world-space width (kim-2003 Fig. 2; docs/model.md §5) ---
+
+def test_ribbon_widths_by_hand():
+    from hairjax._raster import ribbon_widths
+
+    w = np.array([0.1, 0.3])
+    d0, d1 = np.array([2.0, 5.0]), np.array([4.0, 5.0])
+    # Perspective, f = 100: 0.1·100/2 = 5, 0.1·100/4 = 2.5; 0.3·100/5 = 6 at both ends.
+    np.testing.assert_allclose(ribbon_widths(w, "world", d0, d1, 100.0, True), [[5, 2.5], [6, 6]])
+    # Orthographic, f = 10 texels per world unit: 1 and 3, whatever the depth.
+    np.testing.assert_allclose(ribbon_widths(w, "world", d0, d1, 10.0, False), [[1, 1], [3, 3]])
+    np.testing.assert_array_equal(ribbon_widths(w, "pixels", d0, d1, 100.0, True), [[0.1, 0.1], [0.3, 0.3]])
+    with pytest.raises(ValueError, match="'pixels' or 'world'"):
+        ribbon_widths(w, "metres", d0, d1, 1.0, True)
+
+
+def test_tapered_ribbon_coverage_by_hand():
+    # y = 16.0, x from 0 to 10, width 1 at x = 0 growing to 3 at x = 10: w = 1 + 2t, t = x/10.
+    # Row 16 (centre 16.5, d = ½): min(1, w/2) − max(0, −w/2) = min(1, w/2): x = 0.5 → 0.55, x = 4.5 → 0.95.
+    # Row 17 (centre 17.5, d = 1.5): w/2 − 1 where w > 2, i.e. x > 5: x = 5.5 → w = 2.1, 0.05;
+    # x = 7.5 → 0.25; x = 9.5 → 0.45. Rows 15 and 14 mirror 16 and 17.
+    f = rasterize(np.array([[0.0, 16.0]]), np.array([[10.0, 16.0]]), np.ones(1), np.ones(1),
+                  np.array([[1.0, 3.0]]), 32, 32, False)
+    img = image(f, 32, 32)
+    x = np.arange(10) + 0.5
+    w = 1 + 2 * x / 10
+    outer = np.clip(w / 2 - 1, 0, 1)
+    expected = np.zeros((32, 32))
+    expected[15, :10] = expected[16, :10] = np.minimum(1.0, w / 2)
+    expected[14, :10] = expected[17, :10] = outer
+    np.testing.assert_allclose(img, expected, atol=1e-12)
+    np.testing.assert_allclose(img[17, [5, 7, 9]], [0.05, 0.25, 0.45], atol=1e-12)
+    np.testing.assert_allclose(img[16, [0, 4, 5]], [0.55, 0.95, 1.0], atol=1e-12)
+
+
+def test_equal_end_widths_are_the_pixel_width_ribbon():
+    """[E, 2] widths with equal ends give bit-identical fragments to [E] widths."""
+    rng = np.random.default_rng(5)
+    xy0, xy1 = rng.uniform(-2, 30, (40, 2)), rng.uniform(-2, 30, (40, 2))
+    z0, z1, w = rng.uniform(1, 3, 40), rng.uniform(1, 3, 40), rng.uniform(0.5, 3, 40)
+    a = rasterize(xy0, xy1, z0, z1, w, 28, 28, True)
+    b = rasterize(xy0, xy1, z0, z1, np.stack([w, w], axis=1), 28, 28, True)
+    for field in ("pixel", "segment", "coverage", "t", "depth"):
+        np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
+
+
+def _world_segment_scene(width, units, depth=5.0):
+    import hairjax as hj
+
+    # A camera at z = depth looking at the origin, fov 90° on 32 rows: f = 16 pixels. The
+    # segment x ∈ [−0.5, 0.5] at y = 0, depth `depth`, lands on row boundary y = 16.
+    hair = hj.Strands.from_list([[[-0.5, 0.0, 0.0], [0.5, 0.0, 0.0]]], alpha=1.0, width=width)
+    return hj.Scene(hair.replace(width_units=units),
+                    camera=hj.Camera(eye=(0.0, 0.0, depth), target=(0.0, 0.0, 0.0), fov=90.0,
+                                     width=32, height=32),
+                    shadows=hj.Shadows("none"))
+
+
+def test_world_width_segment_covers_the_expected_pixels():
+    import hairjax as hj
+
+    # 0.625 world units at depth 5 with f = 16: 0.625·16/5 = 2 pixels, centred on y = 16:
+    # rows 15 and 16 (centres ½ away) fully covered, row 14 and 17 (1½ away) not at all.
+    # Along x: 16 ± 0.5·16/5 = [14.4, 17.6) holds the centres of columns 14 … 17.
+    alpha = np.asarray(hj.render(_world_segment_scene(0.625, "world")))[..., 3]
+    expected = np.zeros((32, 32))
+    expected[15:17, 14:18] = 1.0
+    np.testing.assert_allclose(alpha, expected, atol=1e-6)  # float32 composite rounding
+    # Twice as far: half the length and half the width, 1 pixel: ½ on rows 15 and 16,
+    # over 16 ± 0.8 → centres 15.5 and 16.5 (columns 15, 16).
+    alpha = np.asarray(hj.render(_world_segment_scene(0.625, "world", depth=10.0)))[..., 3]
+    expected = np.zeros((32, 32))
+    expected[15:17, 15:17] = 0.5
+    np.testing.assert_allclose(alpha, expected, atol=1e-6)
+    # The same width in pixels is 0.625 pixels at any depth: 0.3125 on rows 15 and 16.
+    alpha = np.asarray(hj.render(_world_segment_scene(0.625, "pixels")))[..., 3]
+    expected = np.zeros((32, 32))
+    expected[15:17, 14:18] = 0.3125
+    np.testing.assert_allclose(alpha, expected, atol=1e-6)
+
+
+def test_world_width_too_wide_for_the_light_view_is_a_clear_error():
+    import hairjax as hj
+
+    scene = _world_segment_scene(5.0, "world").replace(shadows=hj.Shadows("exact", resolution=16))
+    with pytest.raises(ValueError, match="too wide for its border"):
+        hj.render(scene)

@@ -488,6 +488,7 @@ ERROR_CASES = [
      ["shadows.resolution must be an integer in [4, 16384], got 0"]),
     ("shadows-maps-zero", HAIR + "[shadows]\nmaps = 0\n", ["shadows.maps must be an integer in"]),
     ("shadows-maps-float", HAIR + "[shadows]\nmaps = 1.5\n", ["shadows.maps must be an integer"]),
+    ("width-units", HAIR + 'width_units = "mm"\n', ["hair.width_units must be one of 'pixels', 'world'"]),
     ("ordering-method", HAIR + '[ordering]\nmethod = "sorted"\n',
      ["ordering.method must be one of 'bins', 'exact', 'none'"]),
     ("ordering-bins-zero", HAIR + "[ordering]\nbins = 0\n", ["ordering.bins must be an integer"]),
@@ -571,3 +572,10 @@ def test_docs_show_the_packaged_default_scene():
     start = text.index("```toml\n# The built-in default scene") + len("```toml\n")
     block = text[start:text.index("```", start)]
     assert block == default_scene_path().read_text(encoding="utf-8")
+
+
+def test_width_units_load(tmp_path):
+    scene = load_scene(write(tmp_path, HAIR + 'width = 0.01\nwidth_units = "world"\n'))
+    assert scene.strands.width_units == "world"
+    np.testing.assert_array_equal(scene.strands.width, 0.01)
+    assert load_scene(write(tmp_path, HAIR)).strands.width_units == "pixels"  # the default

@@ -193,7 +193,7 @@ def render_gl(scene: Scene, params: ShadingParams | ScheuermannParams | None = N
                                  "the light, pass occluder= too (occluder_light(scene, geometry))")
         elif scene.shadows.method != "none":
             frame = light_frame(scene.strands.points, strands.segments, scene.strands.width,
-                                scene.light, scene.shadows.resolution)
+                                scene.light, scene.shadows.resolution, scene.strands.width_units)
             points = _Points(ctx, strands, None if surface is None else surface.points)
             try:
                 frame = with_receivers(frame, points.receivers)
@@ -387,6 +387,7 @@ def _camera_pass(ctx, progs, scene: Scene, params, strands, view: View, order,
         fbo.depth_mask = surface is None  # keep the occluder's depths
         fbo.clear(*bg, 0.0, depth=1.0)
         common = dict(raster_size=(float(w), float(h)), depth_far=depth_far,
+                      world_width=scene.strands.width_units == "world",
                       **_view_uniforms("view", view), **_light_uniforms(scene))
         if surface is not None:
             # §13: the occluder's colour where its surface pass covered the pixel centre.
@@ -489,6 +490,7 @@ def _shading_uniforms(scene: Scene, params) -> dict:
 def _light_pass_uniforms(scene: Scene, frame: LightFrame) -> dict:
     r = scene.shadows.resolution
     return dict(raster_size=(float(r), float(r)), shade=False,
+                world_width=scene.strands.width_units == "world",
                 light_perspective=bool(frame.view.perspective), resolution=r,
                 **_view_uniforms("view", frame.view))
 

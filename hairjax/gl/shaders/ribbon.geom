@@ -1,6 +1,7 @@
 #version 450
 // §5: expand a segment into a screen-aligned quad that holds every pixel centre with
-// 0 ≤ s < L and d < w/2 + ½ (with one pixel to spare); the fragment shader decides.
+// 0 ≤ s < L and d < w/2 + ½ (with one pixel to spare; w the wider end's width); the
+// fragment shader decides.
 #include "hairjax_model"
 
 layout(lines) in;
@@ -22,7 +23,7 @@ flat out float seg_length;
 flat out vec3 color0;
 flat out vec3 color1;
 flat out float alpha;
-flat out float width;
+flat out vec2 widths;  // the ribbon width at each end (pixels)
 flat out vec2 depths;
 
 void main() {
@@ -33,7 +34,7 @@ void main() {
     if (!(len > 0.0)) return;  // zero-length segments draw nothing (§5)
     vec2 u = d / len;
     vec2 n = vec2(-u.y, u.x);
-    float reach = 0.5 * vin[0].width + PIXEL_HALF_EXTENT + 1.0;
+    float reach = 0.5 * max(vin[0].width, vin[1].width) + PIXEL_HALF_EXTENT + 1.0;
     vec2 corners[4] = vec2[4](a - u - n * reach, a - u + n * reach,
                               b + u - n * reach, b + u + n * reach);
     for (int i = 0; i < 4; ++i) {
@@ -43,7 +44,7 @@ void main() {
         color0 = vin[0].color;
         color1 = vin[1].color;
         alpha = vin[0].alpha;
-        width = vin[0].width;
+        widths = vec2(vin[0].width, vin[1].width);
         depths = vec2(vin[0].screen.z, vin[1].screen.z);
         vec2 ndc = vec2(2.0 * corners[i].x / raster_size.x - 1.0,
                         1.0 - 2.0 * corners[i].y / raster_size.y);

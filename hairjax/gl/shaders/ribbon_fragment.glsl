@@ -6,7 +6,7 @@ flat in float seg_length;
 flat in vec3 color0;
 flat in vec3 color1;
 flat in float alpha;
-flat in float width;
+flat in vec2 widths;
 flat in vec2 depths;
 
 uniform vec2 raster_size;
@@ -23,7 +23,9 @@ RibbonSample ribbon_sample() {
     vec2 r = c - p0;
     float s = (r.x * delta.x + r.y * delta.y) * inv_len;
     float dist = abs(r.x * delta.y - r.y * delta.x) * inv_len;
-    float cov = ribbon_coverage(dist, width);
+    float t = s * inv_len;
+    // w₀ + t(w₁ − w₀) is exactly w₀ for ribbons of constant width (pixel widths).
+    float cov = ribbon_coverage(dist, widths.x + t * (widths.y - widths.x));
     if (!(cov > 0.0) || s < 0.0 || !(s < seg_length)) discard;
-    return RibbonSample(cov, s * inv_len);
+    return RibbonSample(cov, t);
 }

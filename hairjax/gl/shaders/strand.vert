@@ -15,6 +15,7 @@ in vec3 in_normal;         // §17 (Scheuermann scenes only): strand normal
 in vec2 in_maps;           // §17: shift texture σ, noise mask m
 
 uniform View view;
+uniform bool world_width;  // §5: in_width in world units, w·f/D pixels here (w·f orthographic)
 uniform bool shade;        // camera pass: shade points; light passes: geometry only
 uniform Shading shading;
 uniform Scheuermann scheuermann;  // used when shading.model == SHADING_SCHEUERMANN
@@ -44,7 +45,9 @@ vec3 safe_normalize(vec3 x) {
 void main() {
     vout.screen = project(view, in_position);
     vout.alpha = in_alpha;
-    vout.width = in_width;
+    // Drawn segments lie beyond the near plane, so D > 0 where the width is used.
+    vout.width = world_width ? in_width * view.focal / (view.perspective ? vout.screen.z : 1.0)
+                             : in_width;
     vout.level = 0.0;
     vout.color = vec3(0.0);
     if (shade) {
