@@ -56,7 +56,7 @@ def _sibling(name: str):
 
 
 _reuse = _sibling("order_reuse")
-turned, image_difference = _reuse.turned, _reuse.image_difference
+turned, image_difference, _angles = _reuse.turned, _reuse.image_difference, _reuse._parse_angles
 
 
 def _hj():
@@ -187,16 +187,6 @@ def _ints(text: str) -> list[int]:
     if not values or min(values) < 1:
         raise argparse.ArgumentTypeError(f"expected positive integers: {text!r}")
     return values
-
-
-def _angles(text: str) -> list[float]:
-    try:
-        angles = [float(x) for x in text.split(",") if x.strip()]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"--angles takes numbers separated by commas: {text!r}")
-    if not angles:
-        raise argparse.ArgumentTypeError("--angles needs at least one angle")
-    return sorted(set(angles) | {0.0})
 
 
 def _parser() -> argparse.ArgumentParser:
