@@ -28,11 +28,13 @@ from jaxtyping import Array, Float
 
 from ._constants import PATCH_OPAQUE_EPS
 from ._occluder import _pixel_fragments, drawable_triangles
-from ._ordering import static_order
-from ._projection import View
+from ._ordering import hair_centre, static_order
+from ._projection import View, camera_view
+from ._scheuermann import strand_normals
 
-__all__ = ["Patches", "patch_mesh", "patch_alpha", "PatchFragments", "patch_fragments",
-           "PatchWeights", "four_pass_weights", "composite_patches"]
+__all__ = ["scene_patches", "scene_point_colors", "render_patches", "Patches", "patch_mesh",
+           "patch_alpha", "PatchFragments", "patch_fragments", "PatchWeights", "four_pass_weights",
+           "composite_patches"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -216,3 +218,34 @@ def composite_patches(frags: PatchFragments, weights: PatchWeights, colors: Floa
     rgb = rgb + jnp.asarray(weights.background)[:, None] * jnp.asarray(background)[None, :]
     image = jnp.concatenate([rgb, jnp.asarray(weights.coverage)[:, None]], axis=1)
     return image.reshape(height, width, 4)
+
+
+def scene_patches(scene) -> Patches:
+    """The scene's strands as patches (`scene.patches`: width, opaque core): N away from
+    `hair_centre` (§17's strand normal), drawn in the static order about it (slide 14)."""
+    from ._render import tangents
+
+    points, offsets = scene.strands.points, scene.strands.offsets
+    tangent = tangents(points, offsets)
+    centre = hair_centre(points, offsets)
+    normal = strand_normals(points, tangent, centre)
+    return patch_mesh(points, offsets, tangent, normal, scene.patches.width,
+                      scene.patches.opaque_core, centre)
+
+
+def scene_point_colors(scene, params=None) -> Float[Array, "P 3"]:
+    """The strands' shaded point colours (`_render.point_colors`: the scene's shading
+    model, with the strands' own self-shadows, §7), which the patches interpolate."""
+    from ._render import geometry_stage, point_colors
+
+    return point_colors(geometry_stage(scene), scene.params if params is None else params)
+
+
+def render_patches(scene, params=None) -> Float[Array, "H W 4"]:
+    """`scene` (with `scene.patches`) drawn as hair patches: slide 17's four passes as
+    per-pixel weights (NumPy) on the JAX point colours, so differentiable in `params`."""
+    view = camera_view(scene.camera)
+    frags = patch_fragments(view, scene_patches(scene))
+    weights = four_pass_weights(frags, view.width * view.height)
+    return composite_patches(frags, weights, scene_point_colors(scene, params),
+                             jnp.asarray(scene.background), view.height, view.width)
