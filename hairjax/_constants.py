@@ -42,3 +42,9 @@ OCCLUDER_SHADOW_BIAS = 3.0
 # saturate(lerp(SCHEUERMANN_DIFFUSE_FLOOR, 1, N·L)): the seed's 0.25 shifts the terminator
 # past N·L = 0 "for a softer look" (light reaches N·L > −1/3).
 SCHEUERMANN_DIFFUSE_FLOOR = 0.25
+
+# Hair patches (docs/model.md §18, scheuermann-2004 slide 17): a fragment is opaque, and
+# passes the Z-priming pass's alpha test, when its texture alpha a ≥ 1 − PATCH_OPAQUE_EPS.
+# The profile a(u) reaches exactly 1 on the core; 1e-6 only absorbs float32 rounding of
+# the interpolated u in GL there (u's float32 error ~1e-7, a's ≤ 1e-7 / (½ − c/2)).
+PATCH_OPAQUE_EPS = 1e-6

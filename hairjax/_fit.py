@@ -770,6 +770,8 @@ def fit(
         raise FitError(f"{len(scenes)} scenes for {len(target_list)} targets")
     mask_list = [None] * len(scenes) if masks is None else list(masks)
     weight_list = [None] * len(scenes) if weights is None else list(weights)
+    if any(s.patches is not None for s in scenes):  # docs/model.md §18: not wired into the fit
+        raise FitError("fit does not support hair-patch scenes (hair.geometry = 'patches')")
     if any(s.shading_model == "scheuermann" for s in scenes):  # docs/model.md §17
         return _fit_scheuermann(scenes, target_list, mask_list, weight_list, fit, init, solver,
                                 scalar, max_steps, rtol, atol, progress)

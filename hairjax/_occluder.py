@@ -111,40 +111,10 @@ def _mesh_raster(view: View, vertices: np.ndarray, triangles: np.ndarray, normal
     drawn = drawable_triangles(view, vertices, triangles)
     tri = triangles[drawn]
     xy, depth = view.project(vertices)
-    a, b, c = (xy[tri[:, k]] for k in range(3))
-    area = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
-    corners = xy[tri]
-    # Pixel columns i whose centre i + ½ lies in [min x, max x], clipped to the image.
-    x0 = np.clip(np.ceil(corners[..., 0].min(axis=1) - 0.5), 0, w)
-    x1 = np.clip(np.floor(corners[..., 0].max(axis=1) - 0.5), -1, w - 1)
-    y0 = np.clip(np.ceil(corners[..., 1].min(axis=1) - 0.5), 0, h)
-    y1 = np.clip(np.floor(corners[..., 1].max(axis=1) - 0.5), -1, h - 1)
-    nx = np.maximum(x1 - x0 + 1, 0).astype(np.int64)
-    ny = np.maximum(y1 - y0 + 1, 0).astype(np.int64)
-    # Zero-area projections (edge-on triangles) cover no pixel centre's open set: dropped.
-    count = np.where(area != 0, nx * ny, 0)
     best_depth = depth_out
     best_tri = np.full(w * h, -1, np.int64)
     best_lam = np.zeros((w * h, 3))
-    tri_of = np.repeat(np.arange(len(tri)), count)
-    within = np.arange(tri_of.size) - np.repeat(np.cumsum(count) - count, count)
-    for lo in range(0, tri_of.size, _CHUNK):
-        k, r = tri_of[lo:lo + _CHUNK], within[lo:lo + _CHUNK]
-        px = x0[k] + r % nx[k]
-        py = y0[k] + r // nx[k]
-        cx, cy = px + 0.5, py + 0.5
-        ak, bk, ck = a[k], b[k], c[k]
-        # Barycentrics from edge functions, each over the signed area: both windings.
-        lam_a = ((bk[:, 0] - cx) * (ck[:, 1] - cy) - (bk[:, 1] - cy) * (ck[:, 0] - cx)) / area[k]
-        lam_b = ((ck[:, 0] - cx) * (ak[:, 1] - cy) - (ck[:, 1] - cy) * (ak[:, 0] - cx)) / area[k]
-        lam_c = 1.0 - lam_a - lam_b
-        lam = np.stack([lam_a, lam_b, lam_c], axis=1)
-        inside = np.all(lam >= 0, axis=1)
-        k, lam = k[inside], lam[inside]
-        pixel = (py[inside] * w + px[inside]).astype(np.int64)
-        if view.perspective:
-            lam = lam / depth[tri[k]]
-            lam /= lam.sum(axis=1, keepdims=True)
+    for k, pixel, lam in _pixel_fragments(view, xy, depth, tri):
         point = np.einsum("ni,nij->nj", lam, vertices[tri[k]])
         d = (point - view.origin) @ view.forward
         # Nearest per pixel within the batch, then against the earlier batches.
@@ -164,6 +134,46 @@ def _mesh_raster(view: View, vertices: np.ndarray, triangles: np.ndarray, normal
     winner = np.full(w * h, -1, np.int64)
     winner[hit] = drawn[best_tri[hit]]
     return best_depth, normal_out, point_out, winner
+
+
+def _pixel_fragments(view: View, xy: np.ndarray, depth: np.ndarray, tri: np.ndarray):
+    """Every (triangle, pixel centre) pair where the centre lies in the projected triangle
+    (module docstring: λ ≥ 0, edges included, zero-area projections dropped), in batches of
+    at most _CHUNK candidates: yields (k: index into `tri` `[N]`, pixel `[N]`, λ' `[N, 3]`
+    perspective-correct for perspective views). `xy`, `depth`: `view.project(vertices)`."""
+    w, h = view.width, view.height
+    a, b, c = (xy[tri[:, k]] for k in range(3))
+    area = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+    corners = xy[tri]
+    # Pixel columns i whose centre i + ½ lies in [min x, max x], clipped to the image.
+    x0 = np.clip(np.ceil(corners[..., 0].min(axis=1) - 0.5), 0, w)
+    x1 = np.clip(np.floor(corners[..., 0].max(axis=1) - 0.5), -1, w - 1)
+    y0 = np.clip(np.ceil(corners[..., 1].min(axis=1) - 0.5), 0, h)
+    y1 = np.clip(np.floor(corners[..., 1].max(axis=1) - 0.5), -1, h - 1)
+    nx = np.maximum(x1 - x0 + 1, 0).astype(np.int64)
+    ny = np.maximum(y1 - y0 + 1, 0).astype(np.int64)
+    # Zero-area projections (edge-on triangles) cover no pixel centre's open set: dropped.
+    count = np.where(area != 0, nx * ny, 0)
+    tri_of = np.repeat(np.arange(len(tri)), count)
+    within = np.arange(tri_of.size) - np.repeat(np.cumsum(count) - count, count)
+    for lo in range(0, tri_of.size, _CHUNK):
+        k, r = tri_of[lo:lo + _CHUNK], within[lo:lo + _CHUNK]
+        px = x0[k] + r % nx[k]
+        py = y0[k] + r // nx[k]
+        cx, cy = px + 0.5, py + 0.5
+        ak, bk, ck = a[k], b[k], c[k]
+        # Barycentrics from edge functions, each over the signed area: both windings.
+        lam_a = ((bk[:, 0] - cx) * (ck[:, 1] - cy) - (bk[:, 1] - cy) * (ck[:, 0] - cx)) / area[k]
+        lam_b = ((ck[:, 0] - cx) * (ak[:, 1] - cy) - (ck[:, 1] - cy) * (ak[:, 0] - cx)) / area[k]
+        lam_c = 1.0 - lam_a - lam_b
+        lam = np.stack([lam_a, lam_b, lam_c], axis=1)
+        inside = np.all(lam >= 0, axis=1)
+        k, lam = k[inside], lam[inside]
+        pixel = (py[inside] * w + px[inside]).astype(np.int64)
+        if view.perspective:
+            lam = lam / depth[tri[k]]
+            lam /= lam.sum(axis=1, keepdims=True)
+        yield k, pixel, lam
 
 
 def occluder_extent(occluder) -> np.ndarray:

@@ -494,6 +494,12 @@ def render(scene: Scene, params: ShadingParams | None = None,
     view, kim-2003 Fig. 8; see `visibility_order`); the earlier stages then run afresh.
     """
     params = scene.params if params is None else params
+    if scene.patches is not None:  # §18: hair patches, drawn with slide 17's four passes
+        if alpha is not None or order is not None:
+            raise ValueError("a hair-patch scene takes neither `alpha` nor `order`")
+        from ._patches import render_patches
+
+        return render_patches(scene, params)
     return shading_stage(geometry_stage(scene, alpha, order=order), params)
 
 
@@ -511,6 +517,11 @@ def render_profiled(scene: Scene, params: ShadingParams | None = None):
     prefixed with `geometry/`. Includes compilation on a first call.
     """
     params = scene.params if params is None else params
+    if scene.patches is not None:  # §18: one stage, the patches' set-up and composite
+        t0 = time.perf_counter()
+        image = jax.block_until_ready(render(scene, params))
+        return image, {"patches (four passes)": time.perf_counter() - t0,
+                       "total": time.perf_counter() - t0}
     forget(scene)
     t0 = time.perf_counter()
     setup = prepare(scene)

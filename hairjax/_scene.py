@@ -19,7 +19,7 @@ from ._shading import SHADING_MODELS, ShadingParams
 from ._strands import Strands
 from ._streaks import Streaks
 
-__all__ = ["Camera", "Light", "Shadows", "Ordering", "Occluder", "Scene"]
+__all__ = ["Camera", "Light", "Shadows", "Ordering", "Occluder", "PatchGeometry", "Scene"]
 
 # Every shading model a scene may name: the analytic ones and their lookup-table variants (§14).
 MODELS = (*SHADING_MODELS, *LOOKUP_MODELS)
@@ -234,6 +234,25 @@ class Occluder:
                 and np.array_equal(self.triangles, other.triangles))
 
 
+@dataclasses.dataclass(frozen=True)
+class PatchGeometry:
+    """Draw the strands as polygonal hair patches (docs/model.md §18, scheuermann-2004
+    slides 4–6, 14–17): ribbons `width` world units wide, alpha texture with an opaque
+    core of fraction `opaque_core`, drawn with slide 17's four passes."""
+
+    width: float
+    opaque_core: float = 0.5
+
+    def __post_init__(self):
+        w = self.width
+        if isinstance(w, bool) or not isinstance(w, (int, float)) or not (np.isfinite(w) and w > 0):
+            raise SceneError(f"hair.patch_width must be a positive finite number, got {w!r}")
+        c = self.opaque_core
+        if isinstance(c, bool) or not isinstance(c, (int, float)) or not 0 <= c <= 1:
+            raise SceneError(f"hair.opaque_core must be a number in [0, 1], got {c!r}")
+        object.__setattr__(self, "width", float(w))
+        object.__setattr__(self, "opaque_core", float(c))
+
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class Scene:
@@ -246,6 +265,8 @@ class Scene:
     `ShadingParams`; or `"scheuermann"` (docs/model.md §17) with a `ScheuermannParams`;
     `scheuermann_maps` (used by that model only) says how its per-point inputs are made.
     `streaks`: wenzel-2002's streak texture along the hairs (§16), or None.
+    `patches`: draw the strands as hair patches (§18) instead of ribbons, or None; the
+    strands' opacity maps still give the self-shadows; no occluder.
     """
 
     strands: Strands
@@ -261,6 +282,7 @@ class Scene:
     lookup_size: int = 256
     streaks: Streaks | None = None
     scheuermann_maps: ScheuermannMaps = ScheuermannMaps()
+    patches: PatchGeometry | None = None
 
     def __post_init__(self):
         if not isinstance(self.strands, Strands):
@@ -282,6 +304,12 @@ class Scene:
         if wanted is ScheuermannParams:
             check_scheuermann_params(self.params)
         object.__setattr__(self, "background", _rgb("background.color", self.background))
+        if self.patches is not None:
+            if not isinstance(self.patches, PatchGeometry):
+                raise SceneError("scene.patches must be a PatchGeometry or None")
+            if self.occluder is not None:
+                raise SceneError("hair.geometry = 'patches' does not draw an occluder: "
+                                 "remove [occluder] or use geometry = 'strands'")
 
     def replace(self, **changes) -> Scene:
         return dataclasses.replace(self, **changes)

@@ -34,6 +34,7 @@ from ._scene import (
     Light,
     Occluder,
     Ordering,
+    PatchGeometry,
     Scene,
     Shadows,
 )
@@ -56,7 +57,9 @@ DEFAULT_HAIR_ALPHA = 0.5
 DEFAULT_HAIR_WIDTH = 1.0
 
 # [hair] keys by the sources that accept them.
-_HAIR_COMMON = ("source", "alpha", "width", "width_units", "scale", "translate", "color")
+_HAIR_COMMON = ("source", "alpha", "width", "width_units", "scale", "translate", "color",
+                "geometry", "patch_width", "opaque_core")
+HAIR_GEOMETRIES = ("strands", "patches")
 _HAIR_PROCEDURAL = ("strands", "points", "seed", "length", "gravity")
 _HAIR_ONLY_FOR = {"inertia": "furball", "radius": "scalp", "coverage": "scalp"}
 
@@ -148,10 +151,11 @@ def scene_from_dict(
         streaks = _build(where, Streaks, **_read_streaks(tables["streaks"]))
     # Hair last: generating or reading it is the only slow step, so the cheap checks of
     # the other tables fail first.
+    patches = _read_patches(tables["hair"])
     strands = _read_hair(tables["hair"], Path(base_dir))
 
     scene_args = _given(shading_model=model, background=background, lookup_size=lookup_size,
-                        streaks=streaks, scheuermann_maps=maps)
+                        streaks=streaks, scheuermann_maps=maps, patches=patches)
     return _build(where, Scene, strands=strands, camera=camera, light=light, params=params,
                   shadows=shadows, ordering=ordering, occluder=occluder, name=scene_name,
                   **scene_args)
@@ -310,6 +314,22 @@ def _read_hair(table: _Table, base_dir: Path) -> Strands:
     if units is not None:  # `width` is then in the scene's units, after `scale`
         strands = strands.replace(width_units=units)
     return strands
+
+
+def _read_patches(table: _Table) -> PatchGeometry | None:
+    """[hair] geometry = "patches" with patch_width (required) and opaque_core (§18)."""
+    geometry = table.choice("geometry", HAIR_GEOMETRIES)
+    width = table.number("patch_width", lo=0, lo_open=True)
+    core = table.number("opaque_core", lo=0, hi=1)
+    if geometry != "patches":
+        for key in ("patch_width", "opaque_core"):
+            if key in table:
+                raise SceneError(f"{table.where}: hair.{key} applies only to geometry = 'patches'")
+        return None
+    if width is None:
+        raise SceneError(f"{table.where}: hair.patch_width (world units) is required with "
+                         "geometry = 'patches'")
+    return PatchGeometry(width, **_given(opaque_core=core))
 
 
 def _check_hair_keys(table: _Table, source: str, is_file: bool) -> None:

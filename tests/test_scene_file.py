@@ -104,7 +104,7 @@ def test_default_scene_values():
 # --------------------------------------------------------------------------- examples
 
 EXAMPLE_NAMES = ["point_light", "grazing", "dense_opaque", "occluder", "tressfx_ponytail", "sintel",
-                 "furball_animated", "scheuermann"]
+                 "furball_animated", "scheuermann", "patches"]
 
 
 def test_every_example_is_listed():

@@ -46,6 +46,7 @@ _PROGRAMS = {
     "occluder_sphere": dict(vertex_shader="fullscreen.vert", fragment_shader="occluder_sphere.frag"),
     "occluder_mesh": dict(vertex_shader="occluder_mesh.vert", fragment_shader="occluder_mesh.frag"),
     "occluder_color": dict(vertex_shader="fullscreen.vert", fragment_shader="occluder_color.frag"),
+    "patch": dict(vertex_shader="patch.vert", fragment_shader="patch.frag"),
 }
 _COMPUTE = {"omega_maps": "omega_maps.comp", "omega_exact": "omega_exact.comp",
             "occluder_visibility": "occluder_visibility.comp"}

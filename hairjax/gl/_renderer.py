@@ -17,7 +17,7 @@ import numpy as np
 
 from .._lookup import LOOKUP_MODELS, kajiya_kay_table
 from .._occluder import drawable_triangles, occluder_extent, occluder_light_view, vertex_normals
-from .._projection import View
+from .._projection import View, camera_view
 from .._render import tangents, visibility_order
 from .._scene import Scene
 from .._scheuermann import ScheuermannParams, scheuermann_inputs
@@ -163,6 +163,8 @@ def render_gl(scene: Scene, params: ShadingParams | ScheuermannParams | None = N
     with `omega` when the scene has an occluder and shadows.
     """
     params = scene.params if params is None else params
+    if scene.patches is not None:
+        return _render_patches(scene, params, omega, order, occluder)
     ctx = get_context()
     progs = programs(ctx)
     timings = {}
@@ -220,6 +222,24 @@ def render_gl(scene: Scene, params: ShadingParams | ScheuermannParams | None = N
         strands.release()
         if surface is not None:
             surface.release()
+
+
+def _render_patches(scene: Scene, params, omega, order, occluder) -> GLResult:
+    """docs/model.md §18: slide 17's four passes in GL over the patch mesh. The per-point
+    colours come from the JAX shading (`scene_point_colors`): GL here checks visibility
+    and compositing, not the shading (the ribbon path checks that)."""
+    from .._patches import scene_patches, scene_point_colors
+    from ._patches import render_patches_gl
+
+    if omega is not None or order is not None or occluder is not None:
+        raise ValueError("a hair-patch scene takes none of `omega`, `order`, `occluder`")
+    clock = time.perf_counter()
+    colors = np.asarray(scene_point_colors(scene, params), np.float64)
+    shaded = time.perf_counter()
+    image = render_patches_gl(get_context(), camera_view(scene.camera), scene_patches(scene),
+                              colors, scene.background)
+    timings = {"point colours (JAX)": shaded - clock, "four passes": time.perf_counter() - shaded}
+    return GLResult(image, None, timings)
 
 
 def _depth_far(scene: Scene, view: View, depth: np.ndarray) -> float:

@@ -1,0 +1,95 @@
+"""Hair patches in GL: scheuermann-2004 slide 17's four passes (docs/model.md §18).
+
+1. prime Z: alpha test passes opaque fragments only, no culling, Z writes on, Z test
+   LESS, colour writes off;
+2. opaque: no culling, Z writes off, Z test EQUAL (only the front-most opaque fragment);
+3. transparent back faces: alpha test passes non-opaque fragments, front faces culled,
+   Z writes off, Z test LESS, blending "over";
+4. transparent front faces: back faces culled, Z writes on, Z test LESS, "over".
+
+Triangles are drawn in the order of `Patches.triangles` (slide 14's static order) in every
+pass; GL keeps primitive order for depth test and blending within a draw call.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._occluder import drawable_triangles
+from .._patches import Patches
+from .._projection import View
+from ._context import check, release
+from ._programs import programs
+from ._renderer import _set, _view_uniforms
+
+__all__ = ["render_patches_gl"]
+
+
+def render_patches_gl(ctx, view: View, patches: Patches, point_colors: np.ndarray,
+                      background) -> np.ndarray:
+    """The patches drawn at `view` with the per-point colours `point_colors` `[P, 3]`
+    (each vertex carries its strand point's colour) over `background` (RGB, alpha 0).
+    Returns `float32[H, W, 4]` linear RGBA, row 0 at the top."""
+    import moderngl
+
+    w, h = view.width, view.height
+    prog = programs(ctx)["patch"]
+    tri = patches.triangles[drawable_triangles(view, patches.vertices, patches.triangles)]
+    _, depth = view.project(patches.vertices)
+    # Drawn depths lie in (0, max]: far = 2·max keeps them inside [0, 1) of the buffer.
+    far = 2.0 * float(max(np.max(depth[tri], initial=0.0), view.near if np.isfinite(view.near) else 1.0))
+    color = ctx.texture((w, h), 4, dtype="f4")
+    depth_tex = ctx.depth_texture((w, h))
+    fbo = ctx.framebuffer(color_attachments=[color], depth_attachment=depth_tex)
+    objects = [fbo, color, depth_tex]
+    try:
+        fbo.use()
+        ctx.viewport = (0, 0, w, h)
+        bg = [float(x) for x in np.asarray(background, np.float64).ravel()]
+        fbo.clear(bg[0], bg[1], bg[2], 0.0, depth=1.0)
+        if tri.size:  # fires unless every triangle reaches the near plane
+            f4 = lambda a: ctx.buffer(np.ascontiguousarray(a, "f4").tobytes())  # noqa: E731
+            vbo, ubo = f4(patches.vertices), f4(patches.u)
+            cbo = f4(np.asarray(point_colors, np.float64)[patches.point])
+            ibo = ctx.buffer(np.ascontiguousarray(tri, "u4").tobytes())
+            vao = ctx.vertex_array(prog, [(vbo, "3f", "in_position"), (ubo, "1f", "in_u"),
+                                          (cbo, "3f", "in_color")],
+                                   index_buffer=ibo, index_element_size=4)
+            objects += [vao, vbo, ubo, cbo, ibo]
+            _set(prog, raster_size=(float(w), float(h)), depth_range=(0.0, far),
+                 core=float(patches.core), **_view_uniforms("view", view))
+            ctx.enable(moderngl.DEPTH_TEST)
+            ctx.front_face = "ccw"
+            passes = [  # (opaque fragments?, culled faces, Z writes, Z test, colour writes, blend)
+                (True, None, True, "<", False, False),      # 1. prime Z
+                (True, None, False, "==", True, False),     # 2. opaque parts
+                (False, "front", False, "<", True, True),   # 3. transparent back faces
+                (False, "back", True, "<", True, True),     # 4. transparent front faces
+            ]
+            for opaque, cull, z_write, z_test, colour, blend in passes:
+                _set(prog, opaque_pass=opaque)
+                if cull is None:
+                    ctx.disable(moderngl.CULL_FACE)
+                else:
+                    ctx.enable(moderngl.CULL_FACE)
+                    ctx.cull_face = cull
+                fbo.depth_mask = z_write
+                ctx.depth_func = z_test
+                fbo.color_mask = (colour,) * 4
+                if blend:
+                    ctx.enable(moderngl.BLEND)
+                    # "over": C ← a c + (1 − a) C, A ← a + (1 − a) A.
+                    ctx.blend_func = (moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA,
+                                      moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA)
+                else:
+                    ctx.disable(moderngl.BLEND)
+                vao.render(moderngl.TRIANGLES, vertices=tri.size)
+                check(ctx, "hair patch pass")
+        image = np.frombuffer(color.read(), dtype="f4").reshape(h, w, 4)[::-1].copy()
+    finally:
+        ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE | moderngl.BLEND)
+        fbo.depth_mask = True
+        fbo.color_mask = (True,) * 4
+        ctx.depth_func = "<"
+        release(ctx, *objects)
+    return image

@@ -1,0 +1,379 @@
+"""Hair patches and slide 17's four passes (docs/model.md §18): hand-built cases whose
+colours follow from the rule by hand, the JAX rule against GL, and the patch mesh."""
+
+import dataclasses
+from pathlib import Path
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import hairjax as hj
+from hairjax._constants import PATCH_OPAQUE_EPS
+from hairjax._errors import SceneError
+from hairjax._occluder import _near_segments
+from hairjax._ordering import hair_centre
+from hairjax._patches import (
+    Patches,
+    composite_patches,
+    four_pass_weights,
+    patch_alpha,
+    patch_fragments,
+    patch_mesh,
+    scene_patches,
+    scene_point_colors,
+)
+from hairjax._projection import camera_view
+from hairjax._render import tangents
+from hairjax._scene import Camera, PatchGeometry
+from hairjax._scheuermann import strand_normals
+from hairjax._sources import furball
+
+BG = np.array([0.1, 0.2, 0.3])
+RED, GREEN, BLUE = np.eye(3)
+# Core 0: a(u) = 1 − |2u − 1|, so u sets a quad's (constant) alpha: u = ½ → 1 (opaque).
+A_HALF, A_FIFTH = 0.25, 0.1  # u for a = 0.5 and a = 0.2
+
+
+def _view(size=8):
+    return camera_view(Camera(eye=(0.0, 0.0, 4.0), fov=40.0, width=size, height=size))
+
+
+def _quads(specs):
+    """Axis-aligned rectangles covering the view's centre, one per (z, u, front), drawn in
+    the given order; quad q carries point colour q. Front: counter-clockwise seen from +z.
+    Off-centre corners keep the diagonal and sides away from pixel centres."""
+    vertices, triangles, us = [], [], []
+    for q, (z, u, front) in enumerate(specs):
+        base = 4 * q
+        vertices += [(-1.03, -0.97, z), (1.21, -0.97, z), (1.21, 1.13, z), (-1.03, 1.13, z)]
+        us += [u] * 4
+        tris = [(0, 1, 2), (0, 2, 3)] if front else [(0, 2, 1), (0, 3, 2)]
+        triangles += [(base + a, base + b, base + c) for a, b, c in tris]
+    n = len(specs)
+    return Patches(np.array(vertices, float), np.array(triangles), np.array(us, float),
+                   np.repeat(np.arange(n), 4), 0.0)
+
+
+def _jax_image(view, patches, colors):
+    frags = patch_fragments(view, patches)
+    weights = four_pass_weights(frags, view.width * view.height)
+    return np.asarray(composite_patches(frags, weights, jnp.asarray(colors), jnp.asarray(BG),
+                                        view.height, view.width))
+
+
+def _centre_pixel(image):
+    h, w = image.shape[:2]
+    return image[h // 2, w // 2]
+
+
+def over(a, c, behind):
+    return a * c + (1 - a) * behind
+
+
+# (specs in draw order, colours, expected RGB at the centre): each by slide 17's passes.
+CASES = {
+    # Opaque red nearer than a transparent green: the green fails Z LESS in pass 4.
+    "opaque-over-transparent": ([(0.5, 0.5, True), (0.0, A_HALF, True)], [RED, GREEN], RED),
+    # A transparent back face behind the opaque red: pass 3's Z test LESS against Z₁.
+    "opaque-over-back": ([(0.5, 0.5, True), (0.0, A_HALF, False)], [RED, GREEN], RED),
+    # A transparent green in front of the opaque red: blended over it in pass 4.
+    "transparent-over-opaque": ([(0.0, 0.5, True), (0.5, A_HALF, True)], [RED, GREEN],
+                                over(0.5, GREEN, RED)),
+    # Front (green, near) drawn first, back (blue, far) second: pass 3 draws the back face
+    # before pass 4 draws the front one, whatever the draw order.
+    "back-then-front": ([(0.5, A_HALF, True), (0.0, A_FIFTH, False)], [GREEN, BLUE],
+                        over(0.5, GREEN, over(0.2, BLUE, BG))),
+    # Two front faces, the near one drawn first: it writes Z, the far one is rejected.
+    "front-near-first": ([(0.5, A_HALF, True), (0.0, A_FIFTH, True)], [GREEN, BLUE],
+                         over(0.5, GREEN, BG)),
+    # The far one drawn first: both pass, in draw order.
+    "front-far-first": ([(0.0, A_FIFTH, True), (0.5, A_HALF, True)], [BLUE, GREEN],
+                        over(0.5, GREEN, over(0.2, BLUE, BG))),
+    # Two back faces, near first: Z writes are off in pass 3, so both blend, in draw order
+    # (the far one over the near one: the order dependence the static sort keeps small).
+    "back-near-first": ([(0.5, A_HALF, False), (0.0, A_FIFTH, False)], [GREEN, BLUE],
+                        over(0.2, BLUE, over(0.5, GREEN, BG))),
+    # Two opaque quads at one depth: pass 2's EQUAL passes both, the last drawn stays.
+    "opaque-tie": ([(0.0, 0.5, True), (0.0, 0.5, False)], [RED, GREEN], GREEN),
+    # Nothing opaque, one back face behind the background only.
+    "single-back": ([(0.0, A_HALF, False)], [GREEN], over(0.5, GREEN, BG)),
+}
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_hand_built_jax(name):
+    specs, colors, expected = CASES[name]
+    image = _jax_image(_view(), _quads(specs), np.array(colors))
+    # float64 sums of a few products: 1e-12 is rounding.
+    np.testing.assert_allclose(_centre_pixel(image)[:3], expected, atol=1e-12)
+    opaque = any(u == 0.5 for _, u, _ in specs)
+    alpha = 1.0 if opaque else 1 - np.prod([1 - (1 - abs(2 * u - 1)) for _, u, _ in specs])
+    if name == "front-near-first":
+        alpha = 0.5
+    np.testing.assert_allclose(_centre_pixel(image)[3], alpha, atol=1e-12)
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_hand_built_gl(gl, name):
+    from hairjax.gl._patches import render_patches_gl
+
+    specs, colors, expected = CASES[name]
+    view = _view()
+    image = render_patches_gl(gl, view, _quads(specs), np.array(colors), BG)
+    # float32 colour buffer and blending: 1e-6 is a few float32 ulps of values ≤ 1.
+    np.testing.assert_allclose(_centre_pixel(image)[:3], expected, atol=1e-6)
+    # Every pixel, not only the centre; no pixel centre lies within 1e-2 px of an edge, so
+    # float32 cannot change which fragments exist.
+    patches = _quads(specs)
+    xy, _ = view.project(patches.vertices)
+    t = patches.triangles
+    edges = np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]])
+    assert not _near_segments(xy[edges[:, 0]], xy[edges[:, 1]], 1e-2, view.width, view.height).any()
+    np.testing.assert_allclose(image, _jax_image(view, _quads(specs), np.array(colors)), atol=1e-6)
+
+
+def test_alpha_threshold():
+    # The profile: 1 on the core |u − ½| ≤ c/2, 0 at the edges, linear between.
+    np.testing.assert_allclose(patch_alpha(np.array([0.0, 0.1, 0.3, 0.5, 0.7, 1.0]), 0.4),
+                               [0.0, 1 / 3, 1.0, 1.0, 1.0, 0.0], atol=1e-15)
+    assert np.all(patch_alpha(np.array([0.0, 0.5, 1.0]), 1.0) == 1.0)
+    # a = 1 − 1e-3 is transparent (blended at its alpha), a = 1 opaque (written as is).
+    view = _view()
+    for u, opaque in [(0.5 - 0.5e-3, False), (0.5, True)]:
+        patches = _quads([(0.0, u, True)])
+        frags = patch_fragments(view, patches)
+        assert np.all((frags.alpha >= 1 - PATCH_OPAQUE_EPS) == opaque)
+        pixel = _centre_pixel(_jax_image(view, patches, np.array([RED])))
+        expected = RED if opaque else over(1 - 1e-3, RED, BG)
+        np.testing.assert_allclose(pixel[:3], expected, atol=1e-12)
+    with pytest.raises(ValueError, match="opaque core"):
+        patch_mesh(np.zeros((2, 3)), np.array([0, 2]), np.zeros((2, 3)), np.zeros((2, 3)), 1.0, 1.5,
+                   np.zeros(3))
+    with pytest.raises(ValueError, match="patch width"):
+        patch_mesh(np.zeros((2, 3)), np.array([0, 2]), np.zeros((2, 3)), np.zeros((2, 3)), 0.0, 0.5,
+                   np.zeros(3))
+
+
+SNAP = 1 / 256  # llvmpipe's sub-pixel precision: vertices snap to 1/256 px (as _occluder's bound)
+
+
+def snap_bound(view, patches, frags, colors):
+    """Per pixel, how far the image may move when the drawn triangles' projected vertices
+    move by up to SNAP px per axis: first order, Σ over the 6 coordinates of the change in
+    each fragment's a and colour (central differences of §13's barycentrics), Σ over the
+    pixel's fragments of 2·max|c|·|Δa| + |Δc| (a fragment's alpha moves its own term and
+    the transmittance of what lies behind, each ≤ max|c|). Matters for patches a pixel or
+    less wide, where u moves by SNAP/width."""
+    xy, depth = view.project(patches.vertices)
+    tri = patches.triangles[frags.draw]
+    c = np.stack([frags.pixel % view.width + 0.5, frags.pixel // view.width + 0.5], axis=1)
+    colors = np.asarray(colors, np.float64)
+
+    def values(corners):
+        a, b, cc = corners[:, 0], corners[:, 1], corners[:, 2]
+        area = (b[:, 0] - a[:, 0]) * (cc[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (cc[:, 0] - a[:, 0])
+        la = ((b[:, 0] - c[:, 0]) * (cc[:, 1] - c[:, 1]) - (b[:, 1] - c[:, 1]) * (cc[:, 0] - c[:, 0])) / area
+        lb = ((cc[:, 0] - c[:, 0]) * (a[:, 1] - c[:, 1]) - (cc[:, 1] - c[:, 1]) * (a[:, 0] - c[:, 0])) / area
+        lam = np.stack([la, lb, 1 - la - lb], axis=1) / depth[tri]
+        lam /= lam.sum(axis=1, keepdims=True)
+        alpha = patch_alpha(np.sum(lam * patches.u[tri], axis=1), patches.core)
+        return alpha, np.einsum("fi,fic->fc", lam, colors[patches.point[tri]])
+
+    corners = xy[tri]
+    da = np.zeros(len(tri))
+    dc = np.zeros(len(tri))
+    for i in range(3):
+        for axis in range(2):
+            up, down = corners.copy(), corners.copy()
+            up[:, i, axis] += SNAP
+            down[:, i, axis] -= SNAP
+            (a1, c1), (a0, c0) = values(up), values(down)
+            da += 0.5 * np.abs(a1 - a0)
+            dc += 0.5 * np.abs(c1 - c0).max(axis=1)
+    per_fragment = 2 * max(colors.max(), 1.0) * da + dc
+    return np.bincount(frags.pixel, per_fragment, minlength=view.width * view.height)
+
+
+def _strand_patches(width=0.3, core=0.4):
+    """A small tuft: 24 seeded curved strands on a unit sphere's front, 5 points each."""
+    rng = np.random.default_rng(7)
+    strands = []
+    for _ in range(24):
+        root = rng.normal(size=3) * [0.6, 0.6, 0.2] + [0, 0, 0.8]
+        root /= np.linalg.norm(root)
+        bend = rng.normal(size=3) * 0.15
+        s = np.linspace(0, 1, 5)[:, None]
+        strands.append(root * (1 + 0.5 * s) + bend * s**2 + [0, -0.3, 0] * s)
+    points = np.concatenate(strands)
+    offsets = np.arange(0, 121, 5)
+    tangent = tangents(points, offsets)
+    centre = hair_centre(points, offsets)
+    normal = strand_normals(points, tangent, centre)
+    return patch_mesh(points, offsets, tangent, normal, width, core, centre), points, normal
+
+
+def test_front_faces_point_outward():
+    # Narrow ribbons: a wide one folds where N turns fast between points (a quad's two
+    # triangles then bend apart, and one may face inward; docs/model.md §18).
+    patches, points, normal = _strand_patches(width=0.05)
+    v = patches.vertices
+    t = patches.triangles
+    n = np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]])
+    mid = v[t].mean(axis=1)
+    # The right-hand-rule normal agrees with the strand normal N (away from the centre).
+    assert np.all(np.sum(n * normal[patches.point[t]].mean(axis=1), axis=1) > 0)
+    # Seen from +z (outside the tuft), the fragments of outward faces are front faces: the
+    # screen-area rule agrees with n·(eye − P) > 0.
+    view = camera_view(Camera(eye=(0.0, 0.0, 5.0), fov=40.0, width=32, height=32))
+    frags = patch_fragments(view, patches)
+    facing = np.sum(n * (view.origin - mid), axis=1) > 0
+    assert frags.pixel.size > 0
+    np.testing.assert_array_equal(frags.front, facing[frags.draw])
+
+
+def test_jax_matches_gl(gl):
+    """A 40² tuft of patches with seeded point colours. Tolerance 1e-4 (float32 colours and
+    barycentrics, ~1e-6) plus `snap_bound` (llvmpipe's vertex snapping), except pixels
+    where float32 may change which fragments exist or pass a test: centres within 1e-3 px
+    of a triangle edge (float32 rounding of our 40 px coordinates is ~4e-6 px; snapping
+    moves edges by up to 1/256 px, which the edge case leaves to the mask only where a
+    centre lies that near), fragments with alpha within 1e-4 of the opaque threshold, and
+    pixels with two fragments whose depths differ by < 1e-5 of the depth range (the depth
+    buffer's 24 bits)."""
+    from hairjax.gl._patches import render_patches_gl
+
+    patches, points, _ = _strand_patches()
+    view = camera_view(Camera(eye=(0.3, 0.2, 4.0), target=(0.0, -0.1, 0.8), fov=30.0, width=40, height=40))
+    colors = np.random.default_rng(3).uniform(0.1, 1.0, size=(len(points), 3))
+    jax_image = _jax_image(view, patches, colors)
+    gl_image = render_patches_gl(gl, view, patches, colors, BG)
+    xy, depth = view.project(patches.vertices)
+    t = patches.triangles
+    edges = np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]])
+    mask = _near_segments(xy[edges[:, 0]], xy[edges[:, 1]], 1e-3, view.width, view.height)
+    frags = patch_fragments(view, patches)
+    near_threshold = np.abs(frags.alpha - (1 - PATCH_OPAQUE_EPS)) < 1e-4
+    mask[frags.pixel[near_threshold]] = True
+    far = 2 * depth.max()
+    same = (frags.pixel[1:] == frags.pixel[:-1])
+    order = np.lexsort((frags.depth, frags.pixel))
+    d, p = frags.depth[order], frags.pixel[order]
+    tie = (p[1:] == p[:-1]) & (np.diff(d) < 1e-5 * far)
+    mask[p[1:][tie]] = True
+    assert same.any()  # the tuft overlaps itself: the passes have work to do
+    covered = np.zeros(view.width * view.height, bool)
+    covered[frags.pixel] = True
+    assert covered.sum() > 100 and mask.sum() < 0.5 * covered.sum()
+    diff = np.abs(gl_image - jax_image).max(axis=-1).ravel()
+    bad = np.flatnonzero((diff > 1e-4 + snap_bound(view, patches, frags, colors)) & ~mask)
+    assert bad.size == 0, (bad, diff[bad])
+    # The bound is a worst case (all six coordinates moved adversely, summed); in practice
+    # snapping moves few pixels past 1e-4: a wrong pass rule would move many.
+    checked = np.zeros(view.width * view.height, bool)
+    checked[frags.pixel] = True
+    checked &= ~mask
+    assert np.mean(diff[checked] <= 1e-4) >= 0.95
+
+
+# --------------------------------------------------------------------------- scenes
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "experiments" / "scenes" / "patches.toml"
+
+
+def _small_patch_scene():
+    scene = hj.load_scene(EXAMPLE)
+    return scene.replace(strands=furball(strands=60, points=6, seed=1, alpha=0.6),
+                         camera=dataclasses.replace(scene.camera, width=40, height=40))
+
+
+def test_scene_file_keys(tmp_path):
+    scene = hj.load_scene(EXAMPLE)
+    assert scene.patches == PatchGeometry(width=0.04, opaque_core=0.4)
+    base = EXAMPLE.read_text()
+    for old, new, message in [
+        ('geometry = "patches"\n', "", "applies only to geometry = 'patches'"),
+        ("patch_width = 0.04", "patch_width = 0.0", "patch_width"),
+        ("patch_width = 0.04   # world units\n", "", "patch_width .* is required"),
+        ("opaque_core = 0.4", "opaque_core = 1.5", "opaque_core"),
+        ('geometry = "patches"', 'geometry = "quads"', "geometry"),
+    ]:
+        path = tmp_path / "bad.toml"
+        path.write_text(base.replace(old, new))
+        with pytest.raises(SceneError, match=message):
+            hj.load_scene(path)
+    with pytest.raises(SceneError, match="occluder"):
+        scene.replace(occluder=hj.Occluder(kind="sphere", center=(0, 0, 0), radius=0.3))
+
+
+def test_scene_jax_matches_gl(gl):
+    """The example (fewer strands, 40²) through `render` and `render_gl`: both draw the
+    same patches with the same JAX point colours, so only visibility and compositing can
+    differ; the mask and tolerance as in test_jax_matches_gl (its patches are ~2 px wide,
+    so the vertex-snapping bound matters here)."""
+    from hairjax.gl import render_gl
+
+    scene = _small_patch_scene()
+    jax_image = np.asarray(hj.render(scene))
+    gl_image = render_gl(scene).image
+    view = camera_view(scene.camera)
+    patches = scene_patches(scene)
+    frags = patch_fragments(view, patches)
+    xy, _ = view.project(patches.vertices)
+    t = patches.triangles
+    edges = np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]])
+    mask = _near_segments(xy[edges[:, 0]], xy[edges[:, 1]], 1e-3, view.width, view.height)
+    assert np.bincount(frags.pixel).max() > 1 and mask.sum() < 0.5 * np.unique(frags.pixel).size
+    colors = scene_point_colors(scene)
+    diff = np.abs(gl_image - jax_image).max(axis=-1).ravel()
+    bad = np.flatnonzero((diff > 1e-4 + snap_bound(view, patches, frags, colors)) & ~mask)
+    assert bad.size == 0, (bad, diff[bad])
+    # The bound is a worst case (all six coordinates moved adversely, summed); in practice
+    # snapping moves few pixels past 1e-4: a wrong pass rule would move many.
+    checked = np.zeros(view.width * view.height, bool)
+    checked[frags.pixel] = True
+    checked &= ~mask
+    assert np.mean(diff[checked] <= 1e-4) >= 0.95
+    assert jax_image[..., 3].max() == 1.0  # opaque cores are drawn
+
+
+def test_patch_image_differentiable():
+    """The weights are geometry; the image is linear in the point colours, so a gradient in
+    a shading parameter flows (float64 central difference, ε = 1e-6: error ~ε² + rounding)."""
+    import equinox as eqx
+    import jax
+
+    scene = _small_patch_scene()
+    p = scene.params
+
+    def total(s):
+        return jnp.sum(hj.render(scene, eqx.tree_at(lambda q: q.kd, p, s * p.kd))[..., :3])
+
+    grad = jax.grad(total)(1.0)
+    eps = 1e-6
+    fd = (total(1.0 + eps) - total(1.0 - eps)) / (2 * eps)
+    # Linear in kd: the central difference is exact but for rounding (~1e-16/ε relative).
+    np.testing.assert_allclose(float(grad), float(fd), rtol=1e-7)
+    assert float(grad) > 0
+
+
+def test_strand_scene_untouched():
+    """A strand scene does no patch work: `render` is the staged path, bit for bit."""
+    from hairjax._render import geometry_stage, shading_stage
+
+    scene = _small_patch_scene().replace(patches=None)
+    np.testing.assert_array_equal(np.asarray(hj.render(scene)),
+                                  np.asarray(shading_stage(geometry_stage(scene), scene.params)))
+
+
+def test_other_entry_points():
+    """`render_profiled` draws the patches too; `fit` refuses them rather than fitting
+    the ribbons' image."""
+    from hairjax._render import render_profiled
+
+    scene = _small_patch_scene()
+    image, timings = render_profiled(scene)
+    np.testing.assert_array_equal(np.asarray(image), np.asarray(hj.render(scene)))
+    assert "patches (four passes)" in timings
+    with pytest.raises(hj.FitError, match="hair-patch"):
+        hj.fit(scene, np.zeros((40, 40, 4)))
