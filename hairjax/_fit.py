@@ -5,8 +5,8 @@ The image is linear in Kd, Ks and the ambient term:
     image = ambient⊙A + Kd⊙K_d(κ) + Ks⊙K_s(κ, p) + T·backdrop + T·O(κ),
 
 A = composite(c), K_d = composite(τ·light·sin(T, L)·c), K_s = composite(τ·light·b^p)
-(docs/model.md §6, §8); with an occluder, the backdrop holds its k·ambient and
-O(κ) = exp(−κΩ)·V·k·light·max(N·L, 0) at the pixels it covers (§13). The geometry stage
+(docs/model.md §6, §8); with an occluder, the backdrop is 0 at the pixels it covers and
+O(κ) = k·ambient + exp(−κΩ)·V·k·light·max(N·L, 0) there (§13, `occluder_colors`). The geometry stage
 runs once per target; Kajiya-Kay's geometric terms once per target; K_d is recomputed per
 step only when κ is fitted, K_s only when κ or the shininess is, and otherwise a step is a
 handful of per-pixel multiply-adds. Being
@@ -29,7 +29,7 @@ import numpy as np
 
 from ._constants import FIT_TRANSMITTANCE_CUTOFF
 from ._lookup import LOOKUP_MODELS, lookup_coordinates, lookup_terms
-from ._render import composite, geometry_stage
+from ._render import composite, geometry_stage, occluder_colors
 from ._scene import Scene
 from ._shading import ShadingParams, kajiya_kay_terms, specular_power
 
@@ -133,9 +133,7 @@ class _Terms(eqx.Module):
     light: jax.Array
     omega: jax.Array | None
     constant: jax.Array  # ambient⊙A + T·backdrop, [HW, 3]
-    occluder_pixel: jax.Array | None  # [Q] pixels the occluder covers (§13)
-    occluder_lit: jax.Array | None  # [Q, 3] T·V·k·light·max(N·L, 0) there
-    occluder_omega: jax.Array | None  # [Q] Ω at its surface points
+    ambient: jax.Array  # the held ambient, for the occluder's colour (§13)
     kd_image: jax.Array | None  # K_d when κ is fixed
     ks_image: jax.Array | None  # K_s when κ and p are fixed
     target: jax.Array
@@ -210,16 +208,9 @@ def _prepare_terms(scene: Scene, params: ShadingParams, names, target, sqrt_weig
     omega = geom.omega
     tau = None if omega is None else jnp.exp(-params.kappa * omega)
     # The fixed part of the image is computed once, with every fragment.
-    backdrop = full.backdrop
-    occ_pixel = occ_lit = None
-    if full.occluder_pixel is not None:
-        occ_pixel = full.occluder_pixel
-        backdrop = backdrop.at[occ_pixel].set(params.ambient[None, :] * full.occluder_color[None, :])
-        occ_lit = full.transmittance[occ_pixel][:, None] * full.occluder_direct
-        if full.occluder_visibility is not None:
-            occ_lit = occ_lit * full.occluder_visibility[:, None]
+    # (The backdrop is 0 where the occluder covers the pixel: `_fixed` adds its colour.)
     constant = (composite(full, params.ambient[None, :] * full.base_color * streak)
-                + full.transmittance[:, None] * backdrop)
+                + full.transmittance[:, None] * full.backdrop)
     kd_image = ks_image = None
     if "kappa" not in names or omega is None:
         scale = 1.0 if tau is None else tau[:, None]
@@ -227,9 +218,9 @@ def _prepare_terms(scene: Scene, params: ShadingParams, names, target, sqrt_weig
         if "shininess" not in names:
             ks_image = composite(geom, scale * _specular_of(gap, lookup, geom, params.shininess)[:, None]
                                  * light)
-    return _Terms(geom, sin_tl, gap, lit_color, light, omega, constant, occ_pixel, occ_lit,
-                  full.occluder_omega if occ_pixel is not None else None, kd_image, ks_image,
-                  jnp.asarray(target), jnp.asarray(sqrt_weight), lookup, geom.lookup_size, geom.model)
+    return _Terms(geom, sin_tl, gap, lit_color, light, omega, constant, params.ambient, kd_image,
+                  ks_image, jnp.asarray(target), jnp.asarray(sqrt_weight), lookup, geom.lookup_size,
+                  geom.model)
 
 
 def _specular_of(gap, lookup, where, shininess):
@@ -241,13 +232,13 @@ def _specular_of(gap, lookup, where, shininess):
 
 
 def _fixed(terms: _Terms, kappa):
-    """ambient⊙A + T·backdrop + T·O(κ): the image without the K_d and K_s terms."""
-    if terms.occluder_pixel is None:
+    """ambient⊙A + T·backdrop + T·(the occluder's colour at κ, `occluder_colors`): the image
+    without the K_d and K_s terms."""
+    g = terms.geometry
+    if g.occluder_pixel is None:
         return terms.constant
-    lit = terms.occluder_lit
-    if terms.occluder_omega is not None:
-        lit = lit * jnp.exp(-kappa * terms.occluder_omega)[:, None]
-    return terms.constant.at[terms.occluder_pixel].add(lit)
+    occluder = occluder_colors(g, ShadingParams(ambient=terms.ambient, kappa=kappa))
+    return terms.constant.at[g.occluder_pixel].add(g.transmittance[g.occluder_pixel][:, None] * occluder)
 
 
 def _point_terms(terms: _Terms, shininess, kappa):
