@@ -763,16 +763,19 @@ def fit(
     weight_list = [None] * len(scenes) if weights is None else list(weights)
     if any(s.patches is not None for s in scenes):  # docs/model.md §18: not wired into the fit
         raise FitError("fit does not support hair-patch scenes (hair.geometry = 'patches')")
-    if any(s.shading_model == "scheuermann" for s in scenes):  # docs/model.md §17
-        return _fit_scheuermann(scenes, target_list, mask_list, weight_list, fit, init, solver,
-                                scalar, max_steps, rtol, atol, progress)
-    names = _check_names(fit, scalar)
+    scheuermann = any(s.shading_model == "scheuermann" for s in scenes)  # docs/model.md §17
+    names = _scheuermann_names(scenes, fit, scalar) if scheuermann else _check_names(fit, scalar)
     double = jnp.result_type(float) == jnp.float64
     rtol = (1e-8 if double else 1e-5) if rtol is None else rtol
     atol = (1e-10 if double else 1e-7) if atol is None else atol
     opt, least_squares = _solver(solver, rtol, atol)
     init = scenes[0].params if init is None else init
     arrays = [_target_arrays(s, t, m, w) for s, t, m, w in zip(scenes, target_list, mask_list, weight_list)]
+    if scheuermann:
+        from ._fit_scheuermann import fit_scheuermann
+
+        return fit_scheuermann(scenes, arrays, names, init, opt, least_squares, scalar, max_steps,
+                               rtol, atol, progress)
 
     start = time.perf_counter()
     terms = [_prepare_terms(s, init, names, t, sw) for s, (t, sw) in zip(scenes, arrays)]
@@ -814,23 +817,14 @@ def fit(
                      std_error=std_error, undetermined=undetermined, rmse=rmse, restarts=restarts)
 
 
-def _fit_scheuermann(scenes, target_list, mask_list, weight_list, names, init, solver, scalar,
-                     max_steps, rtol, atol, progress) -> FitResult:
-    """`fit` for Scheuermann scenes (every scene must be one): `_fit_scheuermann.py`."""
-    from ._fit_scheuermann import SCHEUERMANN_FITTABLE, check_names, fit_scheuermann
+def _scheuermann_names(scenes, names, scalar) -> tuple[str, ...]:
+    """The names a Scheuermann fit takes (`_fit_scheuermann.py`; every scene must be one):
+    FITTABLE, `fit`'s default, stands for all of that model's parameters."""
+    from ._fit_scheuermann import SCHEUERMANN_FITTABLE, check_names
 
     if any(s.shading_model != "scheuermann" for s in scenes):
         raise FitError("scenes of one fit share a shading model; got Scheuermann and Kajiya-Kay")
-    names = SCHEUERMANN_FITTABLE if names is FITTABLE else names  # the default: all of them
-    names = check_names(names, scalar)
-    double = jnp.result_type(float) == jnp.float64
-    rtol = (1e-8 if double else 1e-5) if rtol is None else rtol
-    atol = (1e-10 if double else 1e-7) if atol is None else atol
-    opt, least_squares = _solver(solver, rtol, atol)
-    arrays = [_target_arrays(s, t, m, w) for s, t, m, w in zip(scenes, target_list, mask_list, weight_list)]
-    init = scenes[0].params if init is None else init
-    return fit_scheuermann(scenes, arrays, names, init, opt, least_squares, scalar, max_steps,
-                           rtol, atol, progress)
+    return check_names(SCHEUERMANN_FITTABLE if names is FITTABLE else names, scalar)
 
 
 def _to_space(params: ShadingParams, names, scalar, transforms) -> dict:

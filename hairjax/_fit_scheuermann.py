@@ -125,10 +125,9 @@ _jit_loss = eqx.filter_jit(lambda z, problem: _loss_fn(z, problem)[0])
 def fit_scheuermann(scenes, arrays, names, init, opt, least_squares, scalar, max_steps,
                     rtol, atol, progress) -> FitResult:
     """`hairjax.fit` for Scheuermann scenes: `arrays` are `_target_arrays`' (target,
-    √weight) per scene; the rest as `fit` passes them."""
+    √weight) per scene, `names` checked by `check_names`; the rest as `fit` passes them."""
     if not isinstance(init, ScheuermannParams):
         raise FitError(f"a Scheuermann scene is fitted from ScheuermannParams, got {type(init).__name__}")
-    names = check_names(names, scalar)
     scalar = tuple(scalar)
     start = time.perf_counter()
     geometries = [geometry_stage(s) for s in scenes]
