@@ -30,7 +30,7 @@ from ._projection import View, light_view
 
 __all__ = ["occluder_hits", "sphere_hits", "mesh_hits", "vertex_normals", "occluder_extent",
            "occluder_light_view", "occluder_visibility", "shadow_bias", "silhouette_pixels",
-           "interpolation_bound"]
+           "interpolation_bound", "corner_nudges"]
 
 _CHUNK = 1 << 22  # (triangle, pixel) candidates per batch: bounds memory to ~1 GB
 
@@ -314,11 +314,19 @@ def interpolation_bound(view: View, occluder, light, step: float) -> np.ndarray:
         return np.maximum(np.sum(n * to_l, axis=1), 0.0)
 
     bound = np.zeros(len(pix))
+    for up, down in corner_nudges(corners, step):
+        bound += 0.5 * np.abs(lambert(up) - lambert(down))
+    out[pix] = float(np.max(np.asarray(occluder.color) * np.asarray(light.color))) * bound
+    return out
+
+
+def corner_nudges(corners: np.ndarray, step: float):
+    """For `[T, 3, 2]` screen-space triangle corners: each of the six coordinates moved by
+    +step and by −step, the others kept, as (up, down) pairs — the terms of a first-order
+    bound on what snapping vertices to a grid of `step` can change."""
     for i in range(3):
         for axis in range(2):
             up, down = corners.copy(), corners.copy()
             up[:, i, axis] += step
             down[:, i, axis] -= step
-            bound += 0.5 * np.abs(lambert(up) - lambert(down))
-    out[pix] = float(np.max(np.asarray(occluder.color) * np.asarray(light.color))) * bound
-    return out
+            yield up, down

@@ -11,7 +11,7 @@ import pytest
 import hairjax as hj
 from hairjax._constants import PATCH_OPAQUE_EPS
 from hairjax._errors import SceneError
-from hairjax._occluder import _near_segments
+from hairjax._occluder import _near_segments, corner_nudges
 from hairjax._ordering import hair_centre
 from hairjax._patches import (
     Patches,
@@ -183,14 +183,10 @@ def snap_bound(view, patches, frags, colors):
     corners = xy[tri]
     da = np.zeros(len(tri))
     dc = np.zeros(len(tri))
-    for i in range(3):
-        for axis in range(2):
-            up, down = corners.copy(), corners.copy()
-            up[:, i, axis] += SNAP
-            down[:, i, axis] -= SNAP
-            (a1, c1), (a0, c0) = values(up), values(down)
-            da += 0.5 * np.abs(a1 - a0)
-            dc += 0.5 * np.abs(c1 - c0).max(axis=1)
+    for up, down in corner_nudges(corners, SNAP):
+        (a1, c1), (a0, c0) = values(up), values(down)
+        da += 0.5 * np.abs(a1 - a0)
+        dc += 0.5 * np.abs(c1 - c0).max(axis=1)
     per_fragment = 2 * max(colors.max(), 1.0) * da + dc
     return np.bincount(frags.pixel, per_fragment, minlength=view.width * view.height)
 
