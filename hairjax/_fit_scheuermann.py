@@ -21,6 +21,7 @@ from ._fit import (
     FitError,
     FitResult,
     _covariance,
+    _half_square,
     _softplus,
     _softplus_inv,
     _solve,
@@ -119,9 +120,6 @@ def _loss_fn(z, problem):
     return 0.5 * jnp.sum(_residuals(z, problem) ** 2), None
 
 
-_jit_loss = eqx.filter_jit(lambda z, problem: _loss_fn(z, problem)[0])
-
-
 def fit_scheuermann(scenes, arrays, names, init, opt, least_squares, scalar, max_steps,
                     rtol, atol, progress) -> FitResult:
     """`hairjax.fit` for Scheuermann scenes: `arrays` are `_target_arrays`' (target,
@@ -150,7 +148,7 @@ def fit_scheuermann(scenes, arrays, names, init, opt, least_squares, scalar, max
     elapsed = time.perf_counter() - start - geometry_s
     std_error, undetermined = _standard_errors(fitted, problem)
     n_pixels = float(sum(np.count_nonzero(np.asarray(sw)) for _, sw in arrays)) * 3
-    final_loss = float(_jit_loss(z, problem)) if diverged else losses[-1]
+    final_loss = float(_half_square(_residuals, z, problem)) if diverged else losses[-1]
     return FitResult(params=fitted, initial=init, fitted=names, loss=losses, steps=steps,
                      time_s=elapsed, geometry_s=geometry_s, termination=termination,
                      std_error=std_error, undetermined=undetermined,
