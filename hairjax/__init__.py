@@ -1,8 +1,10 @@
 """hairjax: differentiable hair shading in JAX.
 
 Strands are drawn as antialiased, alpha-blended ribbons in a bin-sorted visibility order,
-self-shadowed with opacity shadow maps and shaded with Kajiya-Kay. The model is written
-down once, in docs/model.md.
+self-shadowed with opacity shadow maps and shaded with Kajiya-Kay or Scheuermann's two
+shifted highlights. The model is written down once, in docs/model.md; how the package is
+laid out, and how to add a shading model, shadow method or ordering, in
+docs/architecture.md.
 """
 
 from importlib.metadata import PackageNotFoundError, version
@@ -10,61 +12,54 @@ from importlib.metadata import PackageNotFoundError, version
 from ._animate import load_animation as load_animation
 from ._animate import write_frames as write_frames
 from ._band import renderer_band as renderer_band
+from ._cache import forget as forget
 from ._errors import HairFormatError as HairFormatError
 from ._errors import SceneError as SceneError
 from ._fit import FitError as FitError
 from ._fit import FitResult as FitResult
 from ._fit import fit as fit
+from ._geometry_stage import Geometry as Geometry
+from ._geometry_stage import geometry_stage as geometry_stage
 from ._image import read_image as read_image
 from ._image import write_image as write_image
 from ._io import hair_info as hair_info
 from ._io import load_hair as load_hair
-from ._render import (
-    Geometry as Geometry,
-)
-from ._render import (
-    geometry_stage as geometry_stage,
-)
-from ._render import (
-    prepare as prepare,
-)
-from ._render import (
-    render as render,
-)
-from ._render import (
-    render_profiled as render_profiled,
-)
-from ._render import (
-    shading_stage as shading_stage,
-)
-from ._scene import (
-    Camera as Camera,
-)
-from ._scene import (
-    Light as Light,
-)
-from ._scene import (
-    Occluder as Occluder,
-)
-from ._scene import (
-    Ordering as Ordering,
-)
-from ._scene import (
-    Scene as Scene,
-)
-from ._scene import (
-    Shadows as Shadows,
-)
+from ._light import Light as Light
+from ._ordering import AbstractOrdering as AbstractOrdering
+from ._ordering import Ordering as Ordering
+from ._ordering import register_ordering as register_ordering
+from ._render import render as render
+from ._render import render_profiled as render_profiled
+from ._scene import Camera as Camera
+from ._scene import Occluder as Occluder
+from ._scene import PatchGeometry as PatchGeometry
+from ._scene import Scene as Scene
 from ._scene_file import default_scene_path as default_scene_path
 from ._scene_file import load_scene as load_scene
-from ._scheuermann import ScheuermannMaps as ScheuermannMaps
-from ._scheuermann import ScheuermannParams as ScheuermannParams
+from ._setup import prepare as prepare
+from ._setup import visibility_order as visibility_order
+from ._shading import AbstractShadingModel as AbstractShadingModel
+from ._shading import KajiyaKay as KajiyaKay
+from ._shading import KajiyaKayLookup as KajiyaKayLookup
+from ._shading import KajiyaKayMirror as KajiyaKayMirror
+from ._shading import PointInputs as PointInputs
+from ._shading import Reflectance as Reflectance
+from ._shading import Scheuermann as Scheuermann
+from ._shading import ScheuermannMaps as ScheuermannMaps
+from ._shading import ScheuermannParams as ScheuermannParams
 from ._shading import ShadingParams as ShadingParams
+from ._shading import ShadingPoints as ShadingPoints
+from ._shading import Streaks as Streaks
 from ._shading import kajiya_kay as kajiya_kay
+from ._shading import register_shading_model as register_shading_model
+from ._shading import shading_stage as shading_stage
+from ._shading import transmittance as transmittance
+from ._shadows import AbstractShadowMethod as AbstractShadowMethod
+from ._shadows import Shadows as Shadows
+from ._shadows import register_shadow_method as register_shadow_method
 from ._sources import furball as furball
 from ._sources import scalp as scalp
 from ._strands import Strands as Strands
-from ._streaks import Streaks as Streaks
 from ._supersample import supersample as supersample
 
 try:

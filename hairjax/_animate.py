@@ -20,7 +20,8 @@ import numpy as np
 
 from ._errors import SceneError
 from ._scene import Scene
-from ._scene_file import _build, _Table, load_scene, scene_from_dict
+from ._scene_file import load_scene, scene_from_dict, scene_tables
+from ._scene_table import Table, build
 
 __all__ = ["Motion", "Animation", "load_animation", "path_position", "path_acceleration",
            "inertia_vector", "write_frames"]
@@ -114,12 +115,12 @@ def load_animation(path) -> Animation:
     if data["hair"].get("source") != "furball":
         raise SceneError(f"{where}: hair.source must be 'furball' to animate (wenzel-2002's fur "
                          f"ball), got {data['hair'].get('source')!r}")
-    table = _Table("animation", data.get("animation", {}), where)
+    table = Table("animation", data.get("animation", {}), where, scene_tables()["animation"])
     kwargs = {k: v for k, v in dict(
         amplitude=table.vec3("amplitude"), frequency=table.vec3("frequency"),
         phase=table.vec3("phase"), inertia=table.number("inertia", lo=0),
         frames=table.integer("frames", lo=1)).items() if v is not None}
-    motion = _build(where, Motion, **kwargs)
+    motion = build(where, Motion, **kwargs)
     name = data.get("name", path.stem)
     return Animation(data, path.resolve().parent, name, where, motion)
 

@@ -30,17 +30,16 @@ Tolerances (tests/test_gl.py gives the measurements behind them):
 
 from __future__ import annotations
 
-import weakref
-
 import numpy as np
 
+from ._cache import cached
 from ._constants import SHADOW_FILTER_RADIUS
-from ._occluder import interpolation_bound, occluder_hits, silhouette_pixels
+from ._geometry_stage import geometry_stage
+from ._occluder import interpolation_bound, occluder_hits, occluder_light_view, shadow_bias, silhouette_pixels
 from ._raster import Fragments, rasterize, ribbon_widths
-from ._render import geometry_stage, visibility_order
 from ._scene import Scene
-from ._scheuermann import segment_alpha
-from ._shadows import light_frame
+from ._setup import prepare, visibility_order
+from ._shadows import OpacityMaps, light_frame, with_receivers
 
 __all__ = ["renderer_band", "camera_band", "shadow_band", "omega_uncertainty", "occluder_light_uncertainty",
            "transmittance_uncertainty", "PIXEL_TOL", "TAU_TOL", "SLICE_DELTA", "MAX_BAND"]
@@ -65,7 +64,6 @@ OCCLUDER_VERTEX_STEP = 1 / 512
 
 # `_risk` per scene object: the geometry does not change with the shading parameters or
 # colour_bound, so a fit's targets share one computation.
-_RISK_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def over_weights_numpy(alpha: np.ndarray, pixel: np.ndarray) -> np.ndarray:
@@ -143,7 +141,7 @@ def omega_uncertainty(scene: Scene) -> np.ndarray:
     - Points the light does not see (behind a point light) get no shadow in either: 0.
     """
     s = scene.strands
-    if scene.shadows.method == "none":
+    if not scene.shadows.casts:
         return np.zeros(s.num_points)
     r = scene.shadows.resolution
     segs = s.segments()
@@ -159,7 +157,7 @@ def omega_uncertainty(scene: Scene) -> np.ndarray:
     tx = np.floor(np.clip(xy[:, 0], -1, r)).astype(np.int64)
     ty = np.floor(np.clip(xy[:, 1], -1, r)).astype(np.int64)
 
-    if scene.shadows.method == "opacity-maps":
+    if isinstance(scene.shadows, OpacityMaps):
         n = scene.shadows.maps
         u = frame.slice_coordinate(frags.depth, n)
         near_plane = np.abs(u - np.round(u)) < SLICE_DELTA
@@ -252,9 +250,6 @@ def occluder_light_uncertainty(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     occluder point's Ω moved by hair fragments near their segment ends (as
     `omega_uncertainty` bounds for strand points). All False without an occluder or
     shadows."""
-    from ._occluder import occluder_light_view, shadow_bias
-    from ._render import prepare
-    from ._shadows import with_receivers
 
     cam, s = scene.camera, scene.strands
     points_out, pixels_out = np.zeros(s.num_points, bool), np.zeros(cam.width * cam.height, bool)
@@ -285,7 +280,7 @@ def occluder_light_uncertainty(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
                            surface)
     receiver = slice(s.num_points, None)
     unsure[receiver] |= near_edge(frame.xy[receiver])
-    if scene.shadows.method == "opacity-maps":
+    if isinstance(scene.shadows, OpacityMaps):
         u = frame.slice_coordinate(frame.depth[receiver], scene.shadows.maps)
         unsure[receiver] |= np.abs(u - np.round(u)) < SLICE_DELTA
     points_out[:] = unsure[:s.num_points]
@@ -297,14 +292,14 @@ def _risk(scene: Scene, shadows: bool) -> tuple[np.ndarray, np.ndarray]:
     """Per pixel (row-major): the summed weight α·T of fragments near a segment end, plus
     with `shadows` each other fragment's weight times how much its τ may differ (the larger
     of its ends' `transmittance_uncertainty`); and the pixels at the occluder's silhouette
-    or depth (in the band whatever the colour). Cached per scene object."""
-    cache = _RISK_CACHE.setdefault(scene, {})
+    or depth (in the band whatever the colour). Cached per scene object (`_cache`)."""
+    cache = cached(scene, "disagreement band", dict)
     if "camera" not in cache:
         cache.update(_camera_risk(scene))
     if shadows and "either" not in cache:
         cache["either"] = cache["camera"]
         cache["always_either"] = cache["always"]
-        if scene.shadows.method != "none":
+        if scene.shadows.casts:
             # A fragment's colour mixes its segment's end colours, each moving by ≤ Δτ × its
             # fully lit colour: by ≤ max(Δτ₀, Δτ₁) × colour_bound.
             omega = np.asarray(geometry_stage(scene).omega, np.float64)
@@ -328,7 +323,7 @@ def _segment_opacity(scene: Scene) -> np.ndarray:
     scene (docs/model.md §17) — a smaller α in front lets more weight through behind."""
     s = scene.strands
     opacity = s.alpha[s.strand_of_point[s.segments()[:, 0]]]
-    texture = segment_alpha(s, scene.scheuermann_maps) if scene.shading_model == "scheuermann" else None
+    texture = prepare(scene).shading_inputs.segment_alpha
     return opacity if texture is None else opacity * texture
 
 

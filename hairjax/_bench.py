@@ -15,7 +15,7 @@ opacity stage (`geometry_stage`) and the shading stage, each waited for with
 `jax.block_until_ready`; "full render" is their sum within a run. The shading stage
 alone and the gradient of ``sum((image - target)^2)`` with respect to kd, ks, shininess
 and kappa are then timed as warm calls on the last run's geometry, and the ordering as
-`draw_order(segment_depth(...), "bins", 256)` on the scene's camera depths.
+`draw_order(segment_depth(...), Ordering("bins", bins=256))` on the scene's camera depths.
 
 `--backend gl` times the GL renderer instead (`hairjax.gl.render_gl(scene)`: upload, the
 opacity-map passes and the camera pass, each waited for with ``glFinish``; "full render"
@@ -104,8 +104,11 @@ def _median(xs):
 
 
 def _bench_scene(cfg: dict):
-    from ._scene import Camera, Light, Ordering, Scene, Shadows
-    from ._shading import ShadingParams
+    from ._light import Light
+    from ._ordering import Ordering
+    from ._scene import Camera, Scene
+    from ._shading import KajiyaKay, ShadingParams
+    from ._shadows import Shadows
     from ._sources import furball
 
     hair = furball(strands=cfg["strands"], points=POINTS)
@@ -113,8 +116,8 @@ def _bench_scene(cfg: dict):
         strands=hair,
         camera=Camera(eye=EYE, target=TARGET, fov=FOV, width=cfg["size"], height=cfg["size"]),
         light=Light(kind="directional", direction=(-0.6, -0.8, -0.5)),
-        params=ShadingParams(kd=(0.55, 0.35, 0.2), ks=0.35, shininess=30.0, kappa=1.0,
-                             ambient=0.05),
+        shading=KajiyaKay(ShadingParams(kd=(0.55, 0.35, 0.2), ks=0.35, shininess=30.0, kappa=1.0,
+                                        ambient=0.05)),
         shadows=Shadows(method="opacity-maps", maps=cfg["maps"],
                         resolution=cfg["map_resolution"]),
         ordering=Ordering(method="bins", bins=ORDERING_BINS),
@@ -180,9 +183,11 @@ def _measure_jax(scene, repeats: int, progress) -> dict:
     import jax
     import jax.numpy as jnp
 
-    from ._ordering import draw_order, segment_depth
-    from ._render import geometry_stage, prepare, render_profiled, shading_stage
-    from ._shading import ShadingParams
+    from ._geometry_stage import geometry_stage
+    from ._ordering import Ordering, draw_order, segment_depth
+    from ._render import render_profiled
+    from ._setup import prepare
+    from ._shading import ShadingParams, shading_stage
 
     params = scene.params
 
@@ -243,11 +248,11 @@ def _measure_jax(scene, repeats: int, progress) -> dict:
     progress("ordering")
     _, depth = setup.view.project(scene.strands.points)
     segments = scene.strands.segments()
-    draw_order(segment_depth(depth, segments), "bins", ORDERING_BINS)  # warm-up
+    draw_order(segment_depth(depth, segments), Ordering("bins", bins=ORDERING_BINS))  # warm-up
     order_runs = []
     for _ in range(repeats):
         t0 = time.perf_counter()
-        draw_order(segment_depth(depth, segments), "bins", ORDERING_BINS)
+        draw_order(segment_depth(depth, segments), Ordering("bins", bins=ORDERING_BINS))
         order_runs.append(time.perf_counter() - t0)
     order_s = _median(order_runs)
 

@@ -9,8 +9,11 @@ import jax
 import numpy as np
 
 from ._band import PIXEL_TOL
-from ._render import forget, geometry_stage, render
+from ._cache import forget
+from ._geometry_stage import geometry_stage
+from ._render import render
 from ._scene import Scene
+from ._shading import transmittance
 
 __all__ = ["compare", "image_stats", "format_report"]
 
@@ -49,8 +52,8 @@ def compare(scene: Scene, repeats: int = 3) -> dict:
     tau_diff = None
     if gl.omega is not None:
         kappa = float(scene.params.kappa)
-        jax_tau = np.exp(-kappa * np.asarray(geometry_stage(scene).omega, np.float64))
-        gl_tau = np.exp(-kappa * gl.omega.astype(np.float64))
+        jax_tau = np.asarray(transmittance(kappa, np.asarray(geometry_stage(scene).omega, np.float64)))
+        gl_tau = np.asarray(transmittance(kappa, gl.omega.astype(np.float64)))
         tau_diff = float(np.abs(jax_tau - gl_tau).max(initial=0.0))
 
     def jax_full():

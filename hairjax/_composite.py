@@ -12,11 +12,16 @@ without re-compositing.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float
 
-__all__ = ["segmented_scan", "over_weights"]
+if TYPE_CHECKING:
+    from ._geometry_stage import Geometry
+
+__all__ = ["segmented_scan", "over_weights", "composite"]
 
 
 def segmented_scan(values: Float[Array, " n"], first: Bool[Array, " n"], op) -> Float[Array, " n"]:
@@ -44,3 +49,13 @@ def over_weights(
     inclusive = segmented_scan(1.0 - alpha, first, jnp.multiply)
     exclusive = jnp.where(first, 1.0, jnp.roll(inclusive, 1))
     return alpha * exclusive, inclusive
+
+
+def composite(geometry: Geometry, colors: Float[Array, "P C"]) -> Float[Array, "HW C"]:
+    """Σ_k w_k ((1 − t_k) c(p₀) + t_k c(p₁)) per pixel: the hair's part of the composite
+    (docs/model.md §6), linear in the point colours. The backdrop term is not included."""
+    t = geometry.frag_t[:, None]
+    frag_color = (1 - t) * colors[geometry.frag_i0] + t * colors[geometry.frag_i0 + 1]
+    hw = geometry.height * geometry.width
+    return jax.ops.segment_sum(geometry.frag_weight[:, None] * frag_color, geometry.frag_pixel,
+                               num_segments=hw, indices_are_sorted=True)

@@ -28,10 +28,12 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._constants import FIT_TRANSMITTANCE_CUTOFF
-from ._lookup import LOOKUP_MODELS, lookup_coordinates, lookup_terms
-from ._render import composite, geometry_stage, occluder_colors
+from ._composite import composite
+from ._geometry_stage import geometry_stage
 from ._scene import Scene
-from ._shading import ShadingParams, kajiya_kay_terms, specular_power
+from ._shading import KajiyaKayLookup, Scheuermann, ShadingParams, occluder_colors, transmittance
+from ._shading._kajiya_kay import kajiya_kay_terms, specular_power
+from ._shading._lookup import lookup_coordinates, lookup_terms
 
 __all__ = ["fit", "FitResult", "FitError", "FITTABLE", "SOLVERS"]
 
@@ -141,7 +143,7 @@ class _Terms(eqx.Module):
     # Lookup models (§14): per point (u, v) and where the terms are lit; `gap` is then unused.
     lookup: tuple | None = None
     lookup_size: int = eqx.field(static=True, default=0)
-    model: str = eqx.field(static=True, default="kajiya-kay")
+    cone: Callable = eqx.field(static=True, default=None)
 
 
 def _check_names(fit_names, scalar) -> tuple[str, ...]:
@@ -193,20 +195,22 @@ def _prepare_terms(scene: Scene, params: ShadingParams, names, target, sqrt_weig
     full = geometry_stage(scene)
     geom = _visible_fragments(full)
     lookup = None
-    if geom.model in LOOKUP_MODELS:  # §14: the same terms, read from the table
+    cone = type(geom.shading).cone
+    lookup_size = geom.shading.size if isinstance(geom.shading, KajiyaKayLookup) else 0
+    if lookup_size:  # §14: the same terms, read from the table
         lookup = lookup_coordinates(geom.tangent, geom.to_light, geom.to_eye)
-        sin_tl, _ = lookup_terms(params.shininess, *lookup, geom.lookup_size, geom.model)
+        sin_tl, _ = lookup_terms(params.shininess, *lookup, lookup_size, cone)
         gap = jnp.zeros_like(sin_tl)
     else:
         sin_tl, gap = jax.vmap(kajiya_kay_terms, in_axes=(0, 0, 0, None))(
-            geom.tangent, geom.to_light, geom.to_eye, geom.model)
+            geom.tangent, geom.to_light, geom.to_eye, cone)
     # §16: the streak factor scales a point's whole colour, so it rides on the light (and
     # the ambient term): [P, 3] instead of [1, 3] with streaks.
     streak = 1.0 if geom.streak is None else geom.streak[:, None]
     light = geom.light_rgb[None, :] * streak
     lit_color = light * geom.base_color
     omega = geom.omega
-    tau = None if omega is None else jnp.exp(-params.kappa * omega)
+    tau = None if omega is None else transmittance(params.kappa, omega)
     # The fixed part of the image is computed once, with every fragment.
     # (The backdrop is 0 where the occluder covers the pixel: `_fixed` adds its colour.)
     constant = (composite(full, params.ambient[None, :] * full.base_color * streak)
@@ -219,8 +223,8 @@ def _prepare_terms(scene: Scene, params: ShadingParams, names, target, sqrt_weig
             ks_image = composite(geom, scale * _specular_of(gap, lookup, geom, params.shininess)[:, None]
                                  * light)
     return _Terms(geom, sin_tl, gap, lit_color, light, omega, constant, params.ambient, kd_image,
-                  ks_image, jnp.asarray(target), jnp.asarray(sqrt_weight), lookup, geom.lookup_size,
-                  geom.model)
+                  ks_image, jnp.asarray(target), jnp.asarray(sqrt_weight), lookup, lookup_size,
+                  cone)
 
 
 def _specular_of(gap, lookup, where, shininess):
@@ -228,7 +232,7 @@ def _specular_of(gap, lookup, where, shininess):
     at the points' (u, v) (§14); `where` carries the model and table size."""
     if lookup is None:
         return specular_power(gap, shininess)
-    return lookup_terms(shininess, *lookup, where.lookup_size, where.model)[1]
+    return lookup_terms(shininess, *lookup, where.lookup_size, where.cone)[1]
 
 
 def _fixed(terms: _Terms, kappa):
@@ -244,7 +248,7 @@ def _fixed(terms: _Terms, kappa):
 def _point_terms(terms: _Terms, shininess, kappa):
     """Per point: the Kd and Ks colours before compositing, and their derivatives in κ and p:
     τ·sin·light·c, τ·b^p·light, ∂/∂κ of both (−Ω times them), ∂/∂p of the second."""
-    tau = jnp.ones_like(terms.sin_tl) if terms.omega is None else jnp.exp(-kappa * terms.omega)
+    tau = jnp.ones_like(terms.sin_tl) if terms.omega is None else transmittance(kappa, terms.omega)
     omega = jnp.zeros_like(terms.sin_tl) if terms.omega is None else terms.omega
     if terms.lookup is None:
         spec = specular_power(terms.gap, shininess)
@@ -763,7 +767,7 @@ def fit(
     weight_list = [None] * len(scenes) if weights is None else list(weights)
     if any(s.patches is not None for s in scenes):  # docs/model.md §18: not wired into the fit
         raise FitError("fit does not support hair-patch scenes (hair.geometry = 'patches')")
-    scheuermann = any(s.shading_model == "scheuermann" for s in scenes)  # docs/model.md §17
+    scheuermann = any(isinstance(s.shading, Scheuermann) for s in scenes)  # docs/model.md §17
     names = _scheuermann_names(scenes, fit, scalar) if scheuermann else _check_names(fit, scalar)
     double = jnp.result_type(float) == jnp.float64
     rtol = (1e-8 if double else 1e-5) if rtol is None else rtol
@@ -822,7 +826,7 @@ def _scheuermann_names(scenes, names, scalar) -> tuple[str, ...]:
     FITTABLE, `fit`'s default, stands for all of that model's parameters."""
     from ._fit_scheuermann import SCHEUERMANN_FITTABLE, check_names
 
-    if any(s.shading_model != "scheuermann" for s in scenes):
+    if not all(isinstance(s.shading, Scheuermann) for s in scenes):
         raise FitError("scenes of one fit share a shading model; got Scheuermann and Kajiya-Kay")
     return check_names(SCHEUERMANN_FITTABLE if names is FITTABLE else names, scalar)
 

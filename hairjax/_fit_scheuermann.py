@@ -26,8 +26,8 @@ from ._fit import (
     _softplus_inv,
     _solve,
 )
-from ._render import geometry_stage, shading_stage
-from ._scheuermann import ScheuermannParams
+from ._geometry_stage import geometry_stage
+from ._shading import ScheuermannParams, shading_stage
 
 __all__ = ["SCHEUERMANN_FITTABLE", "fit_scheuermann"]
 

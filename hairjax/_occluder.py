@@ -114,7 +114,7 @@ def _mesh_raster(view: View, vertices: np.ndarray, triangles: np.ndarray, normal
     best_depth = depth_out
     best_tri = np.full(w * h, -1, np.int64)
     best_lam = np.zeros((w * h, 3))
-    for k, pixel, lam in _pixel_fragments(view, xy, depth, tri):
+    for k, pixel, lam in pixel_fragments(view, xy, depth, tri):
         point = np.einsum("ni,nij->nj", lam, vertices[tri[k]])
         d = (point - view.origin) @ view.forward
         # Nearest per pixel within the batch, then against the earlier batches.
@@ -136,7 +136,7 @@ def _mesh_raster(view: View, vertices: np.ndarray, triangles: np.ndarray, normal
     return best_depth, normal_out, point_out, winner
 
 
-def _pixel_fragments(view: View, xy: np.ndarray, depth: np.ndarray, tri: np.ndarray):
+def pixel_fragments(view: View, xy: np.ndarray, depth: np.ndarray, tri: np.ndarray):
     """Every (triangle, pixel centre) pair where the centre lies in the projected triangle
     (module docstring: λ ≥ 0, edges included, zero-area projections dropped), in batches of
     at most _CHUNK candidates: yields (k: index into `tri` `[N]`, pixel `[N]`, λ' `[N, 3]`

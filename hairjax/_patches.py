@@ -27,10 +27,13 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ._constants import PATCH_OPAQUE_EPS
-from ._occluder import _pixel_fragments, drawable_triangles
+from ._geometry_stage import geometry_stage
+from ._occluder import drawable_triangles, pixel_fragments
 from ._ordering import hair_centre, static_order
 from ._projection import View, camera_view
-from ._scheuermann import strand_normals
+from ._shading import point_colors
+from ._shading._scheuermann_inputs import strand_normals
+from ._strands import tangents
 
 __all__ = ["scene_patches", "scene_point_colors", "render_patches", "Patches", "patch_mesh",
            "patch_alpha", "PatchFragments", "patch_fragments", "PatchWeights", "four_pass_weights",
@@ -118,7 +121,7 @@ def patch_fragments(view: View, patches: Patches) -> PatchFragments:
     xy, depth = view.project(patches.vertices)
     a, b, c = (xy[tri[:, k]] for k in range(3))
     area = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
-    parts = [(k, pixel, lam) for k, pixel, lam in _pixel_fragments(view, xy, depth, tri)]
+    parts = [(k, pixel, lam) for k, pixel, lam in pixel_fragments(view, xy, depth, tri)]
     k = np.concatenate([p[0] for p in parts]) if parts else np.zeros(0, np.int64)
     pixel = np.concatenate([p[1] for p in parts]) if parts else np.zeros(0, np.int64)
     lam = np.concatenate([p[2] for p in parts]) if parts else np.zeros((0, 3))
@@ -223,8 +226,6 @@ def composite_patches(frags: PatchFragments, weights: PatchWeights, colors: Floa
 def scene_patches(scene) -> Patches:
     """The scene's strands as patches (`scene.patches`: width, opaque core): N away from
     `hair_centre` (§17's strand normal), drawn in the static order about it (slide 14)."""
-    from ._render import tangents
-
     points, offsets = scene.strands.points, scene.strands.offsets
     tangent = tangents(points, offsets)
     centre = hair_centre(points, offsets)
@@ -234,10 +235,8 @@ def scene_patches(scene) -> Patches:
 
 
 def scene_point_colors(scene, params=None) -> Float[Array, "P 3"]:
-    """The strands' shaded point colours (`_render.point_colors`: the scene's shading
-    model, with the strands' own self-shadows, §7), which the patches interpolate."""
-    from ._render import geometry_stage, point_colors
-
+    """The strands' shaded point colours (`point_colors`: the scene's shading model, with
+    the strands' own self-shadows, §7), which the patches interpolate."""
     return point_colors(geometry_stage(scene), scene.params if params is None else params)
 
 

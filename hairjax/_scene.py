@@ -1,8 +1,9 @@
 """The scene: what to render, as plain immutable values.
 
 A `Scene` is configuration, not a pytree: the geometry stage reads it with NumPy, and the
-shading stage takes its differentiable parameters from `Scene.params` (a `ShadingParams`).
-Construction validates every value, so a `Scene` that exists can be rendered.
+shading stage takes its differentiable parameters from its shading model
+(`Scene.shading.params`, also `Scene.params`). Construction validates every value, so a
+`Scene` that exists can be rendered.
 """
 
 from __future__ import annotations
@@ -12,34 +13,15 @@ from typing import Literal
 
 import numpy as np
 
+from ._constants import NEAR_FRACTION
 from ._errors import SceneError
-from ._lookup import LOOKUP_MODELS
-from ._scheuermann import ScheuermannMaps, ScheuermannParams, check_scheuermann_params
-from ._shading import SHADING_MODELS, ShadingParams
+from ._light import Light, rgb, vec3
+from ._ordering import AbstractOrdering, DepthBins
+from ._shading import AbstractShadingModel, KajiyaKay, Streaks
+from ._shadows import AbstractShadowMethod, OpacityMaps
 from ._strands import Strands
-from ._streaks import Streaks
 
-__all__ = ["Camera", "Light", "Shadows", "Ordering", "Occluder", "PatchGeometry", "Scene"]
-
-# Every shading model a scene may name: the analytic ones and their lookup-table variants (§14).
-MODELS = (*SHADING_MODELS, *LOOKUP_MODELS)
-LOOKUP_SIZE_RANGE = (2, 4096)
-
-
-def _vec3(name: str, value, *, nonzero: bool = False) -> tuple[float, float, float]:
-    arr = np.asarray(value, dtype=np.float64)
-    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
-        raise SceneError(f"{name} must be 3 finite numbers, got {value!r}")
-    if nonzero and not np.linalg.norm(arr) > 0:
-        raise SceneError(f"{name} must not have length 0")
-    return tuple(float(x) for x in arr)
-
-
-def _rgb(name: str, value) -> tuple[float, float, float]:
-    arr = np.broadcast_to(np.asarray(value, dtype=np.float64), (3,))
-    if not np.all(np.isfinite(arr)) or np.any(arr < 0):
-        raise SceneError(f"{name} must be a non-negative number or 3 of them, got {value!r}")
-    return tuple(float(x) for x in arr)
+__all__ = ["Camera", "Light", "Occluder", "PatchGeometry", "Scene", "OCCLUDER_KINDS"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -48,7 +30,7 @@ class Camera:
 
     Images are `[height, width, 4]`, row 0 at the top; pixel (i, j) has its centre at
     (i + 0.5, j + 0.5); `target` projects to (width/2, height/2); world `up` is up.
-    `near` (world units) defaults to 1e-3 × |target − eye|; segments with an endpoint
+    `near` (world units) defaults to NEAR_FRACTION (1e-3) × |target − eye|; segments with an endpoint
     nearer than it are not drawn. `offset` (pixels, each in [-0.5, 0.5]) shifts the image:
     `target` projects to (width/2 + offset[0], height/2 + offset[1]); supersampling averages
     images rendered with a grid of such offsets (`hairjax.supersample`).
@@ -64,9 +46,9 @@ class Camera:
     offset: tuple[float, float] = (0.0, 0.0)
 
     def __post_init__(self):
-        eye = _vec3("camera.eye", self.eye)
-        target = _vec3("camera.target", self.target)
-        up = _vec3("camera.up", self.up, nonzero=True)
+        eye = vec3("camera.eye", self.eye)
+        target = vec3("camera.target", self.target)
+        up = vec3("camera.up", self.up, nonzero=True)
         d = np.subtract(target, eye)
         if not np.linalg.norm(d) > 0:
             raise SceneError("camera.eye and camera.target must differ")
@@ -80,7 +62,7 @@ class Camera:
                 raise SceneError(f"camera.{key} must be an integer in [1, 16384], got {v!r}")
         near = self.near
         if near is None:
-            near = 1e-3 * float(np.linalg.norm(d))
+            near = NEAR_FRACTION * float(np.linalg.norm(d))
         if not (np.isfinite(near) and near > 0):
             raise SceneError(f"camera.near must be positive, got {self.near!r}")
         try:
@@ -93,73 +75,6 @@ class Camera:
                        ("width", int(self.width)), ("height", int(self.height)),
                        ("near", float(near)), ("offset", (float(offset[0]), float(offset[1])))):
             object.__setattr__(self, key, v)
-
-
-@dataclasses.dataclass(frozen=True)
-class Light:
-    """A directional light (`direction`: the way light travels) or a point light (`position`)."""
-
-    kind: Literal["directional", "point"] = "directional"
-    direction: tuple[float, float, float] | None = (-1.0, -1.0, -1.0)
-    position: tuple[float, float, float] | None = None
-    color: tuple[float, float, float] = (1.0, 1.0, 1.0)
-
-    def __post_init__(self):
-        if self.kind == "directional":
-            if self.direction is None:
-                raise SceneError("light.direction is required for a directional light")
-            object.__setattr__(self, "direction",
-                               _vec3("light.direction", self.direction, nonzero=True))
-            object.__setattr__(self, "position", None)
-        elif self.kind == "point":
-            if self.position is None:
-                raise SceneError("light.position is required for a point light")
-            object.__setattr__(self, "position", _vec3("light.position", self.position))
-            object.__setattr__(self, "direction", None)
-        else:
-            raise SceneError(f"light.kind must be 'directional' or 'point', got {self.kind!r}")
-        object.__setattr__(self, "color", _rgb("light.color", self.color))
-
-
-SHADOW_METHODS = ("none", "opacity-maps", "exact")
-ORDERING_METHODS = ("bins", "exact", "none", "static")
-
-
-@dataclasses.dataclass(frozen=True)
-class Shadows:
-    """Self-shadowing: `none`, `opacity-maps` (N maps of R × R), or `exact` (N → ∞)."""
-
-    method: Literal["none", "opacity-maps", "exact"] = "opacity-maps"
-    maps: int = 64
-    resolution: int = 256
-
-    def __post_init__(self):
-        if self.method not in SHADOW_METHODS:
-            raise SceneError(f"shadows.method must be one of {SHADOW_METHODS}, got {self.method!r}")
-        if isinstance(self.maps, bool) or int(self.maps) != self.maps or not 1 <= self.maps <= 65536:
-            raise SceneError(f"shadows.maps must be an integer in [1, 65536], got {self.maps!r}")
-        r = self.resolution
-        if isinstance(r, bool) or int(r) != r or not 4 <= r <= 16384:
-            raise SceneError(f"shadows.resolution must be an integer in [4, 16384], got {r!r}")
-        object.__setattr__(self, "maps", int(self.maps))
-        object.__setattr__(self, "resolution", int(r))
-
-
-@dataclasses.dataclass(frozen=True)
-class Ordering:
-    """Visibility order: depth `bins` (kim-2003 §3), `exact` depth sort, `none` (index order),
-    or `static`: inside to outside, from the geometry alone (scheuermann-2004 slide 14)."""
-
-    method: Literal["bins", "exact", "none", "static"] = "bins"
-    bins: int = 256
-
-    def __post_init__(self):
-        if self.method not in ORDERING_METHODS:
-            raise SceneError(
-                f"ordering.method must be one of {ORDERING_METHODS}, got {self.method!r}")
-        if isinstance(self.bins, bool) or int(self.bins) != self.bins or not 1 <= self.bins <= 2**24:
-            raise SceneError(f"ordering.bins must be an integer in [1, 2^24], got {self.bins!r}")
-        object.__setattr__(self, "bins", int(self.bins))
 
 
 OCCLUDER_KINDS = ("sphere", "mesh")
@@ -186,11 +101,11 @@ class Occluder:
     def __post_init__(self):
         if self.kind not in OCCLUDER_KINDS:
             raise SceneError(f"occluder.kind must be one of {OCCLUDER_KINDS}, got {self.kind!r}")
-        object.__setattr__(self, "center", _vec3("occluder.center", self.center))
+        object.__setattr__(self, "center", vec3("occluder.center", self.center))
         if not (np.isfinite(self.radius) and self.radius > 0):
             raise SceneError(f"occluder.radius must be positive, got {self.radius!r}")
         object.__setattr__(self, "radius", float(self.radius))
-        object.__setattr__(self, "color", _rgb("occluder.color", self.color))
+        object.__setattr__(self, "color", rgb("occluder.color", self.color))
         if self.kind == "sphere":
             if self.path is not None or self.vertices is not None or self.triangles is not None:
                 raise SceneError("occluder.path, vertices and triangles are for kind 'mesh' only")
@@ -258,52 +173,37 @@ class PatchGeometry:
 class Scene:
     """Everything needed to render one image.
 
-    `params` holds the differentiable shading parameters; `shading_model` picks the
-    Kajiya-Kay convention (`"kajiya-kay"` or `"kajiya-kay-mirror"`, see docs/model.md) or
-    the seed's convention read from a `lookup_size` × `lookup_size` table
-    (`"kajiya-kay-lookup"`, §14; `lookup_size` is unused by the other models), each with a
-    `ShadingParams`; or `"scheuermann"` (docs/model.md §17) with a `ScheuermannParams`;
-    `scheuermann_maps` (used by that model only) says how its per-point inputs are made.
-    `streaks`: wenzel-2002's streak texture along the hairs (§16), or None.
-    `patches`: draw the strands as hair patches (§18) instead of ribbons, or None; the
-    strands' opacity maps still give the self-shadows; no occluder.
+    `shading`: the shading model with its differentiable parameters (`KajiyaKay`,
+    `KajiyaKayMirror`, `KajiyaKayLookup`, `Scheuermann`, or any registered model,
+    docs/architecture.md); `scene.params` is `scene.shading.params`. `shadows`: the
+    self-shadowing method (`Shadows(...)`, docs/model.md §7); `ordering`: the visibility
+    order (`Ordering(...)`, §4). `streaks`: wenzel-2002's streak texture along the hairs
+    (§16), or None. `patches`: draw the strands as hair patches (§18) instead of ribbons,
+    or None; the strands' opacity maps still give the self-shadows; no occluder.
     """
 
     strands: Strands
     camera: Camera = Camera()
     light: Light = Light()
-    params: ShadingParams = dataclasses.field(default_factory=ShadingParams)
-    shading_model: str = "kajiya-kay"
-    shadows: Shadows = Shadows()
-    ordering: Ordering = Ordering()
+    shading: AbstractShadingModel = dataclasses.field(default_factory=KajiyaKay)
+    shadows: AbstractShadowMethod = OpacityMaps()
+    ordering: AbstractOrdering = DepthBins()
     occluder: Occluder | None = None
     background: tuple[float, float, float] = (0.0, 0.0, 0.0)
     name: str = "scene"
-    lookup_size: int = 256
     streaks: Streaks | None = None
-    scheuermann_maps: ScheuermannMaps = ScheuermannMaps()
     patches: PatchGeometry | None = None
 
     def __post_init__(self):
-        if not isinstance(self.strands, Strands):
-            raise SceneError("scene.strands must be a Strands")
-        if self.shading_model not in MODELS:
-            raise SceneError(
-                f"shading.model must be one of {MODELS}, got {self.shading_model!r}")
-        lo, hi = LOOKUP_SIZE_RANGE
-        n = self.lookup_size
-        if isinstance(n, bool) or int(n) != n or not lo <= n <= hi:
-            raise SceneError(f"shading.lookup_size must be an integer in [{lo}, {hi}], got {n!r}")
-        object.__setattr__(self, "lookup_size", int(n))
+        for key, kind in (("strands", Strands), ("camera", Camera), ("light", Light),
+                          ("shading", AbstractShadingModel), ("shadows", AbstractShadowMethod),
+                          ("ordering", AbstractOrdering)):
+            if not isinstance(getattr(self, key), kind):
+                raise SceneError(f"scene.{key} must be a {kind.__name__}, "
+                                 f"got {type(getattr(self, key)).__name__}")
         if self.streaks is not None and not isinstance(self.streaks, Streaks):
             raise SceneError("scene.streaks must be a Streaks or None")
-        wanted = ScheuermannParams if self.shading_model == "scheuermann" else ShadingParams
-        if not isinstance(self.params, wanted):
-            raise SceneError(f"shading model {self.shading_model!r} takes {wanted.__name__}, "
-                             f"got {type(self.params).__name__}")
-        if wanted is ScheuermannParams:
-            check_scheuermann_params(self.params)
-        object.__setattr__(self, "background", _rgb("background.color", self.background))
+        object.__setattr__(self, "background", rgb("background.color", self.background))
         if self.patches is not None:
             if not isinstance(self.patches, PatchGeometry):
                 raise SceneError("scene.patches must be a PatchGeometry or None")
@@ -311,5 +211,15 @@ class Scene:
                 raise SceneError("hair.geometry = 'patches' does not draw an occluder: "
                                  "remove [occluder] or use geometry = 'strands'")
 
+    @property
+    def params(self):
+        """The shading model's parameters (`scene.shading.params`)."""
+        return self.shading.params
+
     def replace(self, **changes) -> Scene:
+        """A copy with some fields changed; `params=` replaces the shading model's
+        parameters (`scene.shading.replace_params`)."""
+        if "params" in changes:
+            shading = changes.pop("shading", self.shading)
+            changes["shading"] = shading.replace_params(changes.pop("params"))
         return dataclasses.replace(self, **changes)

@@ -11,7 +11,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-__all__ = ["Strands", "WIDTH_UNITS"]
+__all__ = ["Strands", "WIDTH_UNITS", "tangents", "unit_rows"]
 
 WIDTH_UNITS = ("pixels", "world")
 
@@ -108,3 +108,26 @@ class Strands:
     def transformed(self, scale: float = 1.0, translate=(0.0, 0.0, 0.0)) -> Strands:
         """Points scaled about the origin, then translated."""
         return self.replace(points=self.points * scale + np.asarray(translate, dtype=np.float64))
+
+
+def tangents(points: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """Unit tangents: central differences, one-sided at strand ends (`float64[P, 3]`).
+
+    Zero where the difference is zero (repeated points, one-point strands): such a point
+    reflects ambient light only (docs/model.md §1).
+    """
+    prev = np.arange(len(points)) - 1
+    nxt = np.arange(len(points)) + 1
+    starts, ends = offsets[:-1], offsets[1:] - 1
+    prev[starts] = starts
+    nxt[ends] = ends
+    # unit_rows gives 0 for repeated points and one-point strands: the tangent does not exist.
+    return unit_rows(points[nxt] - points[prev])
+
+
+def unit_rows(v: np.ndarray) -> np.ndarray:
+    """Each row of `v` over its length; 0 for a zero row."""
+    norm = np.linalg.norm(v, axis=-1, keepdims=True)
+    # Fires for zero vectors (a repeated point's tangent, a point light or the eye at a
+    # strand point): no direction, so no light.
+    return np.where(norm > 0, v / np.where(norm > 0, norm, 1.0), 0.0)

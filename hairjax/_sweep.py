@@ -24,12 +24,14 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
+import jax
 import numpy as np
 
 from ._compare import image_stats
 from ._files import atomic_path, write_json, write_text
-from ._lookup import LOOKUP_MODELS
-from ._scene import Ordering, Scene
+from ._ordering import Ordering
+from ._scene import Scene
+from ._shadows import Shadows
 from ._supersample import supersample
 
 __all__ = ["KNOBS", "QUICK_KNOBS", "PATHS", "SweepError", "run_sweep", "load_points", "knob_scene"]
@@ -64,7 +66,7 @@ def knob_scene(scene: Scene, knob: str, value) -> tuple[Scene, int]:
     if knob == "map_resolution":
         return scene.replace(shadows=dataclasses.replace(scene.shadows, resolution=int(value))), 1
     if knob == "bins":
-        ordering = Ordering("exact") if value == "exact" else Ordering("bins", int(value))
+        ordering = Ordering("exact") if value == "exact" else Ordering("bins", bins=int(value))
         return scene.replace(ordering=ordering), 1
     if knob == "width":
         f = float(value)
@@ -83,8 +85,8 @@ def reference_scene(scene: Scene, knobs: dict) -> tuple[Scene, int]:
     The resolution stays the scene's: ribbons are w texels wide in the light's view
     (docs/model.md §7), so a finer map draws thinner hair and Ω does not converge as the
     resolution grows; the `map_resolution` knob shows how far it moves instead."""
-    shadows = (scene.shadows if scene.shadows.method == "none"
-               else dataclasses.replace(scene.shadows, method="exact"))
+    shadows = (Shadows("exact", resolution=scene.shadows.resolution) if scene.shadows.casts
+               else scene.shadows)
     s = max(knobs.get("supersampling", (1,)))
     return scene.replace(shadows=shadows, ordering=Ordering("exact")), int(s)
 
@@ -94,7 +96,9 @@ def _renderer(path: str) -> Callable[[Scene], tuple[np.ndarray, np.ndarray | Non
     if path == "jax":
         import jax
 
-        from ._render import forget, geometry_stage, render
+        from ._cache import forget
+        from ._geometry_stage import geometry_stage
+        from ._render import render
 
         def run(scene):
             forget(scene)  # time the whole render, not a cached geometry stage
@@ -154,20 +158,13 @@ def scene_digest(scene: Scene) -> str:
     for a in (s.points, s.offsets, s.alpha, s.width, s.color, *mesh):
         if a is not None:
             h.update(np.ascontiguousarray(a).tobytes())
-    h.update(repr((scene.camera, scene.light, scene.shading_model, scene.shadows, scene.ordering,
+    h.update(repr((scene.camera, scene.light, scene.shading.name, scene.shadows, scene.ordering,
                    scene.occluder, scene.background)).encode())
-    if scene.shading_model == "scheuermann":  # §17: its own parameters and per-point inputs
-        import jax
-
-        h.update(repr(scene.scheuermann_maps).encode())
-        for leaf in jax.tree_util.tree_leaves(scene.params):
-            h.update(np.asarray(leaf, np.float64).tobytes())
-        return h.hexdigest()[:16]
-    h.update(np.asarray([np.asarray(x, np.float64).ravel() for x in
-                         (scene.params.kd, scene.params.ks, scene.params.ambient)]).tobytes())
-    h.update(np.asarray([scene.params.shininess, scene.params.kappa], np.float64).tobytes())
-    if scene.shading_model in LOOKUP_MODELS:  # §14 (analytic scenes keep their old digests)
-        h.update(repr(scene.lookup_size).encode())
+    # The model's configuration (a table size, §17's maps) and its parameters' values.
+    h.update(repr([(f.name, getattr(scene.shading, f.name)) for f in dataclasses.fields(scene.shading)
+                   if f.name != "params"]).encode())
+    for leaf in jax.tree_util.tree_leaves(scene.params):
+        h.update(np.asarray(leaf, np.float64).tobytes())
     if scene.streaks is not None:  # §16
         h.update(repr(scene.streaks).encode())
     return h.hexdigest()[:16]
@@ -259,13 +256,13 @@ def run_sweep(scene: Scene, out, *, knobs: dict | None = None, paths: Sequence[s
             raise SweepError(f"unknown path {p!r}; paths: {', '.join(PATHS)}")
     if repeats < 1:
         raise SweepError(f"repeats must be at least 1, got {repeats}")
-    if scene.shadows.method == "none":
+    if not scene.shadows.casts:
         # A scene without shadows has no shadow knobs to turn.
         knobs = {k: v for k, v in knobs.items() if k not in _SHADOW_KNOBS}
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     config = {"scene": scene.name, "scene_digest": scene_digest(scene), "repeats": repeats,
-              "reference": {"shadows": ("none" if scene.shadows.method == "none"
+              "reference": {"shadows": ("none" if not scene.shadows.casts
                                         else f"exact at {scene.shadows.resolution}²"),
                             "ordering": "exact",
                             "supersampling": int(max(knobs.get("supersampling", (1,))))},

@@ -74,8 +74,7 @@ def _fit(args) -> int:
     import numpy as np
 
     from ._files import write_json
-    from ._fit import FITTABLE, FitError, fit
-    from ._fit_scheuermann import SCHEUERMANN_FITTABLE
+    from ._fit import FitError, fit
     from ._image import read_image, write_image
     from ._render import render
     from ._scene_file import default_scene_path, load_scene
@@ -89,7 +88,7 @@ def _fit(args) -> int:
     extra = [load_scene(s) for s in args.scenes]
     scenes = [first, *extra, *[first] * (len(targets) - 1 - len(extra))]
     # Each shading model has its parameters (docs/model.md §17 for Scheuermann's).
-    fittable = SCHEUERMANN_FITTABLE if first.shading_model == "scheuermann" else FITTABLE
+    fittable = first.shading.fittable
     names = fittable if args.fit is None else tuple(n.strip() for n in args.fit.split(",") if n.strip())
     unknown = [n for n in names if n not in fittable]
     if unknown:

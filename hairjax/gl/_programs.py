@@ -9,12 +9,10 @@ from __future__ import annotations
 from importlib import resources
 
 from .. import _constants
+from .._shading import shading_model_class, shading_model_names
 from ._context import GLError
 
 __all__ = ["programs", "constants_glsl", "shader_source"]
-
-SHADING_MODEL_IDS = {"kajiya-kay": 0, "kajiya-kay-mirror": 1, "kajiya-kay-lookup": 2, "scheuermann": 3}
-
 
 def constants_glsl() -> str:
     """GLSL `const` declarations for every constant in hairjax/_constants.py."""
@@ -27,8 +25,11 @@ def constants_glsl() -> str:
             lines.append(f"const int {name} = {value};")
         elif isinstance(value, float):
             lines.append(f"const float {name} = {value!r};")
-    for name, value in SHADING_MODEL_IDS.items():
-        lines.append(f"const int SHADING_{name.upper().replace('-', '_')} = {value};")
+    # Each registered model's branch of the camera shader (`AbstractShadingModel.gl_id`).
+    for name in shading_model_names():
+        gl_id = shading_model_class(name).gl_id
+        if gl_id is not None:
+            lines.append(f"const int SHADING_{name.upper().replace('-', '_')} = {gl_id};")
     return "\n".join(lines) + "\n"
 
 

@@ -15,17 +15,15 @@ import time
 
 import numpy as np
 
-from .._lookup import LOOKUP_MODELS, kajiya_kay_table
 from .._occluder import drawable_triangles, occluder_extent, occluder_light_view, vertex_normals
 from .._projection import View, camera_view
-from .._render import tangents, visibility_order
 from .._scene import Scene
-from .._scheuermann import ScheuermannParams, scheuermann_inputs
-from .._shading import ShadingParams
-from .._shadows import LightFrame, light_frame, point_planes, with_receivers
-from .._streaks import strand_coordinates, streak_prefix, streak_texture
+from .._setup import visibility_order
+from .._shading._streaks import strand_coordinates, streak_prefix, streak_texture
+from .._shadows import LightFrame, OpacityMaps, light_frame, point_planes, with_receivers
+from .._strands import tangents
 from ._context import check, get_context, release
-from ._programs import SHADING_MODEL_IDS, programs
+from ._programs import programs
 
 __all__ = ["GLResult", "OccluderLight", "occluder_light", "render_gl"]
 
@@ -109,15 +107,14 @@ class _Strands:
         alpha = s.alpha[per_point]
         self.segments = s.segments()
         self.extra = []  # per-point inputs of §17 (Scheuermann) and §16 (streaks), when used
-        if scene.shading_model == "scheuermann":
-            pts, factor, segment_alpha = scheuermann_inputs(s, tangent, scene.scheuermann_maps)
-            color = color * factor
-            if segment_alpha is not None:
-                # ribbon.geom takes a segment's alpha from its first point.
-                alpha = alpha.copy()
-                alpha[self.segments[:, 0]] *= segment_alpha
-            self.extra = [(f4(pts.normal), "3f", "in_normal"),
-                          (f4(np.stack([pts.shift, pts.mask], axis=1)), "2f", "in_maps")]
+        inputs = scene.shading.point_inputs(s, tangent)  # the model's own (§17's), or none
+        if inputs.color_factor is not None:
+            color = color * inputs.color_factor
+        if inputs.segment_alpha is not None:
+            # ribbon.geom takes a segment's alpha from its first point.
+            alpha = alpha.copy()
+            alpha[self.segments[:, 0]] *= inputs.segment_alpha
+        self.extra = [(f4(a), fmt, name) for a, fmt, name in scene.shading.gl_attributes(inputs)]
         self.position = f4(s.points)
         self.tangent = f4(tangent)
         self.color = f4(color)
@@ -148,7 +145,7 @@ class _Strands:
             b.release()
 
 
-def render_gl(scene: Scene, params: ShadingParams | ScheuermannParams | None = None, *,
+def render_gl(scene: Scene, params=None, *,
               clip_slices: bool = True, omega: np.ndarray | None = None,
               order: np.ndarray | None = None, occluder: OccluderLight | None = None) -> GLResult:
     """Render `scene` with OpenGL.
@@ -179,7 +176,7 @@ def render_gl(scene: Scene, params: ShadingParams | ScheuermannParams | None = N
 
     view, _, depth, _, order = visibility_order(scene, order)
     depth_far = _depth_far(scene, view, depth)
-    lighting = scene.occluder is not None and scene.shadows.method != "none"
+    lighting = scene.occluder is not None and scene.shadows.casts
     strands = _Strands(ctx, scene)
     surface = None
     try:
@@ -193,13 +190,13 @@ def render_gl(scene: Scene, params: ShadingParams | ScheuermannParams | None = N
             if lighting and occluder is None:
                 raise ValueError("render_gl: with omega and a scene whose occluder takes part in "
                                  "the light, pass occluder= too (occluder_light(scene, geometry))")
-        elif scene.shadows.method != "none":
+        elif scene.shadows.casts:
             frame = light_frame(scene.strands.points, strands.segments, scene.strands.width,
                                 scene.light, scene.shadows.resolution, scene.strands.width_units)
             points = _Points(ctx, strands, None if surface is None else surface.points)
             try:
                 frame = with_receivers(frame, points.receivers)
-                if scene.shadows.method == "opacity-maps":
+                if isinstance(scene.shadows, OpacityMaps):
                     omega_all = _opacity_maps(ctx, progs, scene, strands, frame, clip_slices, points)
                 else:
                     omega_all = _exact_opacity(ctx, progs, scene, strands, frame, points)
@@ -465,15 +462,15 @@ def _camera_pass(ctx, progs, scene: Scene, params, strands, view: View, order,
         release(ctx, ibo, fbo, color, *([own_depth] if own_depth is not None else []), *extra, table, streak)
 
 
-def _lookup_texture(ctx, scene: Scene, params: ShadingParams):
-    """§14: the lookup model's table (built by the JAX code, `kajiya_kay_table`) as an
-    RG32F texture sampled with LINEAR filtering and CLAMP_TO_EDGE; None for other models."""
+def _lookup_texture(ctx, scene: Scene, params):
+    """§14: the model's table (`gl_table`, built by the JAX code) as an RG32F texture
+    sampled with LINEAR filtering and CLAMP_TO_EDGE; None for models without one."""
     import moderngl
 
-    if scene.shading_model not in LOOKUP_MODELS:
+    table = scene.shading.gl_table(params)
+    if table is None:
         return None
-    table = kajiya_kay_table(params.shininess, scene.lookup_size, LOOKUP_MODELS[scene.shading_model])
-    n = scene.lookup_size
+    n = table.shape[0]
     tex = ctx.texture((n, n), 2, np.ascontiguousarray(table, dtype="f4").tobytes(), dtype="f4")
     tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
     tex.repeat_x = tex.repeat_y = False  # CLAMP_TO_EDGE
@@ -491,20 +488,16 @@ def _streak_texture(ctx, scene: Scene):
 
 
 def _shading_uniforms(scene: Scene, params) -> dict:
-    """The `shading` (and for §17 the `scheuermann`) uniforms of the camera pass."""
-    uniforms = {"shading.model": SHADING_MODEL_IDS[scene.shading_model],
-                "shading.kappa": float(params.kappa)}
-    if scene.shading_model == "scheuermann":
-        if not isinstance(params, ScheuermannParams):
-            raise TypeError("shading model 'scheuermann' takes ScheuermannParams, "
-                            f"got {type(params).__name__}")
-        for name in ("kd", "ambient", "primary_color", "secondary_color"):
-            uniforms[f"scheuermann.{name}"] = _vec(getattr(params, name))
-        for name in ("primary_exponent", "secondary_exponent", "primary_shift", "secondary_shift"):
-            uniforms[f"scheuermann.{name}"] = float(getattr(params, name))
-        return uniforms
-    return {**uniforms, "shading.kd": _vec(params.kd), "shading.ks": _vec(params.ks),
-            "shading.ambient": _vec(params.ambient), "shading.shininess": float(params.shininess)}
+    """The `shading` uniforms of the camera pass: the model's branch and κ, and the
+    model's own (`gl_uniforms`)."""
+    model = scene.shading
+    if model.gl_id is None:
+        raise TypeError(f"shading model {model.name!r} has no GL renderer (gl_id is None)")
+    if not isinstance(params, model.params_type):
+        raise TypeError(f"shading model {model.name!r} takes {model.params_type.__name__}, "
+                        f"got {type(params).__name__}")
+    return {"shading.model": model.gl_id, "shading.kappa": float(params.kappa),
+            **model.gl_uniforms(params)}
 
 
 def _light_pass_uniforms(scene: Scene, frame: LightFrame) -> dict:

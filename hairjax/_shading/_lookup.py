@@ -17,21 +17,34 @@ uploads this module's table as an RG32F texture and samples it that way.
 
 from __future__ import annotations
 
+from typing import ClassVar
+
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float
 
-from ._shading import ShadingParams, kajiya_kay_terms, specular_power
+from .._errors import SceneError
+from ._kajiya_kay import (
+    Cone,
+    KajiyaKay,
+    ShadingParams,
+    kajiya_kay_terms,
+    read_kajiya_kay_params,
+    seed_cone,
+    specular_power,
+)
+from ._model import Reflectance, ShadingPoints, register_shading_model
 
-__all__ = ["LOOKUP_MODELS", "kajiya_kay_table", "bilinear", "lookup_coordinates", "lookup_terms",
-           "kajiya_kay_lookup"]
+__all__ = ["KajiyaKayLookup", "kajiya_kay_table", "bilinear", "lookup_coordinates", "lookup_terms",
+           "kajiya_kay_lookup", "LOOKUP_SIZE_RANGE"]
 
-# Lookup models and the analytic convention each tabulates (docs/model.md §8).
-LOOKUP_MODELS = {"kajiya-kay-lookup": "kajiya-kay"}
+# The table sizes a scene may ask for: 2 texels already interpolate; 4096² RG32F is 128 MiB.
+LOOKUP_SIZE_RANGE = (2, 4096)
 
 
 def kajiya_kay_table(shininess: Float[Array, ""], size: int,
-                     model: str = "kajiya-kay") -> Float[Array, "size size 2"]:
+                     cone: Cone = seed_cone) -> Float[Array, "size size 2"]:
     """The lookup table: `table[j, i] = (sin θ_L, max(b, 0)^p)` at L·T = 2u_i − 1,
     V·T = 2v_j − 1, u_i = (i + ½)/size, v_j = (j + ½)/size (texel centres).
 
@@ -47,7 +60,7 @@ def kajiya_kay_table(shininess: Float[Array, ""], size: int,
     tangent = jnp.array([0.0, 0.0, 1.0], dtype=cos.dtype)
 
     def entry(to_light, to_eye):
-        sin_tl, gap = kajiya_kay_terms(tangent, to_light, to_eye, model)
+        sin_tl, gap = kajiya_kay_terms(tangent, to_light, to_eye, cone)
         return jnp.stack([sin_tl, specular_power(gap, shininess)])
 
     # Rows j: V; columns i: L.
@@ -95,17 +108,17 @@ def lookup_coordinates(
 
 
 def lookup_terms(shininess: Float[Array, ""], uv: Float[Array, "P 2"], lit: Bool[Array, " P"],
-                 lit_specular: Bool[Array, " P"], size: int, model: str = "kajiya-kay-lookup",
+                 lit_specular: Bool[Array, " P"], size: int, cone: Cone = seed_cone,
                  ) -> tuple[Float[Array, " P"], Float[Array, " P"]]:
     """(sin θ_L, max(b, 0)^p) per point from the table, built once for all points."""
-    table = kajiya_kay_table(shininess, size, LOOKUP_MODELS[model])
+    table = kajiya_kay_table(shininess, size, cone)
     terms = jax.vmap(bilinear, in_axes=(None, 0, 0))(table, uv[:, 0], uv[:, 1])
     return jnp.where(lit, terms[:, 0], 0.0), jnp.where(lit_specular, terms[:, 1], 0.0)
 
 
 def kajiya_kay_lookup(
     tangent: Float[Array, "P 3"], to_light: Float[Array, "P 3"], to_eye: Float[Array, "P 3"],
-    params: ShadingParams, size: int, model: str = "kajiya-kay-lookup",
+    params: ShadingParams, size: int, cone: Cone = seed_cone,
 ) -> tuple[Float[Array, "P 3"], Float[Array, "P 3"]]:
     """Unshadowed Kajiya-Kay terms at all points from the lookup table (docs/model.md §14).
 
@@ -114,5 +127,38 @@ def kajiya_kay_lookup(
     `kajiya_kay`'s.
     """
     sin_tl, spec = lookup_terms(params.shininess, *lookup_coordinates(tangent, to_light, to_eye),
-                                size, model)
+                                size, cone)
     return sin_tl[:, None] * params.kd[None, :], spec[:, None] * params.ks[None, :]
+
+
+@register_shading_model
+class KajiyaKayLookup(KajiyaKay):
+    """The seed's Kajiya-Kay read from a `size` × `size` table (wenzel-2002 after
+    Heidrich–Seidel, docs/model.md §14); same parameters as `KajiyaKay`."""
+
+    params: ShadingParams = eqx.field(default_factory=ShadingParams)
+    size: int = eqx.field(static=True, default=256)
+
+    name: ClassVar[str] = "kajiya-kay-lookup"
+    table_keys: ClassVar[tuple[str, ...]] = (*KajiyaKay.table_keys, "lookup_size")
+    gl_id: ClassVar[int | None] = 2
+
+    def __check_init__(self):
+        lo, hi = LOOKUP_SIZE_RANGE
+        n = self.size
+        if isinstance(n, bool) or int(n) != n or not lo <= n <= hi:
+            raise SceneError(f"shading.lookup_size must be an integer in [{lo}, {hi}], got {n!r}")
+
+    def reflectance(self, points: ShadingPoints, params: ShadingParams) -> Reflectance:
+        sin_tl, spec = lookup_terms(params.shininess, *lookup_coordinates(
+            points.tangent, points.to_light, points.to_eye), int(self.size), type(self).cone)
+        return Reflectance(ambient={"ambient": points.base_color},
+                           lit={"kd": sin_tl[:, None] * points.base_color,
+                                "ks": jnp.broadcast_to(spec[:, None], points.base_color.shape)})
+
+    def gl_table(self, params: ShadingParams):
+        return kajiya_kay_table(params.shininess, int(self.size), type(self).cone)
+
+    @classmethod
+    def from_table(cls, table) -> KajiyaKayLookup:
+        return cls(params=read_kajiya_kay_params(table), **table.given(size=table.integer("lookup_size")))

@@ -1,11 +1,7 @@
-"""Scheuermann hair shading (scheuermann-2004 slides 9–13, docs/model.md §17).
-
-Two parts, one concept:
-- the per-point maths (JAX, pure, written for one point; the renderer vmaps it):
-  `scheuermann`, `shift_tangent`, `strand_specular`, `scheuermann_diffuse`;
-- the NumPy set-up of its per-point inputs, computed only for scenes that use it:
-  `strand_normals`, `strand_position` and `scheuermann_inputs` (normals, shift texture,
-  noise mask, base/alpha/occlusion textures along the strand).
+"""The Scheuermann model's per-point inputs, made in NumPy from the geometry alone
+(scheuermann-2004 slides 9–13, docs/model.md §17): strand normals, the shift texture and
+noise mask, and base/alpha/occlusion textures along the strand, with the hair's own
+ambient occlusion. Computed only for scenes that use the model.
 """
 
 from __future__ import annotations
@@ -13,22 +9,17 @@ from __future__ import annotations
 import dataclasses
 
 import equinox as eqx
-import jax
-import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array, ArrayLike, Float
+from jaxtyping import Array, Float
 
-from ._constants import SCHEUERMANN_DIFFUSE_FLOOR
-from ._errors import SceneError
-from ._ordering import hair_centre
-from ._shading import specular_power
-from ._vectors import safe_norm, safe_normalize
+from .._errors import SceneError
+from .._light import Light
+from .._ordering import hair_centre
+from .._shadows import ExactShadows
 
-__all__ = ["ScheuermannParams", "ScheuermannMaps", "ScheuermannPoints", "scheuermann",
-           "shift_tangent", "strand_specular", "smoothstep_attenuation", "scheuermann_diffuse",
-           "strand_normals", "strand_position", "scheuermann_inputs", "segment_alpha",
-           "check_scheuermann_params", "hair_occlusion", "sphere_directions", "exact_omega_numpy"]
-
+__all__ = ["ScheuermannMaps", "ScheuermannPoints", "strand_normals", "strand_position",
+           "scheuermann_inputs", "segment_alpha", "hair_occlusion", "sphere_directions",
+           "exact_omega_numpy", "HAIR_OCCLUSION_RESOLUTION", "HAIR_OCCLUSION_DIRECTIONS"]
 
 # The light rasters of `hair_occlusion`: a strand of width w covers w texels of this many
 # across the hair, i.e. occludes as in a render of the hair at this resolution. Coarse on
@@ -39,119 +30,6 @@ HAIR_OCCLUSION_RESOLUTION = 64
 HAIR_OCCLUSION_DIRECTIONS = 16
 
 
-def _rgb(x) -> Float[Array, 3]:
-    return jnp.broadcast_to(jnp.asarray(x, dtype=jnp.result_type(float)), (3,))
-
-
-def _scalar(x) -> Float[Array, ""]:
-    return jnp.asarray(x, dtype=jnp.result_type(float))
-
-
-class ScheuermannParams(eqx.Module):
-    """The differentiable parameters of the Scheuermann model (a pytree of arrays).
-
-    **Fields:** `kd`, `ambient`, `primary_color`, `secondary_color`: RGB `[3]` (a scalar
-    broadcasts); `primary_exponent`, `secondary_exponent`: the lobes' exponents p₁, p₂;
-    `primary_shift`, `secondary_shift`: the tangent shifts s₁, s₂ along the strand normal
-    (docs/model.md §17 says which way each moves the highlight); `kappa`: κ in τ = exp(−κΩ).
-    Like `ShadingParams` it does not validate (gradients flow through it); a `Scene`
-    checks its values (`check_scheuermann_params`).
-    """
-
-    kd: Float[Array, 3]
-    ambient: Float[Array, 3]
-    primary_color: Float[Array, 3]
-    primary_exponent: Float[Array, ""]
-    primary_shift: Float[Array, ""]
-    secondary_color: Float[Array, 3]
-    secondary_exponent: Float[Array, ""]
-    secondary_shift: Float[Array, ""]
-    kappa: Float[Array, ""]
-
-    def __init__(self, kd: ArrayLike = 0.6, ambient: ArrayLike = 0.0,
-                 primary_color: ArrayLike = 0.3, primary_exponent: ArrayLike = 80.0,
-                 primary_shift: ArrayLike = 0.1, secondary_color: ArrayLike = 0.2,
-                 secondary_exponent: ArrayLike = 20.0, secondary_shift: ArrayLike = -0.1,
-                 kappa: ArrayLike = 1.0):
-        self.kd = _rgb(kd)
-        self.ambient = _rgb(ambient)
-        self.primary_color = _rgb(primary_color)
-        self.primary_exponent = _scalar(primary_exponent)
-        self.primary_shift = _scalar(primary_shift)
-        self.secondary_color = _rgb(secondary_color)
-        self.secondary_exponent = _scalar(secondary_exponent)
-        self.secondary_shift = _scalar(secondary_shift)
-        self.kappa = _scalar(kappa)
-
-
-def check_scheuermann_params(params: ScheuermannParams) -> None:
-    """Raise `SceneError` naming the field unless every value is finite, colours ≥ 0,
-    exponents > 0 and κ ≥ 0 (for concrete parameters, e.g. a scene's; traced ones, which
-    have no values yet, pass)."""
-    if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(params)):
-        return
-    for name in ("kd", "ambient", "primary_color", "secondary_color"):
-        v = np.asarray(getattr(params, name))
-        if not (np.all(np.isfinite(v)) and np.all(v >= 0)):
-            raise SceneError(f"shading.{name} must be ≥ 0 and finite, got {v.tolist()}")
-    for name in ("primary_exponent", "secondary_exponent"):
-        v = float(getattr(params, name))
-        if not (np.isfinite(v) and v > 0):
-            raise SceneError(f"shading.{name} must be > 0 and finite, got {v}")
-    for name in ("primary_shift", "secondary_shift"):
-        if not np.isfinite(float(getattr(params, name))):
-            raise SceneError(f"shading.{name} must be finite, got {float(getattr(params, name))}")
-    if not (np.isfinite(float(params.kappa)) and float(params.kappa) >= 0):
-        raise SceneError(f"shading.kappa must be ≥ 0 and finite, got {float(params.kappa)}")
-
-
-# --------------------------------------------------------------------------- per point (JAX)
-
-
-def scheuermann_diffuse(normal: Float[Array, 3], to_light: Float[Array, 3]) -> Float[Array, ""]:
-    """saturate(lerp(0.25, 1, N·L)) (slide 12); 0 for a point without normal (N = 0, §1's
-    points without tangent: ambient only)."""
-    wrapped = jnp.clip(SCHEUERMANN_DIFFUSE_FLOOR + (1 - SCHEUERMANN_DIFFUSE_FLOOR)
-                       * jnp.dot(normal, to_light), 0.0, 1.0)
-    # Fires at points without tangent (N = 0 there by construction): no lit terms.
-    return jnp.where(jnp.dot(normal, normal) > 0.5, wrapped, 0.0)
-
-
-def shift_tangent(tangent: Float[Array, 3], normal: Float[Array, 3],
-                  shift: Float[Array, ""]) -> Float[Array, 3]:
-    """normalize(T + shift·N) (slide 10). N ⟂ T and both unit (or both 0) by construction
-    (`strand_normals`), so |T + shift·N| = √(1 + shift²) and no guard is needed: a point
-    without tangent keeps T' = 0."""
-    return (tangent + shift * normal) / jnp.sqrt(1 + shift * shift)
-
-
-def smoothstep_attenuation(x: Float[Array, ""]) -> Float[Array, ""]:
-    """smoothstep(−1, 0, x) = t²(3 − 2t), t = clamp(x + 1, 0, 1) (slide 11's dirAtten).
-    A polynomial of a clamp: value and gradient finite everywhere (the gradient is 0 at
-    both clamp edges, so it is continuous)."""
-    t = jnp.clip(x + 1.0, 0.0, 1.0)
-    return t * t * (3.0 - 2.0 * t)
-
-
-def strand_specular(tangent: Float[Array, 3], half: Float[Array, 3],
-                    exponent: Float[Array, ""]) -> Float[Array, ""]:
-    """smoothstep(−1, 0, T·H) · sin(T, H)^p (slide 11) for unit T and H; 0 when either is
-    the zero vector.
-
-    sin(T, H) = ‖T × H‖ and, as for Kajiya-Kay (docs/model.md §8), the power is taken from
-    the gap 1 − sin = cos²/(1 + sin), cos = T·H, without cancellation: near the peak
-    (T ⟂ H) cos is small and its absolute rounding of a few u errs sin^p by ~2√p·u relative,
-    not the ~p·u of rounding sin itself. 1 + sin ≥ 1, so the quotient never divides by 0.
-    """
-    cos = jnp.dot(tangent, half)
-    sin = safe_norm(jnp.cross(tangent, half))
-    # Fires where T or H is the zero vector (a point without tangent; L = −V, where the half
-    # vector does not exist): cos² + sin² = 0 there, and the quotient would claim the peak.
-    unit = cos * cos + sin * sin > 0.5
-    gap = jnp.where(unit, cos * cos / (1 + sin), 1.0)
-    return smoothstep_attenuation(cos) * specular_power(gap, exponent)
-
-
 class ScheuermannPoints(eqx.Module):
     """The per-point inputs only the Scheuermann model needs (JAX arrays in `Geometry`,
     NumPy arrays from `scheuermann_inputs`): unit strand normal N ⟂ T (0 where T = 0),
@@ -160,41 +38,6 @@ class ScheuermannPoints(eqx.Module):
     normal: Float[Array, "P 3"]
     shift: Float[Array, " P"]
     mask: Float[Array, " P"]
-
-
-def scheuermann(
-    tangent: Float[Array, 3],
-    normal: Float[Array, 3],
-    to_light: Float[Array, 3],
-    to_eye: Float[Array, 3],
-    shift: Float[Array, ""],
-    mask: Float[Array, ""],
-    params: ScheuermannParams,
-) -> tuple[Float[Array, 3], Float[Array, 3]]:
-    """Unshadowed Scheuermann terms at one point (slide 12).
-
-    **Arguments:** unit `tangent` T (root to tip), unit strand `normal` N ⟂ T, unit
-    `to_light` L and `to_eye` V (from the point), the shift texture's value `shift` σ, the
-    noise `mask` m, `params`.
-
-    **Returns:** `(diffuse, specular)`, each RGB:
-    Kd·saturate(lerp(0.25, 1, N·L)) and
-    C₁·S(T₁, H, p₁) + m·C₂·S(T₂, H, p₂), with H = normalize(L + V),
-    Tᵢ = normalize(T + (sᵢ + σ)N) and S the strand specular (`strand_specular`).
-    The renderer multiplies both by the point's base colour (docs/model.md §17).
-    """
-    diffuse = params.kd * scheuermann_diffuse(normal, to_light)
-    # safe_normalize fires for L = −V (light exactly behind the point as seen): H = 0,
-    # and strand_specular gives 0.
-    half = safe_normalize(to_light + to_eye)
-    t1 = shift_tangent(tangent, normal, params.primary_shift + shift)
-    t2 = shift_tangent(tangent, normal, params.secondary_shift + shift)
-    specular = (params.primary_color * strand_specular(t1, half, params.primary_exponent)
-                + params.secondary_color * (mask * strand_specular(t2, half, params.secondary_exponent)))
-    return diffuse, specular
-
-
-# --------------------------------------------------------------------------- set-up (NumPy)
 
 
 def _table(name: str, value, width: int | None) -> tuple:
@@ -356,23 +199,21 @@ def hair_occlusion(strands, density: float, seg_alpha: np.ndarray | None = None)
     the summed alpha in front of the point seen from d: §7's `exact` Ω for a directional
     light from d on a HAIR_OCCLUSION_RESOLUTION² raster, with the strands' opacity (and
     alpha texture, `seg_alpha`). NumPy, precomputed: not differentiated in the opacity."""
-    from ._scene import Light  # _scene imports this module
-    from ._shadows import shadow_setup
-
     segments = strands.segments()
     seg_strand = strands.strand_of_point[segments[:, 0]]
     total = np.zeros(strands.num_points)
+    exact = ExactShadows(resolution=HAIR_OCCLUSION_RESOLUTION)
     for d in sphere_directions(HAIR_OCCLUSION_DIRECTIONS):
-        setup = shadow_setup(strands.points, segments, seg_strand, strands.width,
-                             Light(direction=tuple(-d)), "exact", 1, HAIR_OCCLUSION_RESOLUTION,
-                             segment_alpha=seg_alpha, width_units=strands.width_units)
+        setup = exact.setup(strands.points, segments, seg_strand, strands.width,
+                            Light(direction=tuple(-d)), segment_alpha=seg_alpha,
+                            width_units=strands.width_units)
         omega = exact_omega_numpy(setup, strands.alpha[setup.frag_strand] * setup.frag_coverage)
         total += np.exp(-density * omega)
     return total / HAIR_OCCLUSION_DIRECTIONS
 
 
 def exact_omega_numpy(setup, frag_alpha: np.ndarray) -> np.ndarray:
-    """`_shadows.exact_opacity` in NumPy, for an `exact` ShadowSetup (`[P]`): per-texel
+    """`_shadows.exact_opacity` in NumPy, for an `ExactSetup` (`[P]`): per-texel
     inclusive prefix sums of the fragments' alpha, nearest first, read at each point's
     (2r + 1)² texels. (One set-up, many shapes: no JAX compilation per direction.)"""
     if frag_alpha.size == 0:  # fires when no segment reaches the raster: Ω = 0

@@ -18,9 +18,10 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from ._errors import SceneError
+from .._errors import SceneError
 
-__all__ = ["Streaks", "streak_texture", "strand_coordinates", "streak_prefix", "streak_factor"]
+__all__ = ["Streaks", "streak_texture", "strand_coordinates", "streak_prefix", "streak_factor",
+           "streak_factors"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -92,3 +93,14 @@ def streak_factor(texture: Float[Array, " m"], prefix: Float[Array, " m1"], u: F
     a = u * m - 0.5
     b = (u + width) * m - 0.5
     return (_antiderivative(texture, prefix, b) - _antiderivative(texture, prefix, a)) / (width * m)
+
+
+def streak_factors(streaks: Streaks, strands, dtype) -> Float[Array, " P"]:
+    """§16: each point's streak factor, the texture's mean over its hair's [u_i, u_i + Δ]."""
+    import jax  # the rest of this module is NumPy and one pure function
+
+    texture = streak_texture(streaks)
+    u = strand_coordinates(streaks, strands.num_strands)[strands.strand_of_point]
+    return jax.vmap(streak_factor, in_axes=(None, None, 0, None))(
+        jnp.asarray(texture, dtype), jnp.asarray(streak_prefix(texture), dtype),
+        jnp.asarray(u, dtype), streaks.width)

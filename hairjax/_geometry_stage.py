@@ -1,0 +1,126 @@
+"""The geometry stage (docs/model.md §6, §7): from the set-up and the strands' opacity, the
+compositing weights, each pixel's transmittance and alpha, and Ω at every point — JAX,
+differentiable in the per-strand opacity. Its output, `Geometry`, is all the shading stage
+reads: no shading parameter enters here.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, Float
+
+from ._cache import cached
+from ._composite import over_weights
+from ._scene import Scene
+from ._setup import prepare
+from ._shading import AbstractShadingModel
+from ._shading._streaks import streak_factors
+
+__all__ = ["Geometry", "geometry_stage"]
+
+
+class Geometry(eqx.Module):
+    """Output of the geometry stage: what the shading stage needs, as JAX arrays.
+
+    `shading` is the scene's shading model (its configuration and, unused by the shading
+    stage, its own parameters); `shading_inputs` its per-point inputs (`PointInputs.extra`
+    as JAX arrays, or None)."""
+
+    tangent: Float[Array, "P 3"]
+    to_light: Float[Array, "P 3"]
+    to_eye: Float[Array, "P 3"]
+    base_color: Float[Array, "P 3"]
+    light_rgb: Float[Array, " 3"]
+    omega: Float[Array, " P"] | None
+    light_visibility: Float[Array, " P"] | None
+    occluder_pixel: Array | None
+    occluder_direct: Float[Array, "Q 3"] | None
+    occluder_color: Float[Array, " 3"] | None
+    occluder_omega: Float[Array, " Q"] | None
+    occluder_visibility: Float[Array, " Q"] | None
+    frag_pixel: Array
+    frag_i0: Array  # the segment's first point; its second is frag_i0 + 1
+    frag_t: Float[Array, " F"]
+    frag_weight: Float[Array, " F"]
+    frag_alpha: Float[Array, " F"]
+    transmittance: Float[Array, " HW"]
+    backdrop: Float[Array, "HW 3"]
+    alpha_channel: Float[Array, " HW"]
+    shading: AbstractShadingModel
+    height: int = eqx.field(static=True)
+    width: int = eqx.field(static=True)
+    streak: Float[Array, " P"] | None = None  # §16's factor per point; None without streaks
+    shading_inputs: Any = None
+
+
+@eqx.filter_jit
+def _composite_weights(alpha, frag_strand, frag_coverage, frag_first, frag_last, last_pixel,
+                       opaque):
+    frag_alpha = alpha[frag_strand] * frag_coverage
+    weights, inclusive = over_weights(frag_alpha, frag_first, frag_last)
+    # Pixels without fragments keep T = 1; each covered pixel's last fragment sets its T
+    # (`last_pixel` points every other fragment past the end, where it is dropped).
+    transmittance = jnp.ones(opaque.shape[0], weights.dtype).at[last_pixel].set(
+        inclusive, mode="drop")
+    alpha_channel = 1.0 - transmittance * (1.0 - opaque)
+    return weights, frag_alpha, transmittance, alpha_channel
+
+
+def geometry_stage(scene: Scene, alpha: Float[Array, " S"] | None = None, *,
+                   order=None) -> Geometry:
+    """Compositing weights and Ω for `scene`, differentiable in the per-strand `alpha`.
+
+    **Arguments:** `scene`; `alpha` (`[S]`, default the scene's strand opacities) — may be
+    a traced JAX array, e.g. under `jax.grad`. With the default, the result is computed
+    once per scene (eagerly, even under a trace) and cached (`_cache`). `order`: a draw
+    order to use instead of the scene's (`visibility_order`); then nothing is cached.
+    """
+    if alpha is None:
+        def compute():
+            with jax.ensure_compile_time_eval():
+                return _geometry_stage(scene, scene.strands.alpha, order)
+
+        return compute() if order is not None else cached(scene, "geometry", compute)
+    return _geometry_stage(scene, alpha, order)
+
+
+def _geometry_stage(scene: Scene, alpha, order=None) -> Geometry:
+    setup = prepare(scene, order=order)
+    dtype = jnp.result_type(float)
+    alpha = jnp.asarray(alpha, dtype=dtype)
+    hw = scene.camera.width * scene.camera.height
+    last_pixel = np.where(setup.frag_last, setup.frag_pixel, hw)
+    weights, frag_alpha, transmittance, alpha_channel = _composite_weights(
+        alpha, setup.frag_strand, jnp.asarray(setup.frag_coverage, dtype), setup.frag_first,
+        setup.frag_last, last_pixel, jnp.asarray(setup.opaque, dtype))
+    omega = occluder_omega = None
+    if setup.shadow is not None:
+        omega = scene.shadows.omega(setup.shadow, alpha)
+        if setup.occluder_pixel is not None:
+            # The occluder's surface points follow the strand points (§13).
+            p = scene.strands.num_points
+            omega, occluder_omega = omega[:p], omega[p:]
+    maybe = lambda x, t=dtype: None if x is None else jnp.asarray(x, t)  # noqa: E731
+    extra = setup.shading_inputs.extra
+    return Geometry(
+        tangent=jnp.asarray(setup.tangent, dtype), to_light=jnp.asarray(setup.to_light, dtype),
+        to_eye=jnp.asarray(setup.to_eye, dtype), base_color=jnp.asarray(setup.base_color, dtype),
+        light_rgb=jnp.asarray(setup.light_rgb, dtype), omega=omega,
+        light_visibility=maybe(setup.light_visibility),
+        occluder_pixel=maybe(setup.occluder_pixel, jnp.int32),
+        occluder_direct=maybe(setup.occluder_direct), occluder_color=maybe(setup.occluder_color),
+        occluder_omega=occluder_omega, occluder_visibility=maybe(setup.occluder_visibility),
+        frag_pixel=jnp.asarray(setup.frag_pixel, jnp.int32),
+        frag_i0=jnp.asarray(setup.frag_i0, jnp.int32),
+        frag_t=jnp.asarray(setup.frag_t, dtype), frag_weight=weights, frag_alpha=frag_alpha,
+        transmittance=transmittance, backdrop=jnp.asarray(setup.backdrop, dtype),
+        alpha_channel=alpha_channel, shading=scene.shading,
+        height=scene.camera.height, width=scene.camera.width,
+        streak=None if scene.streaks is None else streak_factors(scene.streaks, scene.strands, dtype),
+        shading_inputs=None if extra is None else jax.tree.map(lambda x: jnp.asarray(x, dtype), extra),
+    )

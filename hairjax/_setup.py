@@ -1,0 +1,222 @@
+"""The geometry stage's set-up (NumPy): everything that depends on geometry, camera and
+light only (docs/model.md §2–§7, §13).
+
+Projection and the visibility order, the ribbons' fragments sorted front to back per
+pixel, the occluder's test and its light, the shading model's per-point inputs, and the
+shadow method's plan for Ω. A scene without shadows plans no shadow work; a scene
+without occluder runs no occluder test. Cached per scene (`_cache`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from typing import Any
+
+import jax
+import numpy as np
+
+from ._cache import cached
+from ._occluder import occluder_hits, occluder_light_view, occluder_visibility
+from ._ordering import segment_depth, stable_argsort_uint32
+from ._projection import View, camera_view
+from ._raster import rasterize, ribbon_widths
+from ._scene import Scene
+from ._shading import PointInputs
+from ._strands import tangents, unit_rows
+
+__all__ = ["GeometrySetup", "prepare", "visibility_order", "to_light"]
+
+
+@dataclasses.dataclass(frozen=True)
+class GeometrySetup:
+    """What the geometry stage needs that depends on neither opacity nor shading
+    parameters (NumPy arrays)."""
+
+    view: View
+    tangent: np.ndarray          # [P, 3]
+    to_light: np.ndarray         # [P, 3]
+    to_eye: np.ndarray           # [P, 3]
+    base_color: np.ndarray       # [P, 3] per-point colour (ones when the hair has none)
+    light_rgb: np.ndarray        # [3]
+    # Camera fragments, sorted by pixel, front to back within a pixel:
+    frag_pixel: np.ndarray       # [F]
+    frag_i0: np.ndarray          # [F] first point of the fragment's segment (the second is i0 + 1)
+    frag_t: np.ndarray           # [F] screen-space position along the segment
+    frag_strand: np.ndarray      # [F]
+    frag_coverage: np.ndarray    # [F]
+    frag_first: np.ndarray       # [F] first fragment of its pixel
+    frag_last: np.ndarray        # [F] last fragment of its pixel
+    backdrop: np.ndarray         # [H*W, 3] the background behind the hair (0 on the occluder)
+    opaque: np.ndarray           # [H*W] the occluder covers the pixel centre
+    shadow: Any                  # the shadow method's plan (None without shadows); with an
+    #                              occluder, its surface points follow the strands'
+    timings: dict
+    shading_inputs: PointInputs  # the shading model's per-point inputs (§17's, or none)
+    # The occluder (§9, §13); None without one:
+    occluder_pixel: np.ndarray | None = None    # [Q] the pixels it covers
+    occluder_direct: np.ndarray | None = None   # [Q, 3] k·light·max(N·L, 0) at them
+    occluder_visibility: np.ndarray | None = None  # [Q] V there: 0 where it shadows itself
+    occluder_color: np.ndarray | None = None    # [3] k
+    light_visibility: np.ndarray | None = None  # [P] V: 0 where the occluder shadows a strand point
+
+
+def prepare(scene: Scene, *, order=None) -> GeometrySetup:
+    """The NumPy geometry set-up of `scene`, cached per scene object (`_cache`).
+
+    `order`: a draw order to use instead of the scene's (see `visibility_order`); such a
+    set-up is computed afresh, not cached."""
+    # The set-up depends on concrete geometry only: evaluate it eagerly even when
+    # `render` is being traced (e.g. under jax.jit or jax.grad).
+    if order is not None:
+        with jax.ensure_compile_time_eval():
+            return _prepare(scene, order)
+
+    def compute():
+        with jax.ensure_compile_time_eval():
+            return _prepare(scene)
+
+    return cached(scene, "setup", compute)
+
+
+def visibility_order(scene: Scene, order=None):
+    """Camera projection and the segments' draw order (docs/model.md §2, §4), shared by
+    the JAX and GL renderers.
+
+    Returns `(view, xy [P, 2], depth [P], segments [E, 2], order)`; `order` lists the
+    drawable segments (both ends beyond the near plane), the first drawn first.
+
+    `order` (optional): segment indices, the first drawn first, to use instead of sorting
+    for this camera — e.g. an order computed for an earlier view and reused (kim-2003 §3,
+    Fig. 8). Segments in it that are not drawable from this camera are skipped; segments
+    not in it are not drawn. Indices must be distinct and in [0, E).
+    """
+    cam = scene.camera
+    view = camera_view(cam)
+    xy, depth = view.project(scene.strands.points)
+    segments = scene.strands.segments()
+    # Segments with an end nearer than the near plane (or behind the eye) are not drawn.
+    drawable_mask = (depth[segments[:, 0]] > cam.near) & (depth[segments[:, 1]] > cam.near)
+    if order is not None:
+        order = _given_order(order, len(segments))
+        return view, xy, depth, segments, order[drawable_mask[order]]
+    order = scene.ordering.order(scene.strands, segments, segment_depth(depth, segments),
+                                 np.flatnonzero(drawable_mask))
+    return view, xy, depth, segments, order
+
+
+def _given_order(order, n_segments: int) -> np.ndarray:
+    """`order` checked: a 1-D array of distinct segment indices in [0, n_segments)."""
+    order = np.asarray(order)
+    if order.ndim != 1 or (order.size and not np.issubdtype(order.dtype, np.integer)):
+        raise ValueError(f"order must be a 1-D array of segment indices, got shape {order.shape} "
+                         f"and dtype {order.dtype}")
+    order = order.astype(np.int64)
+    if order.size and (order.min() < 0 or order.max() >= n_segments):
+        raise ValueError(f"order has segment indices outside [0, {n_segments})")
+    if order.size and np.bincount(order, minlength=n_segments).max() > 1:
+        raise ValueError("order lists a segment more than once")
+    return order
+
+
+def to_light(light, points: np.ndarray) -> np.ndarray:
+    """Unit vectors from `points` to the light (`[P, 3]`; 0 at a point light's position)."""
+    if light.kind == "directional":
+        d = -np.asarray(light.direction, dtype=np.float64)
+        return np.broadcast_to(d / np.linalg.norm(d), points.shape)
+    return unit_rows(np.asarray(light.position, dtype=np.float64) - points)
+
+
+def _prepare(scene: Scene, order=None) -> GeometrySetup:
+    timings = {}
+    clock = time.perf_counter()
+
+    def lap(name):
+        nonlocal clock
+        now = time.perf_counter()
+        timings[name] = now - clock
+        clock = now
+
+    strands, cam = scene.strands, scene.camera
+    points = strands.points
+    view, xy, depth, segments, order = visibility_order(scene, order)
+    seg_strand = strands.strand_of_point[segments[:, 0]]
+    lap("project+order")
+
+    tangent = tangents(points, strands.offsets)
+    base_color = strands.color if strands.color is not None else np.ones_like(points)
+    inputs = scene.shading.point_inputs(strands, tangent)  # the model's own (§17's), or none
+    if inputs.color_factor is not None:
+        base_color = base_color * inputs.color_factor
+    segment_alpha = inputs.segment_alpha
+    if any(x is not None for x in (inputs.extra, inputs.color_factor, inputs.segment_alpha)):
+        lap("shading inputs")
+
+    # Rasterise nearest-first, then a stable sort by pixel gives front-to-back per pixel.
+    near_first = order[::-1]
+    s0, s1 = segments[near_first, 0], segments[near_first, 1]
+    widths = ribbon_widths(strands.width[seg_strand[near_first]], strands.width_units, depth[s0],
+                           depth[s1], view.focal, view.perspective)
+    frags = rasterize(xy[s0], xy[s1], depth[s0], depth[s1], widths, cam.width, cam.height, True)
+    lap("rasterize")
+
+    hw = cam.width * cam.height
+    light = scene.light
+    light_rgb = np.asarray(light.color, dtype=np.float64)
+    backdrop = np.broadcast_to(np.asarray(scene.background, np.float64), (hw, 3)).copy()
+    opaque = np.zeros(hw, bool)
+    occluder = {}
+    if scene.occluder is not None:
+        hit_depth, normal, hit_point = occluder_hits(view, scene.occluder)
+        opaque = np.isfinite(hit_depth)
+        occ_pixel = np.flatnonzero(opaque)
+        surface = hit_point[occ_pixel]
+        to_l = to_light(light, surface)
+        # Lambert's max(N·L, 0) (§9): the clip fires on the occluder's unlit side.
+        lambert = np.clip(np.sum(normal[occ_pixel] * to_l, axis=1), 0.0, None)
+        color = np.asarray(scene.occluder.color, np.float64)
+        occluder = dict(occluder_pixel=occ_pixel, occluder_color=color,
+                        occluder_direct=color * light_rgb * lambert[:, None])
+        backdrop[opaque] = 0.0  # the shading stage adds the occluder's colour (§13)
+        # kim-2003 §3: depth test on, hair does not write depth.
+        visible = np.flatnonzero(frags.depth < hit_depth[frags.pixel])
+        frags = frags.take(visible)
+        lap("occluder")
+
+    # Only what compositing needs is permuted: pixel, segment, coverage, t (not depth).
+    sort = stable_argsort_uint32(frags.pixel)
+    pixel, frag_coverage, frag_t = frags.pixel[sort], frags.coverage[sort], frags.t[sort]
+    seg = near_first[frags.segment[sort]]
+    if segment_alpha is not None:  # §17's alpha texture scales the segment's opacity
+        frag_coverage = frag_coverage * segment_alpha[seg]
+    del frags
+    first = np.ones(pixel.size, bool)
+    first[1:] = pixel[1:] != pixel[:-1]
+    last = np.ones(pixel.size, bool)
+    last[:-1] = first[1:]
+    lap("sort fragments")
+
+    shadow = None
+    if scene.shadows.casts:
+        receivers = surface if occluder else None
+        shadow = scene.shadows.setup(points, segments, seg_strand, strands.width, light,
+                                     receivers=receivers, segment_alpha=segment_alpha,
+                                     width_units=strands.width_units)
+        lap("shadow set-up")
+        if occluder:
+            # §13: the occluder's shadow, a depth test in the light's view.
+            light_view = occluder_light_view(light, points, scene.occluder,
+                                             scene.shadows.resolution)
+            depth_map, _, _ = occluder_hits(light_view, scene.occluder)
+            occluder["light_visibility"] = occluder_visibility(light_view, depth_map, points)
+            occluder["occluder_visibility"] = occluder_visibility(light_view, depth_map, surface)
+            lap("occluder shadow")
+
+    return GeometrySetup(
+        view=view, tangent=tangent, to_light=to_light(light, points),
+        to_eye=unit_rows(view.origin - points), base_color=base_color, light_rgb=light_rgb,
+        frag_pixel=pixel, frag_i0=segments[seg, 0].astype(np.int32), frag_t=frag_t,
+        frag_strand=seg_strand[seg].astype(np.int32), frag_coverage=frag_coverage,
+        frag_first=first, frag_last=last, backdrop=backdrop, opaque=opaque, shadow=shadow,
+        timings=timings, shading_inputs=inputs, **occluder,
+    )

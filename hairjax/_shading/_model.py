@@ -1,0 +1,190 @@
+"""The abstract shading model and its registry (docs/architecture.md, docs/model.md §8).
+
+A shading model is an immutable `eqx.Module` holding its differentiable parameters
+(`params`, a small pytree of arrays) and its static configuration (a table size, how
+per-point inputs are made). It owns everything that differs between models:
+
+- `point_inputs`: the per-point inputs it needs from the set-up, in NumPy, from the
+  geometry alone (Scheuermann's strand normals and textures; none for Kajiya-Kay);
+- `reflectance`: its unshadowed colour per point, as a sum of terms each linear in one
+  RGB gain (`Reflectance`): the shading stage applies light, shadow and streaks to the
+  lit terms (`hairjax/_shading/_stage.py`) and the fit solves for the gains
+  (`hairjax/_fit/`), so neither transcribes the model a second time;
+- `searched`: the parameters the colour is not linear in, with the transforms the fit
+  searches them through;
+- its GL side: `gl_id` (the shader's branch), `gl_uniforms`, `gl_table`, `gl_attributes`;
+- its scene-file table: `table_keys` and `from_table`.
+
+A subclass is registered under its `name` with `@register_shading_model`; the scene
+reader, `fit` and the renderers find it there, so a new model is one module plus that
+line (docs/architecture.md shows a toy model).
+"""
+
+from __future__ import annotations
+
+import abc
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import equinox as eqx
+import jax
+import numpy as np
+from jaxtyping import Array, Float
+
+from .._errors import SceneError
+
+if TYPE_CHECKING:  # types only: the scene reader imports the registry, not the reverse
+    from .._scene_file import Table
+
+__all__ = ["AbstractShadingModel", "PointInputs", "ShadingPoints", "Reflectance", "Transform",
+           "register_shading_model", "shading_model_class", "shading_model_names",
+           "check_params"]
+
+
+class PointInputs(eqx.Module):
+    """A model's per-point inputs from the set-up (NumPy, geometry only).
+
+    **Fields:** `extra`: a pytree of `[P, …]` arrays the model's `reflectance` reads
+    (None: none); `color_factor`: `[P, 3]` multiplying the strands' colour (None: 1);
+    `segment_alpha`: `[E]` multiplying each segment's opacity, in the camera and the
+    light's views alike (None: 1)."""
+
+    extra: Any = None
+    color_factor: np.ndarray | None = None
+    segment_alpha: np.ndarray | None = None
+
+
+class ShadingPoints(eqx.Module):
+    """What every model reads at the strand points (JAX arrays, geometry only): unit
+    tangent T, unit to-light L and to-eye V (0 where undefined, docs/model.md §1), the
+    per-point colour c (the strands' colour times the model's `color_factor`) and the
+    model's own `extra` inputs (`PointInputs.extra`, as JAX arrays)."""
+
+    tangent: Float[Array, "P 3"]
+    to_light: Float[Array, "P 3"]
+    to_eye: Float[Array, "P 3"]
+    base_color: Float[Array, "P 3"]
+    extra: Any = None
+
+
+class Reflectance(eqx.Module):
+    """A model's unshadowed colour at the points, split by gain: the colour is
+
+        Σ_g  params.g ⊙ ambient[g]  +  shade(Σ_g params.g ⊙ lit[g])
+
+    where `shade` multiplies by the light's colour, τ = exp(−κΩ) (§7), the occluder's
+    visibility V (§13) — and the streak factor (§16) multiplies the whole. Each term is
+    `[P, 3]` and holds no gain itself, so the image is linear in every gain (docs/fitting.md:
+    variable projection)."""
+
+    ambient: dict[str, Float[Array, "P 3"]]
+    lit: dict[str, Float[Array, "P 3"]]
+
+
+# (forward, inverse): from the fit's unconstrained search variable z to the parameter.
+Transform = tuple[Callable, Callable]
+
+
+def check_params(params: eqx.Module, *, colors: tuple[str, ...] = (),
+                 positive: tuple[str, ...] = (), non_negative: tuple[str, ...] = (),
+                 finite: tuple[str, ...] = ()) -> None:
+    """Raise `SceneError` naming `shading.<field>` unless the parameters' concrete values
+    are in range: `colors` finite and ≥ 0 (RGB), `positive` finite and > 0, `non_negative`
+    finite and ≥ 0, `finite` finite. Traced parameters (inside `jax.grad`, `jit`, a fit's
+    step) have no values yet and pass: the check is for values a user gives."""
+    if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(params)):
+        return
+    for kind, names, ok, text in (
+            ("colors", colors, lambda v: v >= 0, "≥ 0 and finite"),
+            ("positive", positive, lambda v: v > 0, "> 0 and finite"),
+            ("non_negative", non_negative, lambda v: v >= 0, "≥ 0 and finite"),
+            ("finite", finite, lambda v: True, "finite")):
+        for name in names:
+            v = np.asarray(getattr(params, name), dtype=np.float64)
+            if not (np.all(np.isfinite(v)) and np.all(ok(v))):
+                shown = v.tolist() if v.ndim else float(v)
+                raise SceneError(f"shading.{name} must be {text}, got {shown}")
+
+
+class AbstractShadingModel(eqx.Module):
+    """A shading model: differentiable `params` and static configuration (module
+    docstring). Subclasses set the class variables and implement `reflectance`."""
+
+    params: eqx.AbstractVar[Any]
+
+    # The name in scene files (`[shading] model = …`) and the registry.
+    name: ClassVar[str]
+    # The type of `params`, and the [shading] keys this model reads besides `model`.
+    params_type: ClassVar[type]
+    table_keys: ClassVar[tuple[str, ...]]
+    # The parameters `fit` fits by default, and those among them that are RGB gains the
+    # colour is linear in; `searched` maps each other fittable parameter to the transform
+    # the solver searches it through. `ambient` is a gain that is held unless named.
+    fittable: ClassVar[tuple[str, ...]]
+    searched: ClassVar[Mapping[str, Transform]]
+    # The camera shader's branch for this model (hairjax/gl/shaders/strand.vert), or None
+    # where the model has no GL side (the GL renderer then refuses the scene).
+    gl_id: ClassVar[int | None] = None
+
+    def point_inputs(self, strands, tangent: np.ndarray) -> PointInputs:
+        """The per-point inputs from the geometry (NumPy); none by default."""
+        return PointInputs()
+
+    @abc.abstractmethod
+    def reflectance(self, points: ShadingPoints, params) -> Reflectance:
+        """The unshadowed colour at all points, by gain (`Reflectance`). Batched over
+        points (`[P, 3]` terms); differentiable in `params`."""
+
+    def replace_params(self, params) -> AbstractShadingModel:
+        """This model with other parameters (of `params_type`)."""
+        if not isinstance(params, self.params_type):
+            raise TypeError(f"shading model {self.name!r} takes {self.params_type.__name__}, "
+                            f"got {type(params).__name__}")
+        return eqx.tree_at(lambda m: m.params, self, params)
+
+    @property
+    def gains(self) -> tuple[str, ...]:
+        """The RGB gains the colour is linear in (every name `reflectance` returns)."""
+        return tuple(n for n in self.fittable + ("ambient",) if n not in self.searched)
+
+    # ------------------------------------------------------------------ GL side
+    def gl_uniforms(self, params) -> dict[str, Any]:
+        """Uniforms of the camera shader for this model (names as strand.vert has them)."""
+        raise NotImplementedError(f"shading model {self.name!r} has no GL renderer")
+
+    def gl_table(self, params) -> np.ndarray | None:
+        """A `[n, n, 2]` table the shader samples as `kajiya_kay_table`, or None."""
+        return None
+
+    def gl_attributes(self, inputs: PointInputs) -> list[tuple[np.ndarray, str, str]]:
+        """Extra per-vertex attributes `(array, format, name)` from `point_inputs`."""
+        return []
+
+    # ------------------------------------------------------------------ scene file
+    @classmethod
+    @abc.abstractmethod
+    def from_table(cls, table: Table) -> AbstractShadingModel:
+        """The model from a scene file's [shading] table (`Table` getters check types;
+        the parameters' own checks give the ranges)."""
+
+
+_REGISTRY: dict[str, type[AbstractShadingModel]] = {}
+
+
+def register_shading_model(cls: type[AbstractShadingModel]) -> type[AbstractShadingModel]:
+    """Class decorator: make `cls` available under `cls.name` to scene files, `fit` and
+    the renderers. Registering a name twice replaces the earlier class."""
+    _REGISTRY[cls.name] = cls
+    return cls
+
+
+def shading_model_class(name: str) -> type[AbstractShadingModel]:
+    """The registered model class called `name`; `SceneError` listing the names if none."""
+    try:
+        return _REGISTRY[name]
+    except KeyError:
+        raise SceneError(f"shading.model must be one of {shading_model_names()}, got {name!r}") from None
+
+
+def shading_model_names() -> tuple[str, ...]:
+    return tuple(_REGISTRY)

@@ -1,0 +1,91 @@
+"""The shading stage: point colours from the geometry stage and the shading parameters,
+and the image they composite to (docs/model.md §6, §8, §13).
+
+    colour = Σ_g params.g ⊙ ambient_g + light · τ · V · Σ_g params.g ⊙ lit_g   (× streak)
+
+with the model's `Reflectance` terms, τ = exp(−κΩ) (§7) and V the occluder's visibility
+(§13). Nothing here depends on which model shades: the model object in the geometry
+(`Geometry.shading`) supplies its terms.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import equinox as eqx
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+from .._composite import composite
+from ._model import Reflectance, ShadingPoints
+from ._transmittance import transmittance
+
+if TYPE_CHECKING:
+    from .._geometry_stage import Geometry
+
+__all__ = ["shading_points", "light_factor", "combine", "point_colors", "occluder_colors",
+           "shading_stage"]
+
+
+def shading_points(geometry: Geometry) -> ShadingPoints:
+    """The per-point inputs every model reads, from the geometry stage."""
+    return ShadingPoints(tangent=geometry.tangent, to_light=geometry.to_light,
+                         to_eye=geometry.to_eye, base_color=geometry.base_color,
+                         extra=geometry.shading_inputs)
+
+
+def light_factor(geometry: Geometry, kappa) -> Float[Array, "P 3"]:
+    """light · τ · V per point: what the lit terms are multiplied by (§7, §13)."""
+    light = jnp.broadcast_to(geometry.light_rgb[None, :], geometry.tangent.shape)
+    if geometry.omega is not None:
+        light = light * transmittance(kappa, geometry.omega)[:, None]
+    if geometry.light_visibility is not None:
+        light = light * geometry.light_visibility[:, None]
+    return light
+
+
+def combine(reflectance: Reflectance, params, light: Float[Array, "P 3"]) -> Float[Array, "P 3"]:
+    """Σ_g params.g ⊙ ambient_g + light ⊙ Σ_g params.g ⊙ lit_g."""
+    def weighted(terms: dict):
+        return sum(getattr(params, g)[None, :] * term for g, term in terms.items())
+
+    return weighted(reflectance.ambient) + light * weighted(reflectance.lit)
+
+
+def point_colors(geometry: Geometry, params) -> Float[Array, "P 3"]:
+    """Shaded colour at every strand point (Gouraud, kim-2003 §5): the model's reflectance
+    lit by `light_factor`, times the streak factor (§16) where the scene has streaks."""
+    model = geometry.shading
+    if not isinstance(params, model.params_type):
+        raise TypeError(f"shading model {model.name!r} takes {model.params_type.__name__}, "
+                        f"got {type(params).__name__}")
+    colors = combine(model.reflectance(shading_points(geometry), params), params,
+                     light_factor(geometry, params.kappa))
+    if geometry.streak is not None:  # §16: the streak texture modulates the whole colour
+        colors = colors * geometry.streak[:, None]
+    return colors
+
+
+def occluder_colors(geometry: Geometry, params) -> Float[Array, "Q 3"]:
+    """The occluder's colour at the pixels it covers (docs/model.md §13):
+    k·ambient + τ·k·light·max(N·L, 0)·V, τ = exp(−κΩ) at its surface point."""
+    direct = geometry.occluder_direct
+    if geometry.occluder_omega is not None:
+        direct = direct * transmittance(params.kappa, geometry.occluder_omega)[:, None]
+    if geometry.occluder_visibility is not None:
+        direct = direct * geometry.occluder_visibility[:, None]
+    return params.ambient[None, :] * geometry.occluder_color[None, :] + direct
+
+
+@eqx.filter_jit
+def shading_stage(geometry: Geometry, params) -> Float[Array, "H W 4"]:
+    """The image from the geometry stage and the shading parameters (`[H, W, 4]`):
+    the composite of the point colours over the backdrop (the occluder's colour where it
+    covers the pixel), alpha from the geometry stage."""
+    rgb = composite(geometry, point_colors(geometry, params))
+    backdrop = geometry.backdrop
+    if geometry.occluder_pixel is not None:
+        backdrop = backdrop.at[geometry.occluder_pixel].set(occluder_colors(geometry, params))
+    rgb = rgb + geometry.transmittance[:, None] * backdrop
+    image = jnp.concatenate([rgb, geometry.alpha_channel[:, None]], axis=1)
+    return image.reshape(geometry.height, geometry.width, 4)

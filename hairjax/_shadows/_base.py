@@ -1,0 +1,85 @@
+"""The abstract shadow method and its registry (docs/model.md §7, docs/architecture.md).
+
+A shadow method is a small immutable configuration (`[shadows]` in a scene file). It
+plans Ω from the geometry alone (`setup`, NumPy, in the geometry stage's set-up) and
+evaluates it from the strands' opacity (`omega`, JAX, differentiable in opacity). A new
+method is one module with a subclass registered by `@register_shadow_method`; the GL
+renderer finds its pass by the same name (hairjax/gl/).
+"""
+
+from __future__ import annotations
+
+import abc
+import dataclasses
+from typing import Any, ClassVar
+
+import numpy as np
+from jaxtyping import Array, Float
+
+from .._errors import SceneError
+
+__all__ = ["AbstractShadowMethod", "register_shadow_method", "shadow_method_class",
+           "shadow_method_names", "Shadows", "check_resolution"]
+
+
+@dataclasses.dataclass(frozen=True)
+class AbstractShadowMethod(abc.ABC):
+    """Self-shadowing of the hair. Subclasses set `method` (the scene-file name) and
+    `casts` (False only for no shadows: nothing is planned or evaluated), and implement
+    `setup` and `omega`; their dataclass fields are the `[shadows]` keys besides
+    `method`."""
+
+    method: ClassVar[str]
+    casts: ClassVar[bool] = True
+
+    @abc.abstractmethod
+    def setup(self, points, segments, seg_strand, width, light, *,
+              receivers: np.ndarray | None = None, segment_alpha: np.ndarray | None = None,
+              width_units: str = "pixels") -> Any:
+        """What Ω needs that does not depend on opacity (NumPy), for the strand points and
+        then the `receivers` (`[Q, 3]`, the occluder's surface points, §13)."""
+
+    @abc.abstractmethod
+    def omega(self, setup, alpha: Float[Array, " S"]) -> Float[Array, " PQ"]:
+        """Ω at every point of `setup` for per-strand opacity `alpha` (JAX)."""
+
+
+_REGISTRY: dict[str, type[AbstractShadowMethod]] = {}
+
+
+def register_shadow_method(cls: type[AbstractShadowMethod]) -> type[AbstractShadowMethod]:
+    """Class decorator: make `cls` available as `[shadows] method = cls.method`."""
+    _REGISTRY[cls.method] = cls
+    return cls
+
+
+def shadow_method_names() -> tuple[str, ...]:
+    return tuple(_REGISTRY)
+
+
+def shadow_method_class(method: str) -> type[AbstractShadowMethod]:
+    try:
+        return _REGISTRY[method]
+    except (KeyError, TypeError):
+        raise SceneError(f"shadows.method must be one of {shadow_method_names()}, got {method!r}") from None
+
+
+def Shadows(method: str = "opacity-maps", **options: Any) -> AbstractShadowMethod:  # noqa: N802 (a factory named like the type it makes)
+    """The registered shadow method `method` with its options, e.g.
+    `Shadows("opacity-maps", maps=64, resolution=256)` or `Shadows("exact", resolution=128)`;
+    `SceneError` for an unknown method or an option it does not take."""
+    cls = shadow_method_class(method)
+    keys = tuple(f.name for f in dataclasses.fields(cls))
+    for key in options:
+        if key not in keys:
+            takes = ", ".join(keys) if keys else "no options"
+            raise SceneError(f"shadows.{key} is not a key of method = {method!r} (it takes {takes})")
+    return cls(**options)
+
+
+def check_resolution(value) -> int:
+    """The light's raster size: an integer in [4, 16384] (a 3×3 filter needs a few texels;
+    16384² is GL's usual texture limit), or `SceneError`."""
+    if isinstance(value, bool) or int(value) != value or not 4 <= value <= 16384:
+        raise SceneError(f"shadows.resolution must be an integer in [4, 16384], got {value!r}")
+    return int(value)

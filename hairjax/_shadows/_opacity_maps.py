@@ -1,0 +1,136 @@
+"""`method = "opacity-maps"`: kim-2003 §4's opacity shadow maps, Routine 2 (docs/model.md §7).
+
+Ω(D, texel) is the summed fragment alpha, in the light's raster, of everything nearer the
+light than depth D. Maps sit on the planes D_i = D_0 + iΔ, i = 0..N, Δ = (D_N − D_0)/N,
+between the nearest (D_0) and farthest (D_N) strand point; a point at depth z with
+D_i ≤ z ≤ D_{i+1} gets
+
+    Ω = (1 − f) Ω̄(D_i) + f Ω̄(D_{i+1}),   f = (z − D_i)/Δ,
+
+with Ω̄ the 3 × 3 box average around the point's texel (texels outside the map count 0).
+Set-up (NumPy, geometry only) plans the gathers; evaluation (JAX) is linear in fragment
+alpha, so Ω is differentiable in opacity.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, Float, Int
+
+from .._constants import SHADOW_FILTER_RADIUS
+from ._base import AbstractShadowMethod, check_resolution, register_shadow_method
+from ._frame import LightFrame, light_fragments
+
+__all__ = ["OpacityMaps", "OpacityMapSetup", "point_planes", "box_filter", "opacity_maps",
+           "point_opacity", "MAX_MAP_CELLS"]
+
+# (N + 1) · R² map cells at most: 1 GiB in float32.
+MAX_MAP_CELLS = 1 << 28
+
+
+@dataclasses.dataclass(frozen=True)
+class OpacityMapSetup:
+    """What Ω needs that does not depend on opacity: light-space fragments
+    `frag_strand[F]`, `frag_coverage[F]` and `frag_cell[F]` = slice · R² + texel (slice N:
+    beyond the last plane, dropped); per point the plane index `plane[P]`, its weight
+    `f[P]` and texel `texel[P]` (−1 outside)."""
+
+    view: object
+    frag_strand: np.ndarray
+    frag_coverage: np.ndarray
+    frag_cell: np.ndarray
+    plane: np.ndarray
+    f: np.ndarray
+    texel: np.ndarray
+
+
+@register_shadow_method
+@dataclasses.dataclass(frozen=True)
+class OpacityMaps(AbstractShadowMethod):
+    """`maps` (N) opacity maps of `resolution` × `resolution` texels."""
+
+    maps: int = 64
+    resolution: int = 256
+    method = "opacity-maps"
+
+    def __post_init__(self):
+        n = self.maps
+        if isinstance(n, bool) or int(n) != n or not 1 <= n <= 65536:
+            from .._errors import SceneError
+
+            raise SceneError(f"shadows.maps must be an integer in [1, 65536], got {n!r}")
+        object.__setattr__(self, "maps", int(n))
+        object.__setattr__(self, "resolution", check_resolution(self.resolution))
+
+    def setup(self, points, segments, seg_strand, width, light, *, receivers=None,
+              segment_alpha=None, width_units="pixels") -> OpacityMapSetup:
+        maps, resolution = self.maps, self.resolution
+        if (maps + 1) * resolution**2 > MAX_MAP_CELLS:
+            raise ValueError(f"{maps} maps of {resolution}² exceed {MAX_MAP_CELLS} cells; "
+                             "use fewer maps or a lower resolution")
+        lf = light_fragments(points, segments, seg_strand, width, light, resolution,
+                             receivers=receivers, segment_alpha=segment_alpha, width_units=width_units)
+        # A fragment in [D_j, D_{j+1}) counts towards planes j + 1 … N (strictly nearer).
+        # The clip fires only through rounding (a depth ulps below D₀ → slice 0); D_N gives N.
+        j = np.clip(np.floor(lf.frame.slice_coordinate(lf.frags.depth, maps)), 0, maps).astype(np.int64)
+        plane, f = point_planes(lf.frame, maps)
+        return OpacityMapSetup(view=lf.frame.view, frag_strand=lf.frag_strand,
+                               frag_coverage=lf.frag_coverage,
+                               frag_cell=(j * resolution**2 + lf.frags.pixel).astype(np.int32),
+                               plane=plane.astype(np.int32), f=f,
+                               texel=np.where(lf.inside, lf.ty * resolution + lf.tx, -1).astype(np.int32))
+
+    def omega(self, setup: OpacityMapSetup, alpha):
+        dtype = jnp.result_type(float)
+        return _map_opacity(alpha, setup.frag_strand, jnp.asarray(setup.frag_coverage, dtype),
+                            setup.frag_cell, setup.plane, jnp.asarray(setup.f, dtype), setup.texel,
+                            self.maps, self.resolution)
+
+
+@eqx.filter_jit
+def _map_opacity(alpha, frag_strand, frag_coverage, frag_cell, plane, f, texel, maps, resolution):
+    omega = opacity_maps(alpha[frag_strand] * frag_coverage, frag_cell, maps, resolution)
+    return point_opacity(omega, plane, f, texel)
+
+
+def point_planes(frame: LightFrame, maps: int) -> tuple[np.ndarray, np.ndarray]:
+    """Each point's plane i (its slice, clamped to 0 … N − 1) and weight f ∈ [0, 1]."""
+    u = frame.slice_coordinate(frame.depth, maps)
+    # The clips fire at D_N (u = N: plane N − 1, f = 1) and for unseen points (u < 0: 0, 0).
+    plane = np.clip(np.floor(u), 0, maps - 1).astype(np.int64)
+    return plane, np.clip(u - plane, 0.0, 1.0)
+
+
+def box_filter(maps: Float[Array, "n r r"]) -> Float[Array, "n r r"]:
+    """(2r + 1)² box average over texels, zero outside the map."""
+    r = SHADOW_FILTER_RADIUS
+    k = 2 * r + 1
+    padded = jnp.pad(maps, ((0, 0), (r, r), (r, r)))
+    rows = sum(padded[:, i:i + maps.shape[1], :] for i in range(k))
+    return sum(rows[:, :, i:i + maps.shape[2]] for i in range(k)) / (k * k)
+
+
+def opacity_maps(frag_alpha: Float[Array, " f"], frag_cell: Int[Array, " f"], maps: int,
+                 resolution: int) -> Float[Array, "n1 r r"]:
+    """Box-filtered Ω̄ on the N + 1 planes (plane 0 is empty): kim-2003 Routine 2's
+    accumulation, with each slice added to the ones behind it (GL_ONE, GL_ONE)."""
+    cells = resolution * resolution
+    slices = jax.ops.segment_sum(frag_alpha, frag_cell, num_segments=(maps + 1) * cells)
+    slices = slices.reshape(maps + 1, resolution, resolution)[:maps]
+    omega = jnp.concatenate([jnp.zeros_like(slices[:1]), jnp.cumsum(slices, axis=0)])
+    return box_filter(omega)
+
+
+def point_opacity(maps: Float[Array, "n1 r r"], plane: Int[Array, " p"], f: Float[Array, " p"],
+                  texel: Int[Array, " p"]) -> Float[Array, " p"]:
+    """Ω at points: linear interpolation between the two planes around each point."""
+    flat = maps.reshape(maps.shape[0], -1)
+    safe = jnp.maximum(texel, 0)  # fires for texel −1 (outside): any valid index, dropped below
+    omega = (1 - f) * flat[plane, safe] + f * flat[plane + 1, safe]
+    # Fires for points outside the light's map (behind a point light): no shadow.
+    return jnp.where(texel >= 0, omega, 0.0)
