@@ -26,6 +26,7 @@ from .._shadows import LightFrame, light_frame, point_planes, with_receivers
 from .._streaks import strand_coordinates, streak_prefix, streak_texture
 from ._context import check, get_context, release
 from ._programs import SHADING_MODEL_IDS, programs
+from ._uniforms import light_pass_uniforms, light_uniforms, set_uniforms, vec, view_uniforms
 
 __all__ = ["GLResult", "OccluderLight", "occluder_light", "render_gl"]
 
@@ -69,30 +70,6 @@ class GLResult:
     omega: np.ndarray | None
     timings: dict
     occluder: OccluderLight | None = None
-
-
-def _set(prog, **values) -> None:
-    """Set uniforms; names the compiler removed as unused are skipped."""
-    for name, value in values.items():
-        try:
-            uniform = prog[name]
-        except KeyError:
-            continue
-        uniform.value = value
-
-
-def _vec(v) -> tuple:
-    """A vector as the tuple of Python floats a moderngl uniform takes."""
-    return tuple(float(x) for x in np.asarray(v).ravel())
-
-
-def _view_uniforms(prefix: str, view) -> dict:
-    return {f"{prefix}.origin": _vec(view.origin), f"{prefix}.forward": _vec(view.forward),
-            f"{prefix}.right": _vec(view.right), f"{prefix}.up": _vec(view.up),
-            f"{prefix}.focal": float(view.focal), f"{prefix}.center": (float(view.cx), float(view.cy)),
-            # Fires for orthographic (directional-light) views: near = −inf, unused there.
-            f"{prefix}.near": float(view.near) if np.isfinite(view.near) else -1e30,
-            f"{prefix}.perspective": bool(view.perspective)}
 
 
 class _Strands:
@@ -282,16 +259,16 @@ class _OccluderSurface:
             ctx.depth_func = "<"
             fbo.depth_mask = True
             uniforms = dict(raster_size=(float(w), float(h)), depth_range=depth_range,
-                            **_view_uniforms("view", view))
+                            **view_uniforms("view", view))
             if occluder.kind == "sphere":
                 prog = progs["occluder_sphere"]
-                _set(prog, center=_vec(occluder.center), radius=float(occluder.radius), **uniforms)
+                set_uniforms(prog, center=vec(occluder.center), radius=float(occluder.radius), **uniforms)
                 vao = ctx.vertex_array(prog, [])
                 buffers.append(vao)
                 vao.render(moderngl.TRIANGLES, vertices=3)
             else:
                 prog = progs["occluder_mesh"]
-                _set(prog, **uniforms)
+                set_uniforms(prog, **uniforms)
                 tri = occluder.triangles[drawable_triangles(view, occluder.vertices, occluder.triangles)]
                 if tri.size:  # fires unless every triangle reaches the near plane
                     f4 = lambda a: ctx.buffer(np.ascontiguousarray(a, "f4").tobytes())  # noqa: E731
@@ -356,8 +333,8 @@ def _occluder_shadow(ctx, progs, scene: Scene, strands, points: _Points, surface
         light_surface.position.use(0)
         points.buffer.bind_to_storage_buffer(0)
         out.bind_to_storage_buffer(1)
-        _set(comp, light_position_map=0, count=points.count, resolution=r,
-             **_view_uniforms("light", view))
+        set_uniforms(comp, light_position_map=0, count=points.count, resolution=r,
+                     **view_uniforms("light", view))
         comp.run(group_x=(points.count + _GROUP - 1) // _GROUP)
         ctx.memory_barrier()
         check(ctx, "occluder shadow")
@@ -370,17 +347,6 @@ def _occluder_shadow(ctx, progs, scene: Scene, strands, points: _Points, surface
     omega = surface.per_pixel(receiver_omega, 0.0)[::-1].astype(np.float64)
     vis = surface.per_pixel(v[p:], 1.0)[::-1].astype(np.float64)
     return OccluderLight(v[:p], omega.reshape(h, w), vis.reshape(h, w))
-
-
-def _light_uniforms(scene: Scene) -> dict:
-    light = scene.light
-    if light.kind == "directional":
-        d = -np.asarray(light.direction, dtype=np.float64)
-        vector, point = d / np.linalg.norm(d), False
-    else:
-        vector, point = np.asarray(light.position, dtype=np.float64), True
-    return {"light_vector": _vec(vector), "point_light": point,
-            "light_rgb": _vec(light.color)}
 
 
 def _camera_pass(ctx, progs, scene: Scene, params, strands, view: View, order,
@@ -403,12 +369,12 @@ def _camera_pass(ctx, progs, scene: Scene, params, strands, view: View, order,
     try:
         fbo.use()
         ctx.viewport = (0, 0, w, h)
-        bg = _vec(scene.background)
+        bg = vec(scene.background)
         fbo.depth_mask = surface is None  # keep the occluder's depths
         fbo.clear(*bg, 0.0, depth=1.0)
         common = dict(raster_size=(float(w), float(h)), depth_far=depth_far,
                       world_width=scene.strands.width_units == "world",
-                      **_view_uniforms("view", view), **_light_uniforms(scene))
+                      **view_uniforms("view", view), **light_uniforms(scene))
         if surface is not None:
             # §13: the occluder's colour where its surface pass covered the pixel centre.
             ctx.disable(moderngl.BLEND | moderngl.DEPTH_TEST)
@@ -425,9 +391,9 @@ def _camera_pass(ctx, progs, scene: Scene, params, strands, view: View, order,
             prog = progs["occluder_color"]
             for unit, tex in enumerate((surface.position, surface.normal, omega_tex, vis_tex)):
                 tex.use(unit)
-            _set(prog, position_map=0, normal_map=1, omega_map=2, visibility_map=3,
-                 albedo=_vec(scene.occluder.color), ambient=_vec(params.ambient),
-                 kappa=float(params.kappa), **_light_uniforms(scene))
+            set_uniforms(prog, position_map=0, normal_map=1, omega_map=2, visibility_map=3,
+                         albedo=vec(scene.occluder.color), ambient=vec(params.ambient),
+                         kappa=float(params.kappa), **light_uniforms(scene))
             occ_vao = ctx.vertex_array(prog, [])
             extra.append(occ_vao)
             occ_vao.render(moderngl.TRIANGLES, vertices=3)
@@ -444,15 +410,15 @@ def _camera_pass(ctx, progs, scene: Scene, params, strands, view: View, order,
                           moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA)
         ctx.blend_equation = moderngl.FUNC_ADD
         prog = progs["camera"]
-        _set(prog, shade=True, eye=_vec(view.origin), **_shading_uniforms(scene, params), **common)
+        set_uniforms(prog, shade=True, eye=vec(view.origin), **_shading_uniforms(scene, params), **common)
         if table is not None:
             table.use(0)
-            _set(prog, kajiya_kay_table=0)
-        _set(prog, streaks=streak is not None)
+            set_uniforms(prog, kajiya_kay_table=0)
+        set_uniforms(prog, streaks=streak is not None)
         if streak is not None:
             streak.use(1)
-            _set(prog, streak_texture=1, streak_texels=scene.streaks.texels,
-                 streak_width=float(scene.streaks.width))
+            set_uniforms(prog, streak_texture=1, streak_texels=scene.streaks.texels,
+                         streak_width=float(scene.streaks.width))
         vao = strands.vertex_array(prog, ibo)
         if len(order):
             vao.render(moderngl.LINES, vertices=2 * len(order))
@@ -499,20 +465,12 @@ def _shading_uniforms(scene: Scene, params) -> dict:
             raise TypeError("shading model 'scheuermann' takes ScheuermannParams, "
                             f"got {type(params).__name__}")
         for name in ("kd", "ambient", "primary_color", "secondary_color"):
-            uniforms[f"scheuermann.{name}"] = _vec(getattr(params, name))
+            uniforms[f"scheuermann.{name}"] = vec(getattr(params, name))
         for name in ("primary_exponent", "secondary_exponent", "primary_shift", "secondary_shift"):
             uniforms[f"scheuermann.{name}"] = float(getattr(params, name))
         return uniforms
-    return {**uniforms, "shading.kd": _vec(params.kd), "shading.ks": _vec(params.ks),
-            "shading.ambient": _vec(params.ambient), "shading.shininess": float(params.shininess)}
-
-
-def _light_pass_uniforms(scene: Scene, frame: LightFrame) -> dict:
-    r = scene.shadows.resolution
-    return dict(raster_size=(float(r), float(r)), shade=False,
-                world_width=scene.strands.width_units == "world",
-                light_perspective=bool(frame.view.perspective), resolution=r,
-                **_view_uniforms("view", frame.view))
+    return {**uniforms, "shading.kd": vec(params.kd), "shading.ks": vec(params.ks),
+            "shading.ambient": vec(params.ambient), "shading.shininess": float(params.shininess)}
 
 
 def _opacity_maps(ctx, progs, scene, strands, frame: LightFrame, clip_slices: bool, points: _Points):
@@ -565,10 +523,10 @@ def _opacity_maps(ctx, progs, scene, strands, frame: LightFrame, clip_slices: bo
         ctx.disable(moderngl.DEPTH_TEST)
         ctx.enable(moderngl.BLEND)
         ctx.blend_func = moderngl.ONE, moderngl.ONE
-        _set(prog, zmin=float(frame.zmin), span=float(frame.span), maps=n,
-             **_light_pass_uniforms(scene, frame))
-        _set(comp, zmin=float(frame.zmin), span=float(frame.span), maps=n, resolution=r,
-             prev_map=0, cur_map=1, **_view_uniforms("light", frame.view))
+        set_uniforms(prog, zmin=float(frame.zmin), span=float(frame.span), maps=n,
+                     **light_pass_uniforms(scene, frame))
+        set_uniforms(comp, zmin=float(frame.zmin), span=float(frame.span), maps=n, resolution=r,
+                     prev_map=0, cur_map=1, **view_uniforms("light", frame.view))
         points.buffer.bind_to_storage_buffer(0)
         id_buf.bind_to_storage_buffer(1)
         omega_buf.bind_to_storage_buffer(2)
@@ -578,7 +536,7 @@ def _opacity_maps(ctx, progs, scene, strands, frame: LightFrame, clip_slices: bo
                 ctx.copy_framebuffer(prev_fbo, fbo)
                 drawn_since_copy = False
             fbo.use()
-            _set(prog, slice=i)
+            set_uniforms(prog, slice=i)
             if clip_slices:
                 count = starts[i + 1] - starts[i]
                 if count:
@@ -591,7 +549,7 @@ def _opacity_maps(ctx, progs, scene, strands, frame: LightFrame, clip_slices: bo
             if count:
                 previous.use(0)
                 current.use(1)
-                _set(comp, first=int(plane_starts[i]), count=count, plane=i)
+                set_uniforms(comp, first=int(plane_starts[i]), count=count, plane=i)
                 comp.run(group_x=(count + _GROUP - 1) // _GROUP)
                 ctx.memory_barrier()
         check(ctx, f"{n} opacity-map passes")
@@ -619,7 +577,7 @@ def _exact_opacity(ctx, progs, scene, strands, frame: LightFrame, points: _Point
         fbo.use()
         ctx.viewport = (0, 0, r, r)
         ctx.disable(moderngl.DEPTH_TEST | moderngl.BLEND)
-        _set(prog, fill=False, **_light_pass_uniforms(scene, frame))
+        set_uniforms(prog, fill=False, **light_pass_uniforms(scene, frame))
         counts.bind_to_storage_buffer(0)
         cursor.bind_to_storage_buffer(1)
         check(ctx, "exact opacity set-up")
@@ -636,7 +594,7 @@ def _exact_opacity(ctx, progs, scene, strands, frame: LightFrame, points: _Point
         buffers += [offsets, entries]
         offsets.bind_to_storage_buffer(2)
         entries.bind_to_storage_buffer(3)
-        _set(prog, fill=True)
+        set_uniforms(prog, fill=True)
         if draw:
             vao.render(moderngl.LINES, vertices=draw)
         ctx.memory_barrier()
@@ -652,7 +610,7 @@ def _exact_opacity(ctx, progs, scene, strands, frame: LightFrame, points: _Point
         counts.bind_to_storage_buffer(3)
         offsets.bind_to_storage_buffer(4)
         entries.bind_to_storage_buffer(5)
-        _set(comp, count=len(seen), resolution=r, **_view_uniforms("light", frame.view))
+        set_uniforms(comp, count=len(seen), resolution=r, **view_uniforms("light", frame.view))
         if len(seen):
             comp.run(group_x=(len(seen) + _GROUP - 1) // _GROUP)
         ctx.memory_barrier()
