@@ -15,17 +15,16 @@ import time
 
 import numpy as np
 
-from .._lookup import LOOKUP_MODELS, kajiya_kay_table
 from .._occluder import drawable_triangles, occluder_extent, occluder_light_view, vertex_normals
 from .._projection import View, camera_view
 from .._render import tangents, visibility_order
 from .._scene import Scene
-from .._scheuermann import ScheuermannParams, scheuermann_inputs
+from .._scheuermann import ScheuermannParams
 from .._shading import ShadingParams
 from .._shadows import LightFrame, light_frame, point_planes, with_receivers
-from .._streaks import strand_coordinates, streak_prefix, streak_texture
 from ._context import check, get_context, release
-from ._programs import SHADING_MODEL_IDS, programs
+from ._programs import programs
+from ._shading import lookup_texture, point_inputs, shading_uniforms, streak_texture, use_shading_textures
 from ._uniforms import light_pass_uniforms, light_uniforms, set_uniforms, vec, view_uniforms
 
 __all__ = ["GLResult", "OccluderLight", "occluder_light", "render_gl"]
@@ -85,16 +84,9 @@ class _Strands:
         color = s.color if s.color is not None else np.ones_like(s.points)
         alpha = s.alpha[per_point]
         self.segments = s.segments()
-        self.extra = []  # per-point inputs of §17 (Scheuermann) and §16 (streaks), when used
-        if scene.shading_model == "scheuermann":
-            pts, factor, segment_alpha = scheuermann_inputs(s, tangent, scene.scheuermann_maps)
-            color = color * factor
-            if segment_alpha is not None:
-                # ribbon.geom takes a segment's alpha from its first point.
-                alpha = alpha.copy()
-                alpha[self.segments[:, 0]] *= segment_alpha
-            self.extra = [(f4(pts.normal), "3f", "in_normal"),
-                          (f4(np.stack([pts.shift, pts.mask], axis=1)), "2f", "in_maps")]
+        color, alpha, inputs = point_inputs(scene, tangent, color, alpha, self.segments)
+        # The shading model's further per-point inputs (§16, §17), when it has any.
+        self.extra = [(f4(values), fmt, name) for values, fmt, name in inputs]
         self.position = f4(s.points)
         self.tangent = f4(tangent)
         self.color = f4(color)
@@ -102,9 +94,6 @@ class _Strands:
         self.width = f4(s.width[per_point])
         self.omega = f4(np.zeros(s.num_points))
         self.visibility = f4(np.ones(s.num_points))
-        if scene.streaks is not None:  # §16: each point's hair coordinate u_i
-            u = strand_coordinates(scene.streaks, s.num_strands)[per_point]
-            self.extra.append((f4(u), "f", "in_streak"))
 
     def vertex_array(self, prog, index_buffer):
         return self.ctx.vertex_array(prog, [
@@ -364,8 +353,8 @@ def _camera_pass(ctx, progs, scene: Scene, params, strands, view: View, order,
     fbo = ctx.framebuffer(color_attachments=[color], depth_attachment=depth_tex)
     ibo = strands.index_buffer(order)
     extra = []
-    table = _lookup_texture(ctx, scene, params)
-    streak = _streak_texture(ctx, scene)
+    table = lookup_texture(ctx, scene, params)
+    streak = streak_texture(ctx, scene)
     try:
         fbo.use()
         ctx.viewport = (0, 0, w, h)
@@ -410,15 +399,8 @@ def _camera_pass(ctx, progs, scene: Scene, params, strands, view: View, order,
                           moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA)
         ctx.blend_equation = moderngl.FUNC_ADD
         prog = progs["camera"]
-        set_uniforms(prog, shade=True, eye=vec(view.origin), **_shading_uniforms(scene, params), **common)
-        if table is not None:
-            table.use(0)
-            set_uniforms(prog, kajiya_kay_table=0)
-        set_uniforms(prog, streaks=streak is not None)
-        if streak is not None:
-            streak.use(1)
-            set_uniforms(prog, streak_texture=1, streak_texels=scene.streaks.texels,
-                         streak_width=float(scene.streaks.width))
+        set_uniforms(prog, shade=True, eye=vec(view.origin), **shading_uniforms(scene, params), **common)
+        use_shading_textures(prog, scene, table, streak)
         vao = strands.vertex_array(prog, ibo)
         if len(order):
             vao.render(moderngl.LINES, vertices=2 * len(order))
@@ -429,48 +411,6 @@ def _camera_pass(ctx, progs, scene: Scene, params, strands, view: View, order,
     finally:
         ctx.disable(moderngl.BLEND | moderngl.DEPTH_TEST)
         release(ctx, ibo, fbo, color, *([own_depth] if own_depth is not None else []), *extra, table, streak)
-
-
-def _lookup_texture(ctx, scene: Scene, params: ShadingParams):
-    """§14: the lookup model's table (built by the JAX code, `kajiya_kay_table`) as an
-    RG32F texture sampled with LINEAR filtering and CLAMP_TO_EDGE; None for other models."""
-    import moderngl
-
-    if scene.shading_model not in LOOKUP_MODELS:
-        return None
-    table = kajiya_kay_table(params.shininess, scene.lookup_size, LOOKUP_MODELS[scene.shading_model])
-    n = scene.lookup_size
-    tex = ctx.texture((n, n), 2, np.ascontiguousarray(table, dtype="f4").tobytes(), dtype="f4")
-    tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
-    tex.repeat_x = tex.repeat_y = False  # CLAMP_TO_EDGE
-    return tex
-
-
-def _streak_texture(ctx, scene: Scene):
-    """§16: texel k = (N_{k mod m}, P_k), k = 0 … m, as an RG32F texture read with
-    texelFetch (the mean over a hair's span is computed from it exactly); None without streaks."""
-    if scene.streaks is None:
-        return None
-    texture = streak_texture(scene.streaks)
-    data = np.stack([np.append(texture, texture[0]), streak_prefix(texture)], axis=1)
-    return ctx.texture((len(data), 1), 2, np.ascontiguousarray(data, dtype="f4").tobytes(), dtype="f4")
-
-
-def _shading_uniforms(scene: Scene, params) -> dict:
-    """The `shading` (and for §17 the `scheuermann`) uniforms of the camera pass."""
-    uniforms = {"shading.model": SHADING_MODEL_IDS[scene.shading_model],
-                "shading.kappa": float(params.kappa)}
-    if scene.shading_model == "scheuermann":
-        if not isinstance(params, ScheuermannParams):
-            raise TypeError("shading model 'scheuermann' takes ScheuermannParams, "
-                            f"got {type(params).__name__}")
-        for name in ("kd", "ambient", "primary_color", "secondary_color"):
-            uniforms[f"scheuermann.{name}"] = vec(getattr(params, name))
-        for name in ("primary_exponent", "secondary_exponent", "primary_shift", "secondary_shift"):
-            uniforms[f"scheuermann.{name}"] = float(getattr(params, name))
-        return uniforms
-    return {**uniforms, "shading.kd": vec(params.kd), "shading.ks": vec(params.ks),
-            "shading.ambient": vec(params.ambient), "shading.shininess": float(params.shininess)}
 
 
 def _opacity_maps(ctx, progs, scene, strands, frame: LightFrame, clip_slices: bool, points: _Points):
