@@ -17,14 +17,15 @@ import numpy as np
 
 from .._occluder import drawable_triangles, occluder_extent, occluder_light_view, vertex_normals
 from .._projection import View, camera_view
-from .._render import tangents, visibility_order
+from .._render import visibility_order
 from .._scene import Scene
 from .._scheuermann import ScheuermannParams
 from .._shading import ShadingParams
 from .._shadows import LightFrame, light_frame, point_planes, with_receivers
+from ._buffers import Points, Strands
 from ._context import check, get_context, release
 from ._programs import programs
-from ._shading import lookup_texture, point_inputs, shading_uniforms, streak_texture, use_shading_textures
+from ._shading import lookup_texture, shading_uniforms, streak_texture, use_shading_textures
 from ._uniforms import light_pass_uniforms, light_uniforms, set_uniforms, vec, view_uniforms
 
 __all__ = ["GLResult", "OccluderLight", "occluder_light", "render_gl"]
@@ -71,49 +72,6 @@ class GLResult:
     occluder: OccluderLight | None = None
 
 
-class _Strands:
-    """The strands on the GPU: one buffer per point attribute, shared by every pass."""
-
-    def __init__(self, ctx, scene: Scene):
-        s = scene.strands
-        per_point = s.strand_of_point
-        self.ctx = ctx
-        self.count = s.num_points
-        f4 = lambda a: ctx.buffer(np.ascontiguousarray(a, dtype="f4").tobytes())  # noqa: E731
-        tangent = tangents(s.points, s.offsets)
-        color = s.color if s.color is not None else np.ones_like(s.points)
-        alpha = s.alpha[per_point]
-        self.segments = s.segments()
-        color, alpha, inputs = point_inputs(scene, tangent, color, alpha, self.segments)
-        # The shading model's further per-point inputs (§16, §17), when it has any.
-        self.extra = [(f4(values), fmt, name) for values, fmt, name in inputs]
-        self.position = f4(s.points)
-        self.tangent = f4(tangent)
-        self.color = f4(color)
-        self.alpha = f4(alpha)
-        self.width = f4(s.width[per_point])
-        self.omega = f4(np.zeros(s.num_points))
-        self.visibility = f4(np.ones(s.num_points))
-
-    def vertex_array(self, prog, index_buffer):
-        return self.ctx.vertex_array(prog, [
-            (self.position, "3f", "in_position"), (self.tangent, "3f", "in_tangent"),
-            (self.color, "3f", "in_color"), (self.alpha, "f", "in_alpha"),
-            (self.width, "f", "in_width"), (self.omega, "f", "in_omega"),
-            (self.visibility, "f", "in_visibility"), *self.extra,
-        ], index_buffer=index_buffer, index_element_size=4, skip_errors=True)
-
-    def index_buffer(self, segment_ids: np.ndarray):
-        """Endpoints of the given segments, in order, for GL_LINES."""
-        pairs = self.segments[segment_ids].astype("u4")
-        return self.ctx.buffer(pairs.tobytes() if pairs.size else b"\0" * 8)  # no segments: GL needs ≥ 1 byte
-
-    def release(self):
-        for b in (self.position, self.tangent, self.color, self.alpha, self.width, self.omega,
-                  self.visibility, *(buffer for buffer, _, _ in self.extra)):
-            b.release()
-
-
 def render_gl(scene: Scene, params: ShadingParams | ScheuermannParams | None = None, *,
               clip_slices: bool = True, omega: np.ndarray | None = None,
               order: np.ndarray | None = None, occluder: OccluderLight | None = None) -> GLResult:
@@ -146,7 +104,7 @@ def render_gl(scene: Scene, params: ShadingParams | ScheuermannParams | None = N
     view, _, depth, _, order = visibility_order(scene, order)
     depth_far = _depth_far(scene, view, depth)
     lighting = scene.occluder is not None and scene.shadows.method != "none"
-    strands = _Strands(ctx, scene)
+    strands = Strands(ctx, scene)
     surface = None
     try:
         lap("upload")
@@ -162,7 +120,7 @@ def render_gl(scene: Scene, params: ShadingParams | ScheuermannParams | None = N
         elif scene.shadows.method != "none":
             frame = light_frame(scene.strands.points, strands.segments, scene.strands.width,
                                 scene.light, scene.shadows.resolution, scene.strands.width_units)
-            points = _Points(ctx, strands, None if surface is None else surface.points)
+            points = Points(ctx, strands, None if surface is None else surface.points)
             try:
                 frame = with_receivers(frame, points.receivers)
                 if scene.shadows.method == "opacity-maps":
@@ -286,26 +244,7 @@ class _OccluderSurface:
         release(self.ctx, self.position, self.normal, self.depth)
 
 
-class _Points:
-    """The points whose Ω the shadow passes compute: the strand points, then the
-    occluder's surface points (`receivers`, §13) when there are any."""
-
-    def __init__(self, ctx, strands, receivers):
-        self.receivers = receivers if receivers is not None and len(receivers) else None
-        self.count = strands.count + (0 if self.receivers is None else len(self.receivers))
-        self.own = None
-        self.buffer = strands.position
-        if self.receivers is not None:
-            s_pos = np.frombuffer(strands.position.read(), "f4").reshape(-1, 3)
-            self.own = ctx.buffer(np.concatenate([s_pos, self.receivers.astype("f4")]).tobytes())
-            self.buffer = self.own
-
-    def release(self):
-        if self.own is not None:
-            self.own.release()
-
-
-def _occluder_shadow(ctx, progs, scene: Scene, strands, points: _Points, surface,
+def _occluder_shadow(ctx, progs, scene: Scene, strands, points: Points, surface,
                      receiver_omega: np.ndarray) -> OccluderLight:
     """§13: the occluder drawn in its light view (`occluder_light_view`), then V at the
     strand points and at the occluder's surface points by the depth test."""
@@ -413,7 +352,7 @@ def _camera_pass(ctx, progs, scene: Scene, params, strands, view: View, order,
         release(ctx, ibo, fbo, color, *([own_depth] if own_depth is not None else []), *extra, table, streak)
 
 
-def _opacity_maps(ctx, progs, scene, strands, frame: LightFrame, clip_slices: bool, points: _Points):
+def _opacity_maps(ctx, progs, scene, strands, frame: LightFrame, clip_slices: bool, points: Points):
     """kim-2003 Routine 2: B_current accumulates slice after slice (GL_ONE, GL_ONE), the
     points of slice i are evaluated between B_prev = Ω(D_i) and B_current = Ω(D_{i+1})."""
     import moderngl
@@ -499,7 +438,7 @@ def _opacity_maps(ctx, progs, scene, strands, frame: LightFrame, clip_slices: bo
         release(ctx, vao, ibo, id_buf, omega_buf, fbo, prev_fbo, current, previous)
 
 
-def _exact_opacity(ctx, progs, scene, strands, frame: LightFrame, points: _Points):
+def _exact_opacity(ctx, progs, scene, strands, frame: LightFrame, points: Points):
     """Ω without slicing: per-texel fragment lists (count, prefix sum, fill), then each
     point sums the alpha strictly nearer the light in its 3 × 3 texels."""
     import moderngl
