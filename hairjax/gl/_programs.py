@@ -11,9 +11,15 @@ from importlib import resources
 from .. import _constants
 from ._context import GLError
 
-__all__ = ["programs", "constants_glsl", "shader_source"]
+__all__ = ["COMPUTE_GROUP", "programs", "constants_glsl", "shader_source", "workgroups"]
 
 SHADING_MODEL_IDS = {"kajiya-kay": 0, "kajiya-kay-mirror": 1, "kajiya-kay-lookup": 2, "scheuermann": 3}
+COMPUTE_GROUP = 64  # local_size_x of every compute shader (shaders/*.comp)
+
+
+def workgroups(count: int) -> int:
+    """How many work groups of `COMPUTE_GROUP` invocations cover `count` items."""
+    return (count + COMPUTE_GROUP - 1) // COMPUTE_GROUP
 
 
 def constants_glsl() -> str:

@@ -24,14 +24,11 @@ from .._shading import ShadingParams
 from .._shadows import LightFrame, light_frame, point_planes, with_receivers
 from ._buffers import Points, Strands
 from ._context import check, get_context, release
-from ._programs import programs
+from ._programs import programs, workgroups
 from ._shading import lookup_texture, shading_uniforms, streak_texture, use_shading_textures
 from ._uniforms import light_pass_uniforms, light_uniforms, set_uniforms, vec, view_uniforms
 
 __all__ = ["GLResult", "OccluderLight", "occluder_light", "render_gl"]
-
-_GROUP = 64  # local size of the compute shaders
-
 
 @dataclasses.dataclass(frozen=True)
 class OccluderLight:
@@ -263,7 +260,7 @@ def _occluder_shadow(ctx, progs, scene: Scene, strands, points: Points, surface,
         out.bind_to_storage_buffer(1)
         set_uniforms(comp, light_position_map=0, count=points.count, resolution=r,
                      **view_uniforms("light", view))
-        comp.run(group_x=(points.count + _GROUP - 1) // _GROUP)
+        comp.run(group_x=workgroups(points.count))
         ctx.memory_barrier()
         check(ctx, "occluder shadow")
         v = np.frombuffer(out.read(), "f4")[:points.count].astype(np.float64)
@@ -429,7 +426,7 @@ def _opacity_maps(ctx, progs, scene, strands, frame: LightFrame, clip_slices: bo
                 previous.use(0)
                 current.use(1)
                 set_uniforms(comp, first=int(plane_starts[i]), count=count, plane=i)
-                comp.run(group_x=(count + _GROUP - 1) // _GROUP)
+                comp.run(group_x=workgroups(count))
                 ctx.memory_barrier()
         check(ctx, f"{n} opacity-map passes")
         return np.frombuffer(omega_buf.read(), dtype="f4").copy()
@@ -491,7 +488,7 @@ def _exact_opacity(ctx, progs, scene, strands, frame: LightFrame, points: Points
         entries.bind_to_storage_buffer(5)
         set_uniforms(comp, count=len(seen), resolution=r, **view_uniforms("light", frame.view))
         if len(seen):
-            comp.run(group_x=(len(seen) + _GROUP - 1) // _GROUP)
+            comp.run(group_x=workgroups(len(seen)))
         ctx.memory_barrier()
         check(ctx, "exact opacity passes")
         return np.frombuffer(omega_buf.read(), dtype="f4").copy()
