@@ -108,8 +108,8 @@ def test_no_shadow_passes_without_shadows(gl, tmp_path, monkeypatch):
     def forbidden(*args, **kwargs):
         raise AssertionError("shadow passes ran for a scene without shadows")
 
-    monkeypatch.setattr(_renderer, "_opacity_maps", forbidden)
-    monkeypatch.setattr(_renderer, "_exact_opacity", forbidden)
+    monkeypatch.setattr(_renderer, "opacity_maps", forbidden)
+    monkeypatch.setattr(_renderer, "exact_opacity", forbidden)
     result = render_gl(small_scene(tmp_path, "none"))
     assert result.omega is None and "shadows" not in result.timings
 

@@ -21,15 +21,18 @@ from .._render import visibility_order
 from .._scene import Scene
 from .._scheuermann import ScheuermannParams
 from .._shading import ShadingParams
-from .._shadows import LightFrame, light_frame, point_planes, with_receivers
+from .._shadows import light_frame, with_receivers
 from ._buffers import Points, Strands
 from ._context import check, get_context, release
+from ._exact_opacity import exact_opacity
 from ._occluder import OccluderLight, OccluderSurface, occluder_shadow
-from ._programs import programs, workgroups
+from ._opacity_maps import opacity_maps
+from ._programs import programs
 from ._shading import lookup_texture, shading_uniforms, streak_texture, use_shading_textures
-from ._uniforms import light_pass_uniforms, light_uniforms, set_uniforms, vec, view_uniforms
+from ._uniforms import light_uniforms, set_uniforms, vec, view_uniforms
 
 __all__ = ["GLResult", "render_gl"]
+
 
 @dataclasses.dataclass(frozen=True)
 class GLResult:
@@ -95,9 +98,9 @@ def render_gl(scene: Scene, params: ShadingParams | ScheuermannParams | None = N
             try:
                 frame = with_receivers(frame, points.receivers)
                 if scene.shadows.method == "opacity-maps":
-                    omega_all = _opacity_maps(ctx, progs, scene, strands, frame, clip_slices, points)
+                    omega_all = opacity_maps(ctx, progs, scene, strands, frame, clip_slices, points)
                 else:
-                    omega_all = _exact_opacity(ctx, progs, scene, strands, frame, points)
+                    omega_all = exact_opacity(ctx, progs, scene, strands, frame, points)
                 omega = omega_all[:strands.count].copy()
                 strands.omega.write(omega.tobytes())
                 lap("shadows")
@@ -226,150 +229,3 @@ def _camera_pass(ctx, progs, scene: Scene, params, strands, view: View, order,
     finally:
         ctx.disable(moderngl.BLEND | moderngl.DEPTH_TEST)
         release(ctx, ibo, fbo, color, *([own_depth] if own_depth is not None else []), *extra, table, streak)
-
-
-def _opacity_maps(ctx, progs, scene, strands, frame: LightFrame, clip_slices: bool, points: Points):
-    """kim-2003 Routine 2: B_current accumulates slice after slice (GL_ONE, GL_ONE), the
-    points of slice i are evaluated between B_prev = Ω(D_i) and B_current = Ω(D_{i+1})."""
-    import moderngl
-
-    n, r = scene.shadows.maps, scene.shadows.resolution
-    segs = strands.segments[frame.drawable]
-    ids = frame.drawable
-    # Which slices each drawable segment's fragments can fall in (depth is monotone
-    # between the endpoints, so its range is the endpoints' range).
-    z = frame.depth
-    u0 = np.clip(np.floor(frame.slice_coordinate(np.minimum(z[segs[:, 0]], z[segs[:, 1]]), n)), 0, n)
-    u1 = np.clip(np.floor(frame.slice_coordinate(np.maximum(z[segs[:, 0]], z[segs[:, 1]]), n)), 0, n)
-    # The clips fire at D_N (slice N, drawn in no pass: such a segment gets no span) and by rounding.
-    u0, u1 = u0.astype(np.int64), np.minimum(u1.astype(np.int64), n - 1)
-    if clip_slices:
-        spans = np.maximum(u1 - u0 + 1, 0)
-        seg_rep = np.repeat(ids, spans)
-        within = np.arange(spans.sum()) - np.repeat(np.cumsum(spans) - spans, spans)
-        slice_rep = np.repeat(u0, spans) + within
-        order = np.argsort(slice_rep, kind="stable")
-        seg_rep, slice_rep = seg_rep[order], slice_rep[order]
-        starts = np.searchsorted(slice_rep, np.arange(n + 1))
-    else:
-        seg_rep = ids
-        starts = None
-    ibo = strands.index_buffer(seg_rep)
-
-    plane, _ = point_planes(frame, n)
-    seen = np.flatnonzero(frame.seen)
-    by_plane = seen[np.argsort(plane[seen], kind="stable")]
-    plane_starts = np.searchsorted(plane[by_plane], np.arange(n + 1))
-    id_buf = ctx.buffer(by_plane.astype("u4").tobytes() if by_plane.size else b"\0" * 4)  # no point seen
-    omega_buf = ctx.buffer(np.zeros(points.count, "f4").tobytes())
-
-    current = ctx.texture((r, r), 1, dtype="f4")
-    previous = ctx.texture((r, r), 1, dtype="f4")
-    for tex in (current, previous):
-        tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-    fbo = ctx.framebuffer(color_attachments=[current])
-    prev_fbo = ctx.framebuffer(color_attachments=[previous])
-    prog, comp = progs["light_slice"], progs["omega_maps"]
-    vao = strands.vertex_array(prog, ibo)
-    try:
-        fbo.use()
-        ctx.viewport = (0, 0, r, r)
-        fbo.clear(0.0, 0.0, 0.0, 0.0)
-        ctx.disable(moderngl.DEPTH_TEST)
-        ctx.enable(moderngl.BLEND)
-        ctx.blend_func = moderngl.ONE, moderngl.ONE
-        set_uniforms(prog, zmin=float(frame.zmin), span=float(frame.span), maps=n,
-                     **light_pass_uniforms(scene, frame))
-        set_uniforms(comp, zmin=float(frame.zmin), span=float(frame.span), maps=n, resolution=r,
-                     prev_map=0, cur_map=1, **view_uniforms("light", frame.view))
-        points.buffer.bind_to_storage_buffer(0)
-        id_buf.bind_to_storage_buffer(1)
-        omega_buf.bind_to_storage_buffer(2)
-        drawn_since_copy = True
-        for i in range(n):
-            if drawn_since_copy:  # B_prev = Ω(D_i); unchanged if slice i − 1 drew nothing
-                ctx.copy_framebuffer(prev_fbo, fbo)
-                drawn_since_copy = False
-            fbo.use()
-            set_uniforms(prog, slice=i)
-            if clip_slices:
-                count = starts[i + 1] - starts[i]
-                if count:
-                    vao.render(moderngl.LINES, vertices=2 * int(count), first=2 * int(starts[i]))
-                    drawn_since_copy = True
-            elif len(seg_rep):
-                vao.render(moderngl.LINES, vertices=2 * len(seg_rep))
-                drawn_since_copy = True
-            count = int(plane_starts[i + 1] - plane_starts[i])
-            if count:
-                previous.use(0)
-                current.use(1)
-                set_uniforms(comp, first=int(plane_starts[i]), count=count, plane=i)
-                comp.run(group_x=workgroups(count))
-                ctx.memory_barrier()
-        check(ctx, f"{n} opacity-map passes")
-        return np.frombuffer(omega_buf.read(), dtype="f4").copy()
-    finally:
-        ctx.disable(moderngl.BLEND)
-        release(ctx, vao, ibo, id_buf, omega_buf, fbo, prev_fbo, current, previous)
-
-
-def _exact_opacity(ctx, progs, scene, strands, frame: LightFrame, points: Points):
-    """Ω without slicing: per-texel fragment lists (count, prefix sum, fill), then each
-    point sums the alpha strictly nearer the light in its 3 × 3 texels."""
-    import moderngl
-
-    r = scene.shadows.resolution
-    ibo = strands.index_buffer(frame.drawable)
-    target = ctx.texture((r, r), 1, dtype="f4")  # the passes write only to buffers
-    fbo = ctx.framebuffer(color_attachments=[target])
-    counts = ctx.buffer(np.zeros(r * r, "u4").tobytes())
-    cursor = ctx.buffer(np.zeros(r * r, "u4").tobytes())
-    prog = progs["light_list"]
-    vao = strands.vertex_array(prog, ibo)
-    buffers = [ibo, target, fbo, counts, cursor, vao]
-    try:
-        fbo.use()
-        ctx.viewport = (0, 0, r, r)
-        ctx.disable(moderngl.DEPTH_TEST | moderngl.BLEND)
-        set_uniforms(prog, fill=False, **light_pass_uniforms(scene, frame))
-        counts.bind_to_storage_buffer(0)
-        cursor.bind_to_storage_buffer(1)
-        check(ctx, "exact opacity set-up")
-        draw = 2 * len(frame.drawable)
-        if draw:
-            vao.render(moderngl.LINES, vertices=draw)
-        ctx.memory_barrier()
-        check(ctx, "exact opacity: count pass")
-        n_per_texel = np.frombuffer(counts.read(), dtype="u4")
-        offsets_np = (np.cumsum(n_per_texel) - n_per_texel).astype("u4")
-        total = int(n_per_texel.sum())
-        offsets = ctx.buffer(offsets_np.tobytes())
-        entries = ctx.buffer(reserve=max(8 * total, 8))  # fires without light-space fragments
-        buffers += [offsets, entries]
-        offsets.bind_to_storage_buffer(2)
-        entries.bind_to_storage_buffer(3)
-        set_uniforms(prog, fill=True)
-        if draw:
-            vao.render(moderngl.LINES, vertices=draw)
-        ctx.memory_barrier()
-        check(ctx, "exact opacity: fill pass")
-        seen = np.flatnonzero(frame.seen).astype("u4")
-        ids = ctx.buffer(seen.tobytes() if seen.size else b"\0" * 4)  # fires when no point is seen
-        omega_buf = ctx.buffer(np.zeros(points.count, "f4").tobytes())
-        buffers += [ids, omega_buf]
-        comp = progs["omega_exact"]
-        points.buffer.bind_to_storage_buffer(0)
-        ids.bind_to_storage_buffer(1)
-        omega_buf.bind_to_storage_buffer(2)
-        counts.bind_to_storage_buffer(3)
-        offsets.bind_to_storage_buffer(4)
-        entries.bind_to_storage_buffer(5)
-        set_uniforms(comp, count=len(seen), resolution=r, **view_uniforms("light", frame.view))
-        if len(seen):
-            comp.run(group_x=workgroups(len(seen)))
-        ctx.memory_barrier()
-        check(ctx, "exact opacity passes")
-        return np.frombuffer(omega_buf.read(), dtype="f4").copy()
-    finally:
-        release(ctx, *buffers)
