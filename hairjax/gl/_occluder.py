@@ -14,9 +14,9 @@ from .._scene import Scene
 from ._buffers import Points, Strands
 from ._context import check, release
 from ._programs import workgroups
-from ._uniforms import set_uniforms, vec, view_uniforms
+from ._uniforms import light_uniforms, set_uniforms, vec, view_uniforms
 
-__all__ = ["OccluderLight", "OccluderSurface", "occluder_light", "occluder_shadow"]
+__all__ = ["OccluderLight", "OccluderSurface", "draw_occluder_color", "occluder_light", "occluder_shadow"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -139,3 +139,33 @@ def occluder_shadow(ctx, progs, scene: Scene, strands: Strands, points: Points,
     omega = surface.per_pixel(receiver_omega, 0.0)[::-1].astype(np.float64)
     vis = surface.per_pixel(v[p:], 1.0)[::-1].astype(np.float64)
     return OccluderLight(v[:p], omega.reshape(h, w), vis.reshape(h, w))
+
+
+def draw_occluder_color(ctx, progs, scene: Scene, params, surface: OccluderSurface,
+                        occluder: OccluderLight | None, owned: list) -> None:
+    """§13: the occluder's colour k·ambient + τ·k·light·max(N·L, 0)·V where `surface` (the
+    camera's) covers the pixel centre, into the bound framebuffer (blending and depth test
+    off); Ω and V from `occluder`, Ω = 0 and V = 1 without it. The GL objects it creates
+    go to `owned`, for the caller to release with its pass (also when this raises)."""
+    import moderngl
+
+    w, h = scene.camera.width, scene.camera.height
+    if occluder is None:
+        omega_img = np.zeros((h, w), "f4")
+        vis_img = np.ones((h, w), "f4")
+    else:  # the per-pixel arrays have row 0 at the top, textures at the bottom
+        omega_img = np.ascontiguousarray(occluder.omega[::-1], "f4")
+        vis_img = np.ascontiguousarray(occluder.surface_visibility[::-1], "f4")
+    omega_tex = ctx.texture((w, h), 1, omega_img.tobytes(), dtype="f4")
+    vis_tex = ctx.texture((w, h), 1, vis_img.tobytes(), dtype="f4")
+    owned += [omega_tex, vis_tex]
+    prog = progs["occluder_color"]
+    for unit, tex in enumerate((surface.position, surface.normal, omega_tex, vis_tex)):
+        tex.use(unit)
+    set_uniforms(prog, position_map=0, normal_map=1, omega_map=2, visibility_map=3,
+                 albedo=vec(scene.occluder.color), ambient=vec(params.ambient),
+                 kappa=float(params.kappa), **light_uniforms(scene))
+    occ_vao = ctx.vertex_array(prog, [])
+    owned.append(occ_vao)
+    occ_vao.render(moderngl.TRIANGLES, vertices=3)
+    check(ctx, "occluder colour pass")
