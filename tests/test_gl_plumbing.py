@@ -108,24 +108,24 @@ def test_no_shadow_passes_without_shadows(gl, tmp_path, monkeypatch):
     def forbidden(*args, **kwargs):
         raise AssertionError("shadow passes ran for a scene without shadows")
 
-    monkeypatch.setattr(_renderer, "_opacity_maps", forbidden)
-    monkeypatch.setattr(_renderer, "_exact_opacity", forbidden)
+    monkeypatch.setattr(_renderer, "opacity_maps", forbidden)
+    monkeypatch.setattr(_renderer, "exact_opacity", forbidden)
     result = render_gl(small_scene(tmp_path, "none"))
     assert result.omega is None and "shadows" not in result.timings
 
 
 def test_slice_clipping_draws_less_and_changes_nothing(gl, tmp_path, monkeypatch):
     """kim-2003 §4.2: drawing only the segments that meet each slice gives the same Ω."""
-    from hairjax.gl import _renderer, render_gl
+    from hairjax.gl import _buffers, render_gl
 
     drawn = []
-    original = _renderer._Strands.index_buffer
+    original = _buffers.Strands.index_buffer
 
     def counting(self, segment_ids):
         drawn.append(len(segment_ids))
         return original(self, segment_ids)
 
-    monkeypatch.setattr(_renderer._Strands, "index_buffer", counting)
+    monkeypatch.setattr(_buffers.Strands, "index_buffer", counting)
     scene = small_scene(tmp_path)
     clipped = render_gl(scene, clip_slices=True)
     n_clipped = drawn[0]

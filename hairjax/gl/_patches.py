@@ -20,7 +20,7 @@ from .._patches import Patches
 from .._projection import View
 from ._context import check, release
 from ._programs import programs
-from ._renderer import _set, _view_uniforms
+from ._uniforms import set_uniforms, view_uniforms
 
 __all__ = ["render_patches_gl"]
 
@@ -56,8 +56,8 @@ def render_patches_gl(ctx, view: View, patches: Patches, point_colors: np.ndarra
                                           (cbo, "3f", "in_color")],
                                    index_buffer=ibo, index_element_size=4)
             objects += [vao, vbo, ubo, cbo, ibo]
-            _set(prog, raster_size=(float(w), float(h)), depth_range=(0.0, far),
-                 core=float(patches.core), **_view_uniforms("view", view))
+            set_uniforms(prog, raster_size=(float(w), float(h)), depth_range=(0.0, far),
+                         core=float(patches.core), **view_uniforms("view", view))
             ctx.enable(moderngl.DEPTH_TEST)
             ctx.front_face = "ccw"
             passes = [  # (opaque fragments?, culled faces, Z writes, Z test, colour writes, blend)
@@ -67,7 +67,7 @@ def render_patches_gl(ctx, view: View, patches: Patches, point_colors: np.ndarra
                 (False, "back", True, "<", True, True),     # 4. transparent front faces
             ]
             for opaque, cull, z_write, z_test, colour, blend in passes:
-                _set(prog, opaque_pass=opaque)
+                set_uniforms(prog, opaque_pass=opaque)
                 if cull is None:
                     ctx.disable(moderngl.CULL_FACE)
                 else:

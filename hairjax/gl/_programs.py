@@ -12,7 +12,15 @@ from .. import _constants
 from .._shading import shading_model_class, shading_model_names
 from ._context import GLError
 
-__all__ = ["programs", "constants_glsl", "shader_source"]
+__all__ = ["COMPUTE_GROUP", "programs", "constants_glsl", "shader_source", "workgroups"]
+
+COMPUTE_GROUP = 64  # local_size_x of every compute shader (shaders/*.comp)
+
+
+def workgroups(count: int) -> int:
+    """How many work groups of `COMPUTE_GROUP` invocations cover `count` items."""
+    return (count + COMPUTE_GROUP - 1) // COMPUTE_GROUP
+
 
 def constants_glsl() -> str:
     """GLSL `const` declarations for every constant in hairjax/_constants.py."""

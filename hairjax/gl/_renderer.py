@@ -1,11 +1,14 @@
-"""The GL renderer: docs/model.md on OpenGL through moderngl.
+"""The GL renderer: docs/model.md on OpenGL through moderngl; `render_gl` runs the passes.
 
 Same inputs as the JAX renderer and the same NumPy code for what is not per-pixel maths:
 the camera's draw order (`visibility_order`), the light's frame (`light_frame`), each
 point's plane (`point_planes`) and the tangents. Everything per pixel or per texel runs in
-shaders: ribbons and coverage, Kajiya-Kay at points, the opacity maps (kim-2003 Routine 2:
-two buffers, additive slices, Ω per slice of points) or the exact Ω from per-texel fragment
-lists, the occluder and the far-to-near "over" blending.
+shaders, one module per pass: the occluder's surface and shadow (`_occluder`, §13), Ω by
+opacity maps (`_opacity_maps`, kim-2003 Routine 2: two buffers, additive slices, Ω per
+slice of points) or exactly from per-texel fragment lists (`_exact_opacity`), and the
+camera pass (`_camera_pass`: ribbons and coverage, shading at points, the far-to-near
+"over" blending); `_shading` holds what depends on the shading model, `_buffers` the
+strands on the GPU, `_patches` the hair-patch passes (§18).
 """
 
 from __future__ import annotations
@@ -15,46 +18,21 @@ import time
 
 import numpy as np
 
-from .._occluder import drawable_triangles, occluder_extent, occluder_light_view, vertex_normals
-from .._projection import View, camera_view
-from .._scene import Scene
+from .._patches import scene_patches, scene_point_colors
+from .._projection import camera_view
 from .._setup import visibility_order
-from .._shading._streaks import strand_coordinates, streak_prefix, streak_texture
-from .._shadows import LightFrame, OpacityMaps, light_frame, point_planes, with_receivers
-from .._strands import tangents
-from ._context import check, get_context, release
+from .._scene import Scene
+from .._shadows import light_frame, with_receivers
+from ._buffers import Points, Strands
+from ._camera_pass import camera_depth_far, camera_pass
+from ._context import get_context
+from . import _exact_opacity, _opacity_maps  # noqa: F401 (they register their passes)
+from ._occluder import OccluderLight, OccluderSurface, occluder_shadow
+from ._patches import render_patches_gl
 from ._programs import programs
+from ._shadow_passes import gl_shadow_pass
 
-__all__ = ["GLResult", "OccluderLight", "occluder_light", "render_gl"]
-
-_GROUP = 64  # local size of the compute shaders
-
-
-@dataclasses.dataclass(frozen=True)
-class OccluderLight:
-    """The occluder's part of the light (docs/model.md §13): `visibility` V at the strand
-    points (`[P]`, 0 where the occluder shadows them); per pixel (`[H, W]`, row 0 at the
-    top) at the occluder's surface point: `omega` Ω (0 where it does not cover the pixel)
-    and `surface_visibility` V (1 there)."""
-
-    visibility: np.ndarray
-    omega: np.ndarray
-    surface_visibility: np.ndarray
-
-
-def occluder_light(scene: Scene, geometry) -> OccluderLight | None:
-    """The JAX renderer's `OccluderLight` (from its `Geometry`), to hand to `render_gl`
-    with its Ω; None where the scene's occluder takes no part in the light."""
-    if geometry.occluder_pixel is None or geometry.occluder_omega is None:
-        return None
-    cam = scene.camera
-    pixel = np.asarray(geometry.occluder_pixel)
-    omega = np.zeros(cam.width * cam.height)
-    omega[pixel] = np.asarray(geometry.occluder_omega)
-    surface = np.ones(cam.width * cam.height)
-    surface[pixel] = np.asarray(geometry.occluder_visibility)
-    return OccluderLight(np.asarray(geometry.light_visibility, np.float64),
-                         omega.reshape(cam.height, cam.width), surface.reshape(cam.height, cam.width))
+__all__ = ["GLResult", "render_gl"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -67,82 +45,6 @@ class GLResult:
     omega: np.ndarray | None
     timings: dict
     occluder: OccluderLight | None = None
-
-
-def _set(prog, **values) -> None:
-    """Set uniforms; names the compiler removed as unused are skipped."""
-    for name, value in values.items():
-        try:
-            uniform = prog[name]
-        except KeyError:
-            continue
-        uniform.value = value
-
-
-def _vec(v) -> tuple:
-    """A vector as the tuple of Python floats a moderngl uniform takes."""
-    return tuple(float(x) for x in np.asarray(v).ravel())
-
-
-def _view_uniforms(prefix: str, view) -> dict:
-    return {f"{prefix}.origin": _vec(view.origin), f"{prefix}.forward": _vec(view.forward),
-            f"{prefix}.right": _vec(view.right), f"{prefix}.up": _vec(view.up),
-            f"{prefix}.focal": float(view.focal), f"{prefix}.center": (float(view.cx), float(view.cy)),
-            # Fires for orthographic (directional-light) views: near = −inf, unused there.
-            f"{prefix}.near": float(view.near) if np.isfinite(view.near) else -1e30,
-            f"{prefix}.perspective": bool(view.perspective)}
-
-
-class _Strands:
-    """The strands on the GPU: one buffer per point attribute, shared by every pass."""
-
-    def __init__(self, ctx, scene: Scene):
-        s = scene.strands
-        per_point = s.strand_of_point
-        self.ctx = ctx
-        self.count = s.num_points
-        f4 = lambda a: ctx.buffer(np.ascontiguousarray(a, dtype="f4").tobytes())  # noqa: E731
-        tangent = tangents(s.points, s.offsets)
-        color = s.color if s.color is not None else np.ones_like(s.points)
-        alpha = s.alpha[per_point]
-        self.segments = s.segments()
-        self.extra = []  # per-point inputs of §17 (Scheuermann) and §16 (streaks), when used
-        inputs = scene.shading.point_inputs(s, tangent)  # the model's own (§17's), or none
-        if inputs.color_factor is not None:
-            color = color * inputs.color_factor
-        if inputs.segment_alpha is not None:
-            # ribbon.geom takes a segment's alpha from its first point.
-            alpha = alpha.copy()
-            alpha[self.segments[:, 0]] *= inputs.segment_alpha
-        self.extra = [(f4(a), fmt, name) for a, fmt, name in scene.shading.gl_attributes(inputs)]
-        self.position = f4(s.points)
-        self.tangent = f4(tangent)
-        self.color = f4(color)
-        self.alpha = f4(alpha)
-        self.width = f4(s.width[per_point])
-        self.omega = f4(np.zeros(s.num_points))
-        self.visibility = f4(np.ones(s.num_points))
-        if scene.streaks is not None:  # §16: each point's hair coordinate u_i
-            u = strand_coordinates(scene.streaks, s.num_strands)[per_point]
-            self.extra.append((f4(u), "f", "in_streak"))
-
-    def vertex_array(self, prog, index_buffer):
-        return self.ctx.vertex_array(prog, [
-            (self.position, "3f", "in_position"), (self.tangent, "3f", "in_tangent"),
-            (self.color, "3f", "in_color"), (self.alpha, "f", "in_alpha"),
-            (self.width, "f", "in_width"), (self.omega, "f", "in_omega"),
-            (self.visibility, "f", "in_visibility"), *self.extra,
-        ], index_buffer=index_buffer, index_element_size=4, skip_errors=True)
-
-    def index_buffer(self, segment_ids: np.ndarray):
-        """Endpoints of the given segments, in order, for GL_LINES."""
-        pairs = self.segments[segment_ids].astype("u4")
-        return self.ctx.buffer(pairs.tobytes() if pairs.size else b"\0" * 8)  # no segments: GL needs ≥ 1 byte
-
-    def release(self):
-        for b in (self.position, self.tangent, self.color, self.alpha, self.width, self.omega,
-                  self.visibility, *(buffer for buffer, _, _ in self.extra)):
-            b.release()
 
 
 def render_gl(scene: Scene, params=None, *,
@@ -175,14 +77,14 @@ def render_gl(scene: Scene, params=None, *,
         clock = now
 
     view, _, depth, _, order = visibility_order(scene, order)
-    depth_far = _depth_far(scene, view, depth)
+    depth_far = camera_depth_far(scene, view, depth)
     lighting = scene.occluder is not None and scene.shadows.casts
-    strands = _Strands(ctx, scene)
+    strands = Strands(ctx, scene)
     surface = None
     try:
         lap("upload")
         if scene.occluder is not None:
-            surface = _OccluderSurface(ctx, progs, scene.occluder, view, (0.0, depth_far))
+            surface = OccluderSurface(ctx, progs, scene.occluder, view, (0.0, depth_far))
             lap("occluder surface")
         if omega is not None:
             omega = np.asarray(omega, dtype="f4").reshape(strands.count)
@@ -193,25 +95,23 @@ def render_gl(scene: Scene, params=None, *,
         elif scene.shadows.casts:
             frame = light_frame(scene.strands.points, strands.segments, scene.strands.width,
                                 scene.light, scene.shadows.resolution, scene.strands.width_units)
-            points = _Points(ctx, strands, None if surface is None else surface.points)
+            points = Points(ctx, strands, None if surface is None else surface.points)
             try:
                 frame = with_receivers(frame, points.receivers)
-                if isinstance(scene.shadows, OpacityMaps):
-                    omega_all = _opacity_maps(ctx, progs, scene, strands, frame, clip_slices, points)
-                else:
-                    omega_all = _exact_opacity(ctx, progs, scene, strands, frame, points)
+                omega_all = gl_shadow_pass(scene.shadows.method)(ctx, progs, scene, strands, frame,
+                                                                 points, clip_slices=clip_slices)
                 omega = omega_all[:strands.count].copy()
                 strands.omega.write(omega.tobytes())
                 lap("shadows")
                 if lighting:
-                    occluder = _occluder_shadow(ctx, progs, scene, strands, points, surface,
-                                                omega_all[strands.count:])
+                    occluder = occluder_shadow(ctx, progs, scene, strands, points, surface,
+                                               omega_all[strands.count:])
                     lap("occluder shadow")
             finally:
                 points.release()
         if lighting:
             strands.visibility.write(np.asarray(occluder.visibility, "f4").tobytes())
-        image = _camera_pass(ctx, progs, scene, params, strands, view, order, depth_far, surface,
+        image = camera_pass(ctx, progs, scene, params, strands, view, order, depth_far, surface,
                              occluder if lighting else None)
         lap("camera pass")
         return GLResult(image, omega, timings, occluder if lighting else None)
@@ -225,9 +125,6 @@ def _render_patches(scene: Scene, params, omega, order, occluder) -> GLResult:
     """docs/model.md §18: slide 17's four passes in GL over the patch mesh. The per-point
     colours come from the JAX shading (`scene_point_colors`): GL here checks visibility
     and compositing, not the shading (the ribbon path checks that)."""
-    from .._patches import scene_patches, scene_point_colors
-    from ._patches import render_patches_gl
-
     if omega is not None or order is not None or occluder is not None:
         raise ValueError("a hair-patch scene takes none of `omega`, `order`, `occluder`")
     clock = time.perf_counter()
@@ -237,419 +134,3 @@ def _render_patches(scene: Scene, params, omega, order, occluder) -> GLResult:
                               colors, scene.background)
     timings = {"point colours (JAX)": shaded - clock, "four passes": time.perf_counter() - shaded}
     return GLResult(image, None, timings)
-
-
-def _depth_far(scene: Scene, view: View, depth: np.ndarray) -> float:
-    """The camera depth mapped to 1 in the depth buffer: anything drawn lies in (near, far)."""
-    cam = scene.camera
-    # No floor at 1 unit (was initial=1.0): depth/far is stored in 2⁻²⁴ steps, tiny scenes lost digits.
-    far = 2.0 * float(max(np.max(depth, initial=0.0), cam.near))
-    occ = scene.occluder
-    if occ is not None and occ.kind == "sphere":
-        c = np.asarray(occ.center) - view.origin
-        far = max(far, 2.0 * (float(c @ view.forward) + occ.radius))
-    elif occ is not None:
-        drawn = occ.triangles[drawable_triangles(view, occ.vertices, occ.triangles)]
-        if drawn.size:  # fires unless every triangle reaches the near plane
-            far = max(far, 2.0 * float(np.max((occ.vertices[drawn] - view.origin) @ view.forward)))
-    return far
-
-
-class _OccluderSurface:
-    """The occluder drawn into a view's raster (§9, §13): per pixel centre its surface
-    point and normal (RGBA32F, w = 1 where covered) and the depth buffer."""
-
-    def __init__(self, ctx, progs, occluder, view: View, depth_range: tuple[float, float]):
-        import moderngl
-
-        self.ctx = ctx
-        w, h = view.width, view.height
-        self.position = ctx.texture((w, h), 4, dtype="f4")
-        self.normal = ctx.texture((w, h), 4, dtype="f4")
-        self.depth = ctx.depth_texture((w, h))
-        fbo = ctx.framebuffer(color_attachments=[self.position, self.normal],
-                              depth_attachment=self.depth)
-        buffers = [fbo]
-        try:
-            fbo.use()
-            ctx.viewport = (0, 0, w, h)
-            fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
-            ctx.disable(moderngl.BLEND)
-            ctx.enable(moderngl.DEPTH_TEST)
-            ctx.depth_func = "<"
-            fbo.depth_mask = True
-            uniforms = dict(raster_size=(float(w), float(h)), depth_range=depth_range,
-                            **_view_uniforms("view", view))
-            if occluder.kind == "sphere":
-                prog = progs["occluder_sphere"]
-                _set(prog, center=_vec(occluder.center), radius=float(occluder.radius), **uniforms)
-                vao = ctx.vertex_array(prog, [])
-                buffers.append(vao)
-                vao.render(moderngl.TRIANGLES, vertices=3)
-            else:
-                prog = progs["occluder_mesh"]
-                _set(prog, **uniforms)
-                tri = occluder.triangles[drawable_triangles(view, occluder.vertices, occluder.triangles)]
-                if tri.size:  # fires unless every triangle reaches the near plane
-                    f4 = lambda a: ctx.buffer(np.ascontiguousarray(a, "f4").tobytes())  # noqa: E731
-                    vbo = f4(occluder.vertices)
-                    nbo = f4(vertex_normals(occluder.vertices, occluder.triangles))
-                    ibo = ctx.buffer(np.ascontiguousarray(tri, "u4").tobytes())
-                    vao = ctx.vertex_array(prog, [(vbo, "3f", "in_position"), (nbo, "3f", "in_normal")],
-                                           index_buffer=ibo, index_element_size=4)
-                    buffers += [vao, vbo, nbo, ibo]
-                    vao.render(moderngl.TRIANGLES, vertices=tri.size)
-            check(ctx, "occluder surface pass")
-            raw = np.frombuffer(self.position.read(), dtype="f4").reshape(h, w, 4)
-            self.covered = raw[..., 3] > 0  # GL's rows: row 0 at the bottom
-            self.points = raw[self.covered][:, :3].astype(np.float64)
-        finally:
-            ctx.disable(moderngl.DEPTH_TEST)
-            release(ctx, *buffers)
-
-    def per_pixel(self, values: np.ndarray, fill: float) -> np.ndarray:
-        """Values at `points` scattered to a `float32[H, W]` texture image (GL's rows)."""
-        image = np.full(self.covered.shape, fill, "f4")
-        image[self.covered] = values
-        return image
-
-    def release(self):
-        release(self.ctx, self.position, self.normal, self.depth)
-
-
-class _Points:
-    """The points whose Ω the shadow passes compute: the strand points, then the
-    occluder's surface points (`receivers`, §13) when there are any."""
-
-    def __init__(self, ctx, strands, receivers):
-        self.receivers = receivers if receivers is not None and len(receivers) else None
-        self.count = strands.count + (0 if self.receivers is None else len(self.receivers))
-        self.own = None
-        self.buffer = strands.position
-        if self.receivers is not None:
-            s_pos = np.frombuffer(strands.position.read(), "f4").reshape(-1, 3)
-            self.own = ctx.buffer(np.concatenate([s_pos, self.receivers.astype("f4")]).tobytes())
-            self.buffer = self.own
-
-    def release(self):
-        if self.own is not None:
-            self.own.release()
-
-
-def _occluder_shadow(ctx, progs, scene: Scene, strands, points: _Points, surface,
-                     receiver_omega: np.ndarray) -> OccluderLight:
-    """§13: the occluder drawn in its light view (`occluder_light_view`), then V at the
-    strand points and at the occluder's surface points by the depth test."""
-    r = scene.shadows.resolution
-    view = occluder_light_view(scene.light, scene.strands.points, scene.occluder, r)
-    _, z = view.project(np.concatenate([scene.strands.points, occluder_extent(scene.occluder)]))
-    # The light's depth range with room on both sides: [0, 1) holds every surface point.
-    lo, hi = float(z.min()), float(z.max())
-    pad = 0.5 * (hi - lo) + 1e-6 * max(abs(lo), abs(hi), 1.0)
-    light_surface = _OccluderSurface(ctx, progs, scene.occluder, view, (lo - pad, hi + pad))
-    out = ctx.buffer(reserve=4 * max(points.count, 1))
-    comp = progs["occluder_visibility"]
-    try:
-        light_surface.position.use(0)
-        points.buffer.bind_to_storage_buffer(0)
-        out.bind_to_storage_buffer(1)
-        _set(comp, light_position_map=0, count=points.count, resolution=r,
-             **_view_uniforms("light", view))
-        comp.run(group_x=(points.count + _GROUP - 1) // _GROUP)
-        ctx.memory_barrier()
-        check(ctx, "occluder shadow")
-        v = np.frombuffer(out.read(), "f4")[:points.count].astype(np.float64)
-    finally:
-        release(ctx, out)
-        light_surface.release()
-    p = strands.count
-    h, w = surface.covered.shape
-    omega = surface.per_pixel(receiver_omega, 0.0)[::-1].astype(np.float64)
-    vis = surface.per_pixel(v[p:], 1.0)[::-1].astype(np.float64)
-    return OccluderLight(v[:p], omega.reshape(h, w), vis.reshape(h, w))
-
-
-def _light_uniforms(scene: Scene) -> dict:
-    light = scene.light
-    if light.kind == "directional":
-        d = -np.asarray(light.direction, dtype=np.float64)
-        vector, point = d / np.linalg.norm(d), False
-    else:
-        vector, point = np.asarray(light.position, dtype=np.float64), True
-    return {"light_vector": _vec(vector), "point_light": point,
-            "light_rgb": _vec(light.color)}
-
-
-def _camera_pass(ctx, progs, scene: Scene, params, strands, view: View, order,
-                 depth_far: float, surface: _OccluderSurface | None,
-                 occluder: OccluderLight | None) -> np.ndarray:
-    import moderngl
-
-    cam = scene.camera
-    w, h = cam.width, cam.height
-    color = ctx.texture((w, h), 4, dtype="f4")
-    # Depths map to [0, 1) for the depth test: anything drawn lies in (near, depth_far); the
-    # occluder's surface pass already wrote its depths.
-    own_depth = ctx.depth_texture((w, h)) if surface is None else None
-    depth_tex = own_depth if surface is None else surface.depth
-    fbo = ctx.framebuffer(color_attachments=[color], depth_attachment=depth_tex)
-    ibo = strands.index_buffer(order)
-    extra = []
-    table = _lookup_texture(ctx, scene, params)
-    streak = _streak_texture(ctx, scene)
-    try:
-        fbo.use()
-        ctx.viewport = (0, 0, w, h)
-        bg = _vec(scene.background)
-        fbo.depth_mask = surface is None  # keep the occluder's depths
-        fbo.clear(*bg, 0.0, depth=1.0)
-        common = dict(raster_size=(float(w), float(h)), depth_far=depth_far,
-                      world_width=scene.strands.width_units == "world",
-                      **_view_uniforms("view", view), **_light_uniforms(scene))
-        if surface is not None:
-            # §13: the occluder's colour where its surface pass covered the pixel centre.
-            ctx.disable(moderngl.BLEND | moderngl.DEPTH_TEST)
-            fbo.depth_mask = False
-            if occluder is None:
-                omega_img = np.zeros((h, w), "f4")
-                vis_img = np.ones((h, w), "f4")
-            else:  # the per-pixel arrays have row 0 at the top, textures at the bottom
-                omega_img = np.ascontiguousarray(occluder.omega[::-1], "f4")
-                vis_img = np.ascontiguousarray(occluder.surface_visibility[::-1], "f4")
-            omega_tex = ctx.texture((w, h), 1, omega_img.tobytes(), dtype="f4")
-            vis_tex = ctx.texture((w, h), 1, vis_img.tobytes(), dtype="f4")
-            extra += [omega_tex, vis_tex]
-            prog = progs["occluder_color"]
-            for unit, tex in enumerate((surface.position, surface.normal, omega_tex, vis_tex)):
-                tex.use(unit)
-            _set(prog, position_map=0, normal_map=1, omega_map=2, visibility_map=3,
-                 albedo=_vec(scene.occluder.color), ambient=_vec(params.ambient),
-                 kappa=float(params.kappa), **_light_uniforms(scene))
-            occ_vao = ctx.vertex_array(prog, [])
-            extra.append(occ_vao)
-            occ_vao.render(moderngl.TRIANGLES, vertices=3)
-            check(ctx, "occluder colour pass")
-            ctx.enable(moderngl.DEPTH_TEST)
-            ctx.depth_func = "<"
-        else:
-            ctx.disable(moderngl.DEPTH_TEST)
-        # kim-2003 §3: hair far to near, depth test on (if anything wrote depth), no depth
-        # writes; "over" for colour, and 1 − Π(1 − α) for alpha.
-        fbo.depth_mask = False
-        ctx.enable(moderngl.BLEND)
-        ctx.blend_func = (moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA,
-                          moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA)
-        ctx.blend_equation = moderngl.FUNC_ADD
-        prog = progs["camera"]
-        _set(prog, shade=True, eye=_vec(view.origin), **_shading_uniforms(scene, params), **common)
-        if table is not None:
-            table.use(0)
-            _set(prog, kajiya_kay_table=0)
-        _set(prog, streaks=streak is not None)
-        if streak is not None:
-            streak.use(1)
-            _set(prog, streak_texture=1, streak_texels=scene.streaks.texels,
-                 streak_width=float(scene.streaks.width))
-        vao = strands.vertex_array(prog, ibo)
-        if len(order):
-            vao.render(moderngl.LINES, vertices=2 * len(order))
-        vao.release()
-        check(ctx, "camera pass")
-        data = np.frombuffer(color.read(), dtype="f4").reshape(h, w, 4)
-        return data[::-1].copy()  # GL's row 0 is the bottom
-    finally:
-        ctx.disable(moderngl.BLEND | moderngl.DEPTH_TEST)
-        release(ctx, ibo, fbo, color, *([own_depth] if own_depth is not None else []), *extra, table, streak)
-
-
-def _lookup_texture(ctx, scene: Scene, params):
-    """§14: the model's table (`gl_table`, built by the JAX code) as an RG32F texture
-    sampled with LINEAR filtering and CLAMP_TO_EDGE; None for models without one."""
-    import moderngl
-
-    table = scene.shading.gl_table(params)
-    if table is None:
-        return None
-    n = table.shape[0]
-    tex = ctx.texture((n, n), 2, np.ascontiguousarray(table, dtype="f4").tobytes(), dtype="f4")
-    tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
-    tex.repeat_x = tex.repeat_y = False  # CLAMP_TO_EDGE
-    return tex
-
-
-def _streak_texture(ctx, scene: Scene):
-    """§16: texel k = (N_{k mod m}, P_k), k = 0 … m, as an RG32F texture read with
-    texelFetch (the mean over a hair's span is computed from it exactly); None without streaks."""
-    if scene.streaks is None:
-        return None
-    texture = streak_texture(scene.streaks)
-    data = np.stack([np.append(texture, texture[0]), streak_prefix(texture)], axis=1)
-    return ctx.texture((len(data), 1), 2, np.ascontiguousarray(data, dtype="f4").tobytes(), dtype="f4")
-
-
-def _shading_uniforms(scene: Scene, params) -> dict:
-    """The `shading` uniforms of the camera pass: the model's branch and κ, and the
-    model's own (`gl_uniforms`)."""
-    model = scene.shading
-    if model.gl_id is None:
-        raise TypeError(f"shading model {model.name!r} has no GL renderer (gl_id is None)")
-    if not isinstance(params, model.params_type):
-        raise TypeError(f"shading model {model.name!r} takes {model.params_type.__name__}, "
-                        f"got {type(params).__name__}")
-    return {"shading.model": model.gl_id, "shading.kappa": float(params.kappa),
-            **model.gl_uniforms(params)}
-
-
-def _light_pass_uniforms(scene: Scene, frame: LightFrame) -> dict:
-    r = scene.shadows.resolution
-    return dict(raster_size=(float(r), float(r)), shade=False,
-                world_width=scene.strands.width_units == "world",
-                light_perspective=bool(frame.view.perspective), resolution=r,
-                **_view_uniforms("view", frame.view))
-
-
-def _opacity_maps(ctx, progs, scene, strands, frame: LightFrame, clip_slices: bool, points: _Points):
-    """kim-2003 Routine 2: B_current accumulates slice after slice (GL_ONE, GL_ONE), the
-    points of slice i are evaluated between B_prev = Ω(D_i) and B_current = Ω(D_{i+1})."""
-    import moderngl
-
-    n, r = scene.shadows.maps, scene.shadows.resolution
-    segs = strands.segments[frame.drawable]
-    ids = frame.drawable
-    # Which slices each drawable segment's fragments can fall in (depth is monotone
-    # between the endpoints, so its range is the endpoints' range).
-    z = frame.depth
-    u0 = np.clip(np.floor(frame.slice_coordinate(np.minimum(z[segs[:, 0]], z[segs[:, 1]]), n)), 0, n)
-    u1 = np.clip(np.floor(frame.slice_coordinate(np.maximum(z[segs[:, 0]], z[segs[:, 1]]), n)), 0, n)
-    # The clips fire at D_N (slice N, drawn in no pass: such a segment gets no span) and by rounding.
-    u0, u1 = u0.astype(np.int64), np.minimum(u1.astype(np.int64), n - 1)
-    if clip_slices:
-        spans = np.maximum(u1 - u0 + 1, 0)
-        seg_rep = np.repeat(ids, spans)
-        within = np.arange(spans.sum()) - np.repeat(np.cumsum(spans) - spans, spans)
-        slice_rep = np.repeat(u0, spans) + within
-        order = np.argsort(slice_rep, kind="stable")
-        seg_rep, slice_rep = seg_rep[order], slice_rep[order]
-        starts = np.searchsorted(slice_rep, np.arange(n + 1))
-    else:
-        seg_rep = ids
-        starts = None
-    ibo = strands.index_buffer(seg_rep)
-
-    plane, _ = point_planes(frame, n)
-    seen = np.flatnonzero(frame.seen)
-    by_plane = seen[np.argsort(plane[seen], kind="stable")]
-    plane_starts = np.searchsorted(plane[by_plane], np.arange(n + 1))
-    id_buf = ctx.buffer(by_plane.astype("u4").tobytes() if by_plane.size else b"\0" * 4)  # no point seen
-    omega_buf = ctx.buffer(np.zeros(points.count, "f4").tobytes())
-
-    current = ctx.texture((r, r), 1, dtype="f4")
-    previous = ctx.texture((r, r), 1, dtype="f4")
-    for tex in (current, previous):
-        tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-    fbo = ctx.framebuffer(color_attachments=[current])
-    prev_fbo = ctx.framebuffer(color_attachments=[previous])
-    prog, comp = progs["light_slice"], progs["omega_maps"]
-    vao = strands.vertex_array(prog, ibo)
-    try:
-        fbo.use()
-        ctx.viewport = (0, 0, r, r)
-        fbo.clear(0.0, 0.0, 0.0, 0.0)
-        ctx.disable(moderngl.DEPTH_TEST)
-        ctx.enable(moderngl.BLEND)
-        ctx.blend_func = moderngl.ONE, moderngl.ONE
-        _set(prog, zmin=float(frame.zmin), span=float(frame.span), maps=n,
-             **_light_pass_uniforms(scene, frame))
-        _set(comp, zmin=float(frame.zmin), span=float(frame.span), maps=n, resolution=r,
-             prev_map=0, cur_map=1, **_view_uniforms("light", frame.view))
-        points.buffer.bind_to_storage_buffer(0)
-        id_buf.bind_to_storage_buffer(1)
-        omega_buf.bind_to_storage_buffer(2)
-        drawn_since_copy = True
-        for i in range(n):
-            if drawn_since_copy:  # B_prev = Ω(D_i); unchanged if slice i − 1 drew nothing
-                ctx.copy_framebuffer(prev_fbo, fbo)
-                drawn_since_copy = False
-            fbo.use()
-            _set(prog, slice=i)
-            if clip_slices:
-                count = starts[i + 1] - starts[i]
-                if count:
-                    vao.render(moderngl.LINES, vertices=2 * int(count), first=2 * int(starts[i]))
-                    drawn_since_copy = True
-            elif len(seg_rep):
-                vao.render(moderngl.LINES, vertices=2 * len(seg_rep))
-                drawn_since_copy = True
-            count = int(plane_starts[i + 1] - plane_starts[i])
-            if count:
-                previous.use(0)
-                current.use(1)
-                _set(comp, first=int(plane_starts[i]), count=count, plane=i)
-                comp.run(group_x=(count + _GROUP - 1) // _GROUP)
-                ctx.memory_barrier()
-        check(ctx, f"{n} opacity-map passes")
-        return np.frombuffer(omega_buf.read(), dtype="f4").copy()
-    finally:
-        ctx.disable(moderngl.BLEND)
-        release(ctx, vao, ibo, id_buf, omega_buf, fbo, prev_fbo, current, previous)
-
-
-def _exact_opacity(ctx, progs, scene, strands, frame: LightFrame, points: _Points):
-    """Ω without slicing: per-texel fragment lists (count, prefix sum, fill), then each
-    point sums the alpha strictly nearer the light in its 3 × 3 texels."""
-    import moderngl
-
-    r = scene.shadows.resolution
-    ibo = strands.index_buffer(frame.drawable)
-    target = ctx.texture((r, r), 1, dtype="f4")  # the passes write only to buffers
-    fbo = ctx.framebuffer(color_attachments=[target])
-    counts = ctx.buffer(np.zeros(r * r, "u4").tobytes())
-    cursor = ctx.buffer(np.zeros(r * r, "u4").tobytes())
-    prog = progs["light_list"]
-    vao = strands.vertex_array(prog, ibo)
-    buffers = [ibo, target, fbo, counts, cursor, vao]
-    try:
-        fbo.use()
-        ctx.viewport = (0, 0, r, r)
-        ctx.disable(moderngl.DEPTH_TEST | moderngl.BLEND)
-        _set(prog, fill=False, **_light_pass_uniforms(scene, frame))
-        counts.bind_to_storage_buffer(0)
-        cursor.bind_to_storage_buffer(1)
-        check(ctx, "exact opacity set-up")
-        draw = 2 * len(frame.drawable)
-        if draw:
-            vao.render(moderngl.LINES, vertices=draw)
-        ctx.memory_barrier()
-        check(ctx, "exact opacity: count pass")
-        n_per_texel = np.frombuffer(counts.read(), dtype="u4")
-        offsets_np = (np.cumsum(n_per_texel) - n_per_texel).astype("u4")
-        total = int(n_per_texel.sum())
-        offsets = ctx.buffer(offsets_np.tobytes())
-        entries = ctx.buffer(reserve=max(8 * total, 8))  # fires without light-space fragments
-        buffers += [offsets, entries]
-        offsets.bind_to_storage_buffer(2)
-        entries.bind_to_storage_buffer(3)
-        _set(prog, fill=True)
-        if draw:
-            vao.render(moderngl.LINES, vertices=draw)
-        ctx.memory_barrier()
-        check(ctx, "exact opacity: fill pass")
-        seen = np.flatnonzero(frame.seen).astype("u4")
-        ids = ctx.buffer(seen.tobytes() if seen.size else b"\0" * 4)  # fires when no point is seen
-        omega_buf = ctx.buffer(np.zeros(points.count, "f4").tobytes())
-        buffers += [ids, omega_buf]
-        comp = progs["omega_exact"]
-        points.buffer.bind_to_storage_buffer(0)
-        ids.bind_to_storage_buffer(1)
-        omega_buf.bind_to_storage_buffer(2)
-        counts.bind_to_storage_buffer(3)
-        offsets.bind_to_storage_buffer(4)
-        entries.bind_to_storage_buffer(5)
-        _set(comp, count=len(seen), resolution=r, **_view_uniforms("light", frame.view))
-        if len(seen):
-            comp.run(group_x=(len(seen) + _GROUP - 1) // _GROUP)
-        ctx.memory_barrier()
-        check(ctx, "exact opacity passes")
-        return np.frombuffer(omega_buf.read(), dtype="f4").copy()
-    finally:
-        release(ctx, *buffers)

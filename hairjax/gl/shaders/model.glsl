@@ -136,6 +136,11 @@ int slice_of(float z, float zmin, float span, int maps) {
     return int(clamp(floor((z - zmin) * float(maps) / span), 0.0, float(maps)));
 }
 
+// docs/model.md §7: the transmittance τ = exp(−κΩ) through the opacity Ω in front of a point.
+float transmittance(float kappa, float omega) {
+    return exp(-kappa * omega);
+}
+
 // §17 Scheuermann (scheuermann-2004 slides 10–12), as hairjax/_scheuermann.py.
 struct Scheuermann {
     vec3 kd;

@@ -27,7 +27,7 @@ void main() {
         float len = safe_norm(d);
         L = len > 0.0 ? d / len : vec3(0.0);  // fires for a light on the surface: no light
     }
-    float tau = exp(-kappa * texelFetch(omega_map, px, 0).r);
+    float tau = transmittance(kappa, texelFetch(omega_map, px, 0).r);
     float vis = texelFetch(visibility_map, px, 0).r;
     frag_color = vec4(albedo * ambient + tau * vis * albedo * light_rgb * max(dot(n, L), 0.0), 1.0);
 }

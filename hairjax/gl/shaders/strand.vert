@@ -53,7 +53,7 @@ void main() {
     if (shade) {
         vec3 L = point_light ? safe_normalize(light_vector - in_position) : light_vector;
         vec3 V = safe_normalize(eye - in_position);
-        float tau = exp(-shading.kappa * in_omega) * in_visibility;
+        float tau = transmittance(shading.kappa, in_omega) * in_visibility;
         if (shading.model == SHADING_SCHEUERMANN)
             vout.color = shade_scheuermann(scheuermann, in_tangent, in_normal, L, V, in_maps.x,
                                            in_maps.y, in_color, light_rgb, tau);
