@@ -52,6 +52,7 @@ from ._shading import ShadingPoints as ShadingPoints
 from ._shading import Streaks as Streaks
 from ._shading import kajiya_kay as kajiya_kay
 from ._shading import register_shading_model as register_shading_model
+from ._shading import shading_model_class as shading_model_class
 from ._shading import shading_stage as shading_stage
 from ._shading import transmittance as transmittance
 from ._shadows import AbstractShadowMethod as AbstractShadowMethod

@@ -171,6 +171,8 @@ def build(where: str, factory, **kwargs):
     try:
         return factory(**kwargs)
     except SceneError as e:
+        if str(e).startswith(f"{where}: "):  # a table's own check: it named the file already
+            raise
         raise SceneError(f"{where}: {e}") from e
 
 

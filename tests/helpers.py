@@ -31,11 +31,23 @@ def small_furball_scene(strands=40, size=48, shadows="opacity-maps", maps=8, res
         camera=hj.Camera(eye=(0.0, 0.3, 3.5), target=(0.0, 0.0, 0.0), fov=45.0,
                          width=size, height=size),
         light=hj.Light(direction=(-0.5, -0.7, -0.4)),
-        params=hj.ShadingParams(kd=(0.6, 0.4, 0.3), ks=0.4, shininess=20.0, kappa=0.8,
-                                ambient=0.05),
-        shadows=hj.Shadows(method=shadows, maps=maps, resolution=resolution),
+        shading=hj.KajiyaKay(hj.ShadingParams(kd=(0.6, 0.4, 0.3), ks=0.4, shininess=20.0, kappa=0.8,
+                                ambient=0.05)),
+        shadows=shadow_method(shadows, maps, resolution),
         **scene_kw,
     )
+
+
+def cone(model: str):
+    """The Kajiya-Kay cone (`seed_cone`, `mirror_cone`) of the registered model `model`."""
+    return hj.shading_model_class(model).cone
+
+
+def shadow_method(method: str, maps: int = 8, resolution: int = 32):
+    """`hj.Shadows(method, …)` with the options that method takes."""
+    options = {"opacity-maps": dict(maps=maps, resolution=resolution),
+               "exact": dict(resolution=resolution)}.get(method, {})
+    return hj.Shadows(method, **options)
 
 
 def central_difference(f, x: float, eps: float) -> float:

@@ -29,8 +29,8 @@ def omega_scene() -> hj.Scene:
     return hj.Scene(hj.furball(300, 8, seed=1, alpha=0.5),
                     camera=hj.Camera(eye=(0, 0.3, 3.5), width=48, height=48),
                     light=hj.Light(direction=(-0.5, -0.7, -0.4)),
-                    params=hj.ShadingParams(kd=(0.6, 0.4, 0.3), ks=0.4, shininess=20.0, kappa=2.0,
-                                            ambient=0.05),
+                    shading=hj.KajiyaKay(hj.ShadingParams(kd=(0.6, 0.4, 0.3), ks=0.4, shininess=20.0, kappa=2.0,
+                                            ambient=0.05)),
                     shadows=hj.Shadows("opacity-maps", 16, 64))
 
 

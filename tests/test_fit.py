@@ -298,7 +298,7 @@ def test_pruned_fit_image_within_the_stated_bound():
     """The fit's image (fragments behind T < 1e-5 left out) is within 1e-5 × the brightest
     point colour of the renderer's exact image (hairjax/_constants.py)."""
     from hairjax._constants import FIT_TRANSMITTANCE_CUTOFF
-    from hairjax._render import point_colors
+    from hairjax._shading import point_colors
 
     dense = small_furball_scene(strands=2000, size=48, alpha=0.9)
     names = ("kd", "ks", "shininess", "kappa")

@@ -127,7 +127,8 @@ def test_exact_shadows_match(gl):
 def test_both_shading_conventions(gl, model):
     from hairjax.gl import render_gl
 
-    scene = load("point_light").replace(shading_model=model, shadows=hj.Shadows("none"))
+    scene = load("point_light")
+    scene = scene.replace(shading=hj.shading_model_class(model)(scene.params), shadows=hj.Shadows("none"))
     jax_image = np.asarray(hj.render(scene))
     bad, _ = unexplained_pixels(scene, render_gl(scene).image, jax_image)
     assert bad.size == 0

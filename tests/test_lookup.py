@@ -13,8 +13,8 @@ from helpers import PIXEL_TOL, camera_band, central_difference, small_furball_sc
 
 import hairjax as hj
 from hairjax._errors import SceneError
-from hairjax._lookup import bilinear, kajiya_kay_table
-from hairjax._lookup import kajiya_kay_lookup as _kajiya_kay_lookup
+from hairjax._shading._lookup import bilinear, kajiya_kay_table
+from hairjax._shading._lookup import kajiya_kay_lookup as _kajiya_kay_lookup
 
 # Compiled once per table size: op-by-op dispatch of the table build is slow.
 kajiya_kay_lookup = jax.jit(_kajiya_kay_lookup, static_argnums=(4, 5))
@@ -83,8 +83,9 @@ def test_zero_vectors_get_no_light_as_in_the_formula():
     assert float(jnp.abs(d).max()) == 0 and float(jnp.abs(s).max()) == 0
 
 
-def lookup_scene(size=32, **kw):
-    return small_furball_scene(strands=60, size=size, shading_model="kajiya-kay-lookup", **kw)
+def lookup_scene(size=32, lookup_size=256, **kw):
+    scene = small_furball_scene(strands=60, size=size, **kw)
+    return scene.replace(shading=hj.KajiyaKayLookup(scene.params, size=lookup_size))
 
 
 def test_gradients_in_kd_ks_shininess_match_finite_differences():
@@ -116,15 +117,15 @@ def test_scene_checks_lookup_size(tmp_path):
     scene = lookup_scene()
     for bad in (1, 5000, 2.5, True):
         with pytest.raises(SceneError, match="lookup_size"):
-            scene.replace(lookup_size=bad)
+            hj.KajiyaKayLookup(scene.params, size=bad)
     path = tmp_path / "s.toml"
     path.write_text('[hair]\nsource = "furball"\nstrands = 3\n[shading]\nlookup_size = 32\n')
-    with pytest.raises(SceneError, match=r"shading\.lookup_size applies only to the lookup"):
+    with pytest.raises(SceneError, match=r"shading\.lookup_size is not a key of model = 'kajiya-kay'"):
         hj.load_scene(path)
     path.write_text('[hair]\nsource = "furball"\nstrands = 3\n'
                     '[shading]\nmodel = "kajiya-kay-lookup"\nlookup_size = 32\n')
     loaded = hj.load_scene(path)
-    assert (loaded.shading_model, loaded.lookup_size) == ("kajiya-kay-lookup", 32)
+    assert loaded.shading == hj.KajiyaKayLookup(loaded.params, size=32)
 
 
 # --------------------------------------------------------------------------- GL
@@ -197,7 +198,7 @@ def test_gl_lookup_matches_jax(gl, n):
     bad = np.flatnonzero((diff > tol) & ~band)
     assert bad.size == 0, f"{bad.size} pixels differ by > {tol:.3g}; worst {diff[~band].max():.3g}"
     if n == 8:  # the coarse table does show: the analytic model's image is far from it
-        analytic = np.asarray(hj.render(scene.replace(shading_model="kajiya-kay")))
+        analytic = np.asarray(hj.render(scene.replace(shading=hj.KajiyaKay(scene.params))))
         assert np.abs(analytic - jax_image).max() > 10 * tol
 
 
@@ -244,7 +245,7 @@ def test_fit_terms_and_derivatives_for_the_lookup_model():
     terms = _fit._prepare_terms(scene, TRUE, names, exact, np.ones((32 * 32, 1)))
     image = np.asarray(_fit._image(terms, TRUE.kd, TRUE.ks, TRUE.shininess, TRUE.kappa))
     assert np.abs(image - exact).max() <= 1e-5 * exact.max()
-    analytic = np.asarray(hj.render(scene.replace(shading_model="kajiya-kay"), TRUE))
+    analytic = np.asarray(hj.render(scene.replace(shading=hj.KajiyaKay(scene.params)), TRUE))
     assert np.abs(analytic[..., :3].reshape(-1, 3) - exact).max() > 1e-3  # the table shows
 
     args = (jnp.asarray([0.3, 0.5, 0.2]), jnp.asarray([0.4, 0.4, 0.4]), jnp.asarray(25.0),

@@ -9,13 +9,13 @@ from pathlib import Path
 import jax
 import numpy as np
 import pytest
-from helpers import DATA, central_difference, unexplained_pixels
+from helpers import DATA, central_difference, shadow_method, unexplained_pixels
 
 import hairjax as hj
 from hairjax._band import OCCLUDER_VERTEX_STEP, PIXEL_TOL
 from hairjax._occluder import interpolation_bound
 from hairjax._projection import camera_view
-from hairjax._render import occluder_colors, point_colors
+from hairjax._shading import occluder_colors, point_colors
 from hairjax._shadows import light_frame
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "experiments" / "scenes"
@@ -101,8 +101,8 @@ def slab_scene(method: str, kappa: float = 0.7):
                       **quad([[-3, 0, 3], [3, 0, 3], [3, 0, -3], [-3, 0, -3]]))
     return hj.Scene(hair, camera=hj.Camera(eye=(0, -5, 0.0), up=(0, 0, -1), fov=20, width=16,
                                            height=16),
-                    light=light, occluder=occ, shadows=hj.Shadows(method, maps=4, resolution=res),
-                    params=hj.ShadingParams(kd=0.5, ks=0.1, ambient=0.05, kappa=kappa))
+                    light=light, occluder=occ, shadows=shadow_method(method, 4, res),
+                    shading=hj.KajiyaKay(hj.ShadingParams(kd=0.5, ks=0.1, ambient=0.05, kappa=kappa)))
 
 
 @pytest.mark.parametrize("method", ["opacity-maps", "exact"])
@@ -162,7 +162,7 @@ def gl_scenes():
     hair = hj.Strands.from_list([hair_line(n=9), hair_line(y=0.3, z=0.5, n=9)], alpha=0.5)
     out["quad-shadow"] = hj.Scene(
         hair, camera=hj.Camera(eye=(1, 2, 5), width=32, height=32),
-        light=hj.Light(direction=(0.2, -1, 0.1)), params=hj.ShadingParams(kappa=0.5),
+        light=hj.Light(direction=(0.2, -1, 0.1)), shading=hj.KajiyaKay(hj.ShadingParams(kappa=0.5)),
         occluder=hj.Occluder(kind="mesh", **quad([[-3, 1, 3], [0, 1, 3], [0, 1, -3], [-3, 1, -3]])),
         shadows=hj.Shadows("opacity-maps", maps=4, resolution=32))
     # A point light between two layers of hair: the upper layer lies behind the light's
@@ -173,7 +173,7 @@ def gl_scenes():
                                   + [hair_line(y=2.0, z=z, n=9) for z in (-0.2, 0.2)], alpha=0.5)
     out["quad-point-light"] = hj.Scene(
         layers, camera=hj.Camera(eye=(0.5, 1.0, 5), target=(0, 1, 0), width=32, height=32),
-        light=hj.Light(kind="point", position=(0.0, 1.0, 0.0)), params=hj.ShadingParams(kappa=0.5),
+        light=hj.Light(kind="point", position=(0.0, 1.0, 0.0)), shading=hj.KajiyaKay(hj.ShadingParams(kappa=0.5)),
         occluder=hj.Occluder(kind="mesh", **quad([[-3, 0.5, 3], [-0.3, 0.5, 3], [-0.3, 0.5, -3],
                                                    [-3, 0.5, -3]])),
         shadows=hj.Shadows("opacity-maps", maps=4, resolution=128))  # bias 3 texels: 0.28 at z = 1

@@ -40,11 +40,11 @@ def test_farther_endpoint_decides():
 def test_draw_order_far_bins_first_index_within_bin():
     seg_depth = np.array([1.0, 9.0, 1.1, 8.9, 5.0])
     # Two bins split at ~5.05: {0, 2, 4} near, {1, 3} far.
-    np.testing.assert_array_equal(draw_order(seg_depth, "bins", 2), [1, 3, 0, 2, 4])
-    np.testing.assert_array_equal(draw_order(seg_depth, "exact"), [1, 3, 4, 2, 0])
-    np.testing.assert_array_equal(draw_order(seg_depth, "none"), [0, 1, 2, 3, 4])
-    with pytest.raises(ValueError):
-        draw_order(seg_depth, "random")
+    np.testing.assert_array_equal(draw_order(seg_depth, hj.Ordering("bins", 2)), [1, 3, 0, 2, 4])
+    np.testing.assert_array_equal(draw_order(seg_depth, hj.Ordering("exact")), [1, 3, 4, 2, 0])
+    np.testing.assert_array_equal(draw_order(seg_depth, hj.Ordering("none")), [0, 1, 2, 3, 4])
+    with pytest.raises(hj.SceneError, match="ordering.method must be one of .*got 'random'"):
+        hj.Ordering("random")
 
 
 @given(st.lists(st.integers(0, 2**32 - 1), max_size=300))
@@ -101,7 +101,7 @@ def test_static_order_is_the_same_from_every_view():
     import dataclasses
 
     import hairjax as hj
-    from hairjax._render import visibility_order
+    from hairjax._setup import visibility_order
 
     scene = hj.Scene(hj.furball(30, 5, seed=1), ordering=hj.Ordering("static"),
                      camera=hj.Camera(eye=(0.0, 0.3, 3.5), width=16, height=16))
@@ -119,7 +119,7 @@ def test_static_order_is_the_same_from_every_view():
 
 def test_static_order_skips_segments_behind_the_near_plane():
     import hairjax as hj
-    from hairjax._render import visibility_order
+    from hairjax._setup import visibility_order
 
     # A camera inside the ball: some segments have an end nearer than `near` or behind it.
     scene = hj.Scene(hj.furball(30, 5, seed=1), ordering=hj.Ordering("static"),

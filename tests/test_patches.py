@@ -24,9 +24,9 @@ from hairjax._patches import (
     scene_point_colors,
 )
 from hairjax._projection import camera_view
-from hairjax._render import tangents
+from hairjax._strands import tangents
 from hairjax._scene import Camera, PatchGeometry
-from hairjax._scheuermann import strand_normals
+from hairjax._shading._scheuermann_inputs import strand_normals
 from hairjax._sources import furball
 
 BG = np.array([0.1, 0.2, 0.3])
@@ -353,7 +353,7 @@ def test_patch_image_differentiable():
 
 def test_strand_scene_untouched():
     """A strand scene does no patch work: `render` is the staged path, bit for bit."""
-    from hairjax._render import geometry_stage, shading_stage
+    from hairjax import geometry_stage, shading_stage
 
     scene = _small_patch_scene().replace(patches=None)
     np.testing.assert_array_equal(np.asarray(hj.render(scene)),
@@ -363,7 +363,7 @@ def test_strand_scene_untouched():
 def test_other_entry_points():
     """`render_profiled` draws the patches too; `fit` refuses them rather than fitting
     the ribbons' image."""
-    from hairjax._render import render_profiled
+    from hairjax import render_profiled
 
     scene = _small_patch_scene()
     image, timings = render_profiled(scene)

@@ -21,7 +21,7 @@ def stacked_hairs(ordering="bins", front_first=False):
     hair = hj.Strands(np.concatenate(strands), np.arange(4) * 5, [alphas[i] for i in idx], 1.0,
                       np.repeat([colors[i] for i in idx], 5, axis=0))
     return hj.Scene(hair, camera=hj.Camera(eye=(0, 0, 5), target=(0, 0, 0), width=16, height=9),
-                    params=hj.ShadingParams(kd=0.0, ks=0.0, ambient=1.0),
+                    shading=hj.KajiyaKay(hj.ShadingParams(kd=0.0, ks=0.0, ambient=1.0)),
                     shadows=hj.Shadows("none"), ordering=hj.Ordering(ordering, 8),
                     background=(0.2, 0.2, 0.2))
 
@@ -52,7 +52,7 @@ def test_image_conventions_row_zero_is_top():
     # One hair above the target: it must appear in the upper half of the image.
     hair = hj.Strands.from_list([[[-0.5, 0.6, 0.0], [0.5, 0.6, 0.0]]], alpha=1.0)
     scene = hj.Scene(hair, camera=hj.Camera(width=32, height=32), shadows=hj.Shadows("none"),
-                     params=hj.ShadingParams(ambient=1.0))
+                     shading=hj.KajiyaKay(hj.ShadingParams(ambient=1.0)))
     alpha = np.asarray(hj.render(scene))[..., 3]
     rows = np.flatnonzero(alpha.max(axis=1) > 0)
     assert rows.size and rows.max() < 16
@@ -157,7 +157,7 @@ def test_occluder_hides_hair_behind_it():
     front = [[-0.2, -0.1, 1.5], [0.2, -0.1, 1.5]]
     hair = hj.Strands.from_list([behind, front], alpha=1.0)
     base = dict(camera=hj.Camera(eye=(0, 0, 5), width=32, height=32), shadows=hj.Shadows("none"),
-                params=hj.ShadingParams(kd=0.0, ks=0.0, ambient=1.0))
+                shading=hj.KajiyaKay(hj.ShadingParams(kd=0.0, ks=0.0, ambient=1.0)))
     with_sphere = hj.Scene(hair, occluder=hj.Occluder(center=(0, 0, 0), radius=1.0,
                                                       color=(0.0, 0.0, 0.0)), **base)
     img = np.asarray(hj.render(with_sphere))

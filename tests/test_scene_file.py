@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from hairjax._errors import HairFormatError, SceneError
-from hairjax._scene import Camera, Light, Occluder, Ordering, Shadows
+import hairjax as hj
+from hairjax import Camera, Light, Occluder, Ordering, Shadows
 from hairjax._scene_file import default_scene_path, load_scene, scene_from_dict
 from hairjax._sources import furball, scalp
 from hairjax._strands import Strands
@@ -88,7 +89,7 @@ def test_default_scene_values():
                                   up=(0.0, 1.0, 0.0), fov=40.0, width=512, height=512)
     assert scene.light == Light(kind="directional", direction=(-0.6, -0.8, -0.5),
                                 color=(1.0, 1.0, 1.0))
-    assert scene.shading_model == "kajiya-kay"
+    assert isinstance(scene.shading, hj.KajiyaKay) and type(scene.shading).name == "kajiya-kay"
     p = scene.params
     np.testing.assert_allclose(p.kd, [0.55, 0.35, 0.2], rtol=1e-6)
     np.testing.assert_allclose(p.ks, [0.35] * 3, rtol=1e-6)
@@ -189,12 +190,22 @@ def test_absent_tables_take_dataclass_defaults(tmp_path):
     assert scene.shadows == Shadows() and scene.ordering == Ordering()
     assert scene.occluder is None
     assert scene.background == (0.0, 0.0, 0.0)
-    assert scene.shading_model == "kajiya-kay"
+    assert isinstance(scene.shading, hj.KajiyaKay) and type(scene.shading).name == "kajiya-kay"
     np.testing.assert_allclose(scene.params.kd, [0.6] * 3, rtol=1e-6)
     np.testing.assert_allclose(scene.params.shininess, 40.0)
     np.testing.assert_array_equal(scene.strands.alpha, 0.5)
     np.testing.assert_array_equal(scene.strands.width, 1.0)
     np.testing.assert_array_equal(scene.strands.points, furball(strands=50).points)
+
+
+@pytest.mark.parametrize("table, message", [
+    ('[shadows]\nmethod = "exact"\nmaps = 8\n', r"shadows\.maps is not a key of method = 'exact'"),
+    ('[shadows]\nmethod = "none"\nresolution = 8\n', r"shadows\.resolution is not a key of method = 'none'"),
+    ('[ordering]\nmethod = "none"\nbins = 3\n', r"ordering\.bins is not a key of method = 'none'"),
+])
+def test_keys_another_method_would_ignore_are_refused(tmp_path, table, message):
+    with pytest.raises(SceneError, match=message):
+        load_scene(write(tmp_path, HAIR + table))
 
 
 def test_name_must_come_before_the_tables(tmp_path):
@@ -223,11 +234,9 @@ kappa = 0
 ambient = [0.1, 0.2, 0.3]
 [shadows]
 method = "exact"
-maps = 8
 resolution = 4
 [ordering]
 method = "none"
-bins = 3
 [occluder]
 [background]
 color = [0.25, 0.5, 0.75]
@@ -236,14 +245,14 @@ color = [0.25, 0.5, 0.75]
     assert scene.name == "custom"
     assert scene.camera == Camera(fov=30.0, width=64, height=48, near=0.5)
     assert scene.light == Light(kind="point", position=(1.0, 2.0, 3.0), color=(0.5, 0.25, 0.0))
-    assert scene.shading_model == "kajiya-kay-mirror"
+    assert isinstance(scene.shading, hj.KajiyaKayMirror)
     np.testing.assert_allclose(scene.params.kd, [0.25] * 3)
     np.testing.assert_allclose(scene.params.ks, [0, 0.5, 1])
     np.testing.assert_allclose(scene.params.shininess, 7.0)
     np.testing.assert_allclose(scene.params.kappa, 0.0)
     np.testing.assert_allclose(scene.params.ambient, [0.1, 0.2, 0.3], rtol=1e-6)
-    assert scene.shadows == Shadows(method="exact", maps=8, resolution=4)
-    assert scene.ordering == Ordering(method="none", bins=3)
+    assert scene.shadows == Shadows(method="exact", resolution=4)
+    assert scene.ordering == Ordering(method="none")
     assert scene.occluder == Occluder()  # an empty [occluder] is the default sphere
     assert scene.background == (0.25, 0.5, 0.75)
 
@@ -471,7 +480,7 @@ ERROR_CASES = [
     ("light-color-negative", HAIR + "[light]\ncolor = [1, -1, 1]\n", ["light.color"]),
     # [shading]
     ("shading-model", HAIR + '[shading]\nmodel = "phong"\n',
-     ["shading.model must be one of 'kajiya-kay', 'kajiya-kay-mirror'", "'phong'"]),
+     ["shading.model must be one of 'kajiya-kay', 'kajiya-kay-lookup', 'kajiya-kay-mirror'", "'phong'"]),
     ("kd-negative", HAIR + "[shading]\nkd = -0.1\n",
      ["shading.kd must be a number >= 0 or an array of 3 numbers >= 0, got -0.1"]),
     ("kd-bool", HAIR + "[shading]\nkd = true\n", ["shading.kd", "true (boolean)"]),
@@ -483,7 +492,7 @@ ERROR_CASES = [
     ("ambient-negative", HAIR + "[shading]\nambient = -0.5\n", ["shading.ambient", "-0.5"]),
     # [shadows], [ordering]
     ("shadows-method", HAIR + '[shadows]\nmethod = "pcf"\n',
-     ["shadows.method must be one of 'none', 'opacity-maps', 'exact'"]),
+     ["shadows.method must be one of 'exact', 'none', 'opacity-maps'"]),
     ("shadows-resolution-zero", HAIR + "[shadows]\nresolution = 0\n",
      ["shadows.resolution must be an integer in [4, 16384], got 0"]),
     ("shadows-maps-zero", HAIR + "[shadows]\nmaps = 0\n", ["shadows.maps must be an integer in"]),
@@ -552,7 +561,7 @@ DOCS = ROOT / "docs" / "scenes.md"
 
 
 def test_docs_list_exactly_the_keys_of_each_table():
-    from hairjax._scene_file import TABLES, TOP_LEVEL_KEYS
+    from hairjax._scene_file import TOP_LEVEL_KEYS, scene_tables
 
     sections = {}
     for chunk in DOCS.read_text(encoding="utf-8").split("\n## ")[1:]:
@@ -560,7 +569,7 @@ def test_docs_list_exactly_the_keys_of_each_table():
         keys = [line.split("|")[1].strip().strip("`") for line in body.splitlines()
                 if line.startswith("| `")]
         sections[heading.strip()] = keys
-    for table, keys in TABLES.items():
+    for table, keys in scene_tables().items():
         documented = sections[f"`[{table}]`"]
         assert len(documented) == len(set(documented)), table  # each key documented once
         assert set(documented) == set(keys), table

@@ -15,25 +15,29 @@ from helpers import (
     PIXEL_TOL,
     TAU_TOL,
     render_gl_with_edited_shader,
+    shadow_method,
     shadow_band,
     unexplained_pixels,
 )
 
 import hairjax as hj
 from hairjax._errors import SceneError
-from hairjax._render import geometry_stage, point_colors, prepare
+from hairjax import geometry_stage, prepare
+from hairjax._shading import point_colors
 from hairjax._scene_file import scene_from_dict
-from hairjax._scheuermann import (
-    ScheuermannMaps,
+from hairjax._shading._scheuermann import (
     ScheuermannParams,
     scheuermann,
     scheuermann_diffuse,
-    scheuermann_inputs,
     shift_tangent,
     smoothstep_attenuation,
+    strand_specular,
+)
+from hairjax._shading._scheuermann_inputs import (
+    ScheuermannMaps,
+    scheuermann_inputs,
     strand_normals,
     strand_position,
-    strand_specular,
 )
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "experiments" / "scenes" / "scheuermann.toml"
@@ -175,11 +179,12 @@ def test_shift_direction_in_a_rendered_strand(shift):
         hj.Strands.from_list([p], alpha=1.0),
         camera=hj.Camera(eye=tuple(1e4 * h), target=(0.0, 0.0, 0.0), up=(0.0, 0.0, 1.0),
                          fov=1.0, width=8, height=8),
-        light=hj.Light(direction=tuple(-h)), shading_model="scheuermann",
-        params=ScheuermannParams(kd=0.0, ambient=0.0, primary_color=1.0, primary_exponent=300.0,
-                                 primary_shift=shift, secondary_color=0.0),
-        shadows=hj.Shadows("none"),
-        scheuermann_maps=ScheuermannMaps(normal_center=(0.0, 0.0, 0.0), shift_noise=0.0))
+        light=hj.Light(direction=tuple(-h)),
+        shading=hj.Scheuermann(
+            ScheuermannParams(kd=0.0, ambient=0.0, primary_color=1.0, primary_exponent=300.0,
+                              primary_shift=shift, secondary_color=0.0),
+            ScheuermannMaps(normal_center=(0.0, 0.0, 0.0), shift_noise=0.0)),
+        shadows=hj.Shadows("none"))
     colours = point_colors(geometry_stage(scene), scene.params)[:, 0]
     peak = phi[int(jnp.argmax(colours))]
     # Grid step (π/2)/400 ≈ 4e-3 rad; V differs from H by ≤ 1e-4 rad (eye 10⁴ away).
@@ -241,13 +246,14 @@ def small_scene(size=24, strands=30, shadows="opacity-maps", **maps) -> hj.Scene
                     alpha=0.6)
     return hj.Scene(
         hair, camera=hj.Camera(eye=(1.6, 0.6, 2.4), target=(0.0, 0.0, 0.0), width=size, height=size),
-        light=hj.Light(direction=(-0.3, -0.6, -0.75)), shading_model="scheuermann",
-        params=ScheuermannParams(kd=(0.5, 0.35, 0.2), ambient=0.05, primary_color=0.4,
-                                 primary_exponent=30.0, primary_shift=0.15,
-                                 secondary_color=(0.4, 0.3, 0.2), secondary_exponent=8.0,
-                                 secondary_shift=-0.2, kappa=0.9),
-        shadows=hj.Shadows(shadows, maps=6, resolution=24),
-        scheuermann_maps=ScheuermannMaps(normal_center=(0.0, 0.0, 0.0), **maps))
+        light=hj.Light(direction=(-0.3, -0.6, -0.75)),
+        shading=hj.Scheuermann(
+            ScheuermannParams(kd=(0.5, 0.35, 0.2), ambient=0.05, primary_color=0.4,
+                              primary_exponent=30.0, primary_shift=0.15,
+                              secondary_color=(0.4, 0.3, 0.2), secondary_exponent=8.0,
+                              secondary_shift=-0.2, kappa=0.9),
+            ScheuermannMaps(normal_center=(0.0, 0.0, 0.0), **maps)),
+        shadows=shadow_method(shadows, 6, 24))
 
 
 def test_base_texture_and_occlusion_scale_the_colour():
@@ -273,8 +279,9 @@ def test_constant_alpha_texture_equals_scaled_hair_alpha():
 
 
 def test_kajiya_kay_scenes_build_none_of_it():
-    scene = small_scene().replace(shading_model="kajiya-kay", params=hj.ShadingParams())
-    assert prepare(scene).scheuermann is None and geometry_stage(scene).scheuermann is None
+    scene = small_scene().replace(shading=hj.KajiyaKay(hj.ShadingParams()))
+    assert prepare(scene).shading_inputs == hj.PointInputs()
+    assert geometry_stage(scene).shading_inputs is None
 
 
 # --------------------------------------------------------------------------- gradients
@@ -312,14 +319,14 @@ def test_gradients_match_central_differences():
 
 def test_invalid_parameters_are_refused():
     hair = hj.scalp(strands=3, points=3)
-    with pytest.raises(SceneError, match="takes ScheuermannParams"):
-        hj.Scene(hair, shading_model="scheuermann")
-    with pytest.raises(SceneError, match="takes ShadingParams"):
-        hj.Scene(hair, params=ScheuermannParams())
+    with pytest.raises(TypeError, match="takes ScheuermannParams"):
+        hj.Scene(hair, shading=hj.Scheuermann()).replace(params=hj.ShadingParams())
+    with pytest.raises(TypeError, match="takes ShadingParams"):
+        hj.Scene(hair).replace(params=ScheuermannParams())
     for bad in (dict(primary_exponent=0.0), dict(secondary_exponent=-1.0),
                 dict(primary_color=-0.1), dict(secondary_shift=np.nan), dict(kappa=-1.0)):
         with pytest.raises(SceneError, match=next(iter(bad))):
-            hj.Scene(hair, shading_model="scheuermann", params=ScheuermannParams(**bad))
+            ScheuermannParams(**bad)
     for bad, key in ((dict(alpha_texture=(1.2,)), "alpha_texture"), (dict(occlusion=()), "occlusion"),
                      (dict(base_texture=((1.0, 1.0),)), "base_texture"), (dict(mask_noise=2.0), "mask_noise"),
                      (dict(shift_noise=-1.0), "shift_noise"), (dict(texture_seed=-1), "texture_seed"),
@@ -345,10 +352,10 @@ def test_scene_file_errors(tmp_path, shading, message):
 
 def test_example_scene_reads_every_key():
     scene = hj.load_scene(EXAMPLE)
-    assert scene.shading_model == "scheuermann" and isinstance(scene.params, ScheuermannParams)
+    assert isinstance(scene.shading, hj.Scheuermann) and isinstance(scene.params, ScheuermannParams)
     np.testing.assert_allclose(scene.params.secondary_color, [0.35, 0.25, 0.15])
     assert float(scene.params.primary_shift) == 0.1 and float(scene.params.secondary_shift) == -0.15
-    maps = scene.scheuermann_maps
+    maps = scene.shading.maps
     assert maps.normal_center == (0.0, 0.0, 0.0) and maps.texture_seed == 7 and maps.alpha_texture[-1] == 0.3
 
 
@@ -471,13 +478,13 @@ def test_a_scene_may_hold_traced_parameters():
 def test_numpy_exact_omega_equals_the_renderers():
     """exact_omega_numpy (hair_occlusion's Ω) against _shadows.exact_opacity (the renderer's
     `exact` Ω, float64) on the same light-space set-up: equal to rounding."""
-    from hairjax._scheuermann import exact_omega_numpy
+    from hairjax._shading._scheuermann_inputs import exact_omega_numpy
     from hairjax._shadows import exact_opacity, shadow_setup
 
     s = small_scene(strands=60).strands
     segs = s.segments()
     setup = shadow_setup(s.points, segs, s.strand_of_point[segs[:, 0]], s.width,
-                         hj.Light(direction=(0.3, -1.0, 0.2)), "exact", 1, 32)
+                         hj.Light(direction=(0.3, -1.0, 0.2)), hj.Shadows("exact", resolution=32))
     alpha = s.alpha[setup.frag_strand] * setup.frag_coverage
     ref = np.asarray(jax.jit(exact_opacity)(jnp.asarray(alpha), jnp.asarray(setup.frag_first),
                                             jnp.asarray(setup.index), jnp.asarray(setup.weight)))
@@ -489,7 +496,7 @@ def test_hair_occlusion_darkens_the_inside_of_the_hair():
     """A dense clump and, far from it, one lone strand: the clump's centre is occluded
     from every direction, the lone strand from almost none; values in (0, 1]; a denser
     κ_ao darkens; κ_ao = 0 computes nothing."""
-    from hairjax._scheuermann import hair_occlusion
+    from hairjax._shading._scheuermann_inputs import hair_occlusion
 
     rng = np.random.default_rng(2)
     clump = [rng.normal(scale=0.15, size=(4, 3)) for _ in range(150)]
@@ -620,7 +627,7 @@ def test_fit_refuses_what_it_cannot_do():
         hj.fit(scene, target, fit=("kd", "ks"))
     with pytest.raises(hj.FitError, match="grey value"):
         hj.fit(scene, target, fit=("kd",), scalar=("primary_shift",))
-    kk = scene.replace(shading_model="kajiya-kay", params=hj.ShadingParams())
+    kk = scene.replace(shading=hj.KajiyaKay(hj.ShadingParams()))
     with pytest.raises(hj.FitError, match="share a shading model"):
         hj.fit([scene, kk], [target, target])
     with pytest.raises(hj.FitError, match="from ScheuermannParams"):

@@ -5,6 +5,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from helpers import cone
+
 from hairjax import ShadingParams, kajiya_kay
 from hairjax._shading import kajiya_kay_terms, specular_power
 
@@ -21,18 +23,18 @@ def test_known_vectors_both_conventions():
     T = unit(1, 0, 0)
     L = unit(np.cos(np.pi / 3), np.sin(np.pi / 3), 0)
     V = unit(np.cos(np.pi / 6), np.sin(np.pi / 6), 0)
-    d, s = kajiya_kay(T, L, V, PARAMS, "kajiya-kay")
+    d, s = kajiya_kay(T, L, V, PARAMS, cone("kajiya-kay"))
     # diffuse = Kd sin 60°; seed's base = cos(60° − 30°) = cos 30°.
     np.testing.assert_allclose(d, np.array([0.5, 0.25, 1.0]) * np.sqrt(3) / 2, rtol=1e-14)
     np.testing.assert_allclose(s, 2.0 * (np.sqrt(3) / 2) ** 3, rtol=1e-13)
-    d, s = kajiya_kay(T, L, V, PARAMS, "kajiya-kay-mirror")
+    d, s = kajiya_kay(T, L, V, PARAMS, cone("kajiya-kay-mirror"))
     # mirror base = −cos(60° + 30°) = 0: no highlight.
     np.testing.assert_allclose(s, 0.0, atol=1e-14)
     # V at 120° from T (the mirror direction of L at 60°): mirror base = −cos 180° = 1.
     V2 = unit(np.cos(2 * np.pi / 3), np.sin(2 * np.pi / 3), 0)
-    _, s = kajiya_kay(T, L, V2, PARAMS, "kajiya-kay-mirror")
+    _, s = kajiya_kay(T, L, V2, PARAMS, cone("kajiya-kay-mirror"))
     np.testing.assert_allclose(s, 2.0, rtol=1e-13)
-    _, s = kajiya_kay(T, L, V2, PARAMS, "kajiya-kay")
+    _, s = kajiya_kay(T, L, V2, PARAMS, cone("kajiya-kay"))
     # seed's base = cos(60° − 120°) = ½.
     np.testing.assert_allclose(s, 2.0 * 0.5**3, rtol=1e-13)
 
@@ -47,7 +49,7 @@ def test_where_each_model_peaks(model, peak_offset):
     thetas = np.linspace(0.01, np.pi - 0.01, 2001)
     V = jnp.stack([jnp.cos(thetas), jnp.sin(thetas), jnp.zeros_like(thetas)], axis=1)
     p = ShadingParams(kd=0.0, ks=1.0, shininess=50.0)
-    spec = jax.vmap(lambda v: kajiya_kay(T, L, v, p, model)[1][0])(V)
+    spec = jax.vmap(lambda v: kajiya_kay(T, L, v, p, cone(model))[1][0])(V)
     expected = theta_l if model == "kajiya-kay" else np.pi - theta_l
     # The sweep's step is π/2000 ≈ 1.6e-3 rad.
     assert abs(thetas[int(jnp.argmax(spec))] - expected) < 2e-3
@@ -59,7 +61,7 @@ def test_sine_is_exact_near_zero():
     # while sqrt(1 − cos²) would return 0 in float64.
     T = unit(1, 0, 0)
     L = jnp.asarray([1.0, 1e-9, 0.0]) / np.sqrt(1 + 1e-18)
-    d, _ = kajiya_kay(T, L, T, ShadingParams(kd=1.0, ks=0.0), "kajiya-kay")
+    d, _ = kajiya_kay(T, L, T, ShadingParams(kd=1.0, ks=0.0), cone("kajiya-kay"))
     np.testing.assert_allclose(d, 1e-9, rtol=1e-6)
 
 
@@ -80,7 +82,7 @@ def test_gradients_finite_for_tangent_parallel_to_light_and_view():
     T = unit(0, 1, 0)
 
     def f(p, t):
-        d, s = kajiya_kay(t, T, T, p, "kajiya-kay")
+        d, s = kajiya_kay(t, T, T, p, cone("kajiya-kay"))
         return jnp.sum(d + s)
 
     params = ShadingParams(kd=0.3, ks=0.7, shininess=1e4)
@@ -101,7 +103,7 @@ def test_terms_and_power_equal_max_b_0_to_the_p():
     sl, sv = (np.linalg.norm(np.cross(t, x), axis=-1) for x in (light, eye))
     p = 7.5
     for model, b in (("kajiya-kay", tl * tv + sl * sv), ("kajiya-kay-mirror", sl * sv - tl * tv)):
-        _, gap = jax.vmap(kajiya_kay_terms, in_axes=(0, 0, 0, None))(t, light, eye, model)
+        _, gap = jax.vmap(kajiya_kay_terms, in_axes=(0, 0, 0, None))(t, light, eye, cone(model))
         np.testing.assert_allclose(gap, 1 - b, rtol=0, atol=1e-15)
         power = jax.vmap(specular_power, in_axes=(0, None))(gap, jnp.asarray(p))
         # b^p's condition number is p: 1e-15 absolute in b, ≤ p·1e-15/b relative.
@@ -124,7 +126,7 @@ def test_gradients_finite_at_the_peak_and_beyond(model):
         beyond = [(T, T, T), (T, L, T), (T, a, T)]
 
     def power(t, light, eye, p):
-        return specular_power(kajiya_kay_terms(t, light, eye, model)[1], p)
+        return specular_power(kajiya_kay_terms(t, light, eye, cone(model))[1], p)
 
     for dtype in ("float64", "float32"):
         with jax.enable_x64(dtype == "float64"):
@@ -164,5 +166,25 @@ def test_scalar_parameters_broadcast_to_rgb():
 
 
 def test_unknown_model_raises():
-    with pytest.raises(ValueError, match="unknown shading model"):
-        kajiya_kay(unit(1, 0, 0), unit(0, 1, 0), unit(0, 1, 0), PARAMS, "phong")
+    import hairjax as hj
+
+    with pytest.raises(hj.SceneError, match="shading.model must be one of .*got 'phong'"):
+        hj.shading_model_class("phong")
+
+
+@pytest.mark.parametrize("bad", [dict(shininess=-1.0), dict(shininess=0.0), dict(kd=-0.1),
+                                 dict(ks=(0.1, float("nan"), 0.1)), dict(kappa=-1.0),
+                                 dict(ambient=float("inf"))])
+def test_parameters_are_checked_at_construction(bad):
+    """The same range checks for parameters from Python as from a scene file."""
+    import hairjax as hj
+
+    name = next(iter(bad))
+    with pytest.raises(hj.SceneError, match=rf"^shading\.{name} must be"):
+        ShadingParams(**bad)
+
+
+def test_traced_parameters_are_not_checked():
+    """Under a trace the values do not exist yet: construction must not touch them."""
+    out = jax.jit(lambda p: ShadingParams(shininess=p).shininess)(-1.0)
+    assert float(out) == -1.0

@@ -3,8 +3,11 @@
 import numpy as np
 import pytest
 
+from helpers import shadow_method
+
 import hairjax as hj
-from hairjax._render import geometry_stage, point_colors
+from hairjax import geometry_stage
+from hairjax._shading import point_colors
 from hairjax._shadows import map_margin
 
 # Light travels straight down (−y). Three layers of hairs along x at y = 0, −0.5, −1.
@@ -21,8 +24,8 @@ def slab(method, maps=3, alpha=A):
     hair = hj.Strands.from_list(strands, alpha=alpha)
     return hj.Scene(hair, camera=hj.Camera(eye=(0, 3, 6), target=(0, -0.5, 0), width=16, height=16),
                     light=hj.Light(direction=(0, -1, 0)),
-                    params=hj.ShadingParams(kd=1.0, ks=0.0, kappa=2.0),
-                    shadows=hj.Shadows(method=method, maps=maps, resolution=R))
+                    shading=hj.KajiyaKay(hj.ShadingParams(kd=1.0, ks=0.0, kappa=2.0)),
+                    shadows=shadow_method(method, maps, R))
 
 
 def interior_points(scene):

@@ -121,12 +121,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from helpers import MAX_BAND, TAU_TOL, central_difference, shadow_band, unexplained_pixels
+from helpers import MAX_BAND, TAU_TOL, central_difference, cone, shadow_band, shadow_method, unexplained_pixels
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import hairjax as hj
-from hairjax._render import point_colors
+from hairjax._shading import point_colors
 
 BACKENDS = ["float64", "float32", "gl"]
 SIZE = 32  # every case renders 32 × 32 with 32² opacity maps: the rasteriser compiles once
@@ -411,7 +411,7 @@ def mixed_scene() -> hj.Scene:
     hair = hair.replace(width=width, color=color)
     return hj.Scene(hair, camera=camera(), light=hj.Light(direction=(0.0, -1.0, 0.0),
                                                           color=(1.0, 0.9, 0.7)),
-                    params=hj.ShadingParams(kd=0.6, ks=0.4, shininess=20.0, kappa=0.8, ambient=0.05),
+                    shading=hj.KajiyaKay(hj.ShadingParams(kd=0.6, ks=0.4, shininess=20.0, kappa=0.8, ambient=0.05)),
                     shadows=hj.Shadows("opacity-maps", 4, SIZE))
 
 
@@ -429,7 +429,7 @@ def stack_scene() -> hj.Scene:
     # Width 4: rows 14 … 17 of the map are fully covered around the line at y = 16.
     hair = hj.Strands(pts, offsets, alpha, 4.0)
     return hj.Scene(hair, camera=camera(), light=hj.Light(direction=(0.0, 0.0, -1.0)),
-                    params=hj.ShadingParams(kd=0.6, ks=0.4, shininess=20.0, kappa=2e-3, ambient=0.05),
+                    shading=hj.KajiyaKay(hj.ShadingParams(kd=0.6, ks=0.4, shininess=20.0, kappa=2e-3, ambient=0.05)),
                     shadows=hj.Shadows("opacity-maps", 4, SIZE))
 
 
@@ -441,7 +441,7 @@ def point_light_scene(scale: float = 1.0) -> hj.Scene:
                     camera=hj.Camera(eye=tuple(scale * EYE), target=(0.0, 0.0, 0.0), fov=40.0,
                                      width=SIZE, height=SIZE),
                     light=hj.Light(kind="point", position=tuple(scale * light)),
-                    params=hj.ShadingParams(kd=0.6, ks=0.4, shininess=20.0, kappa=0.8, ambient=0.05),
+                    shading=hj.KajiyaKay(hj.ShadingParams(kd=0.6, ks=0.4, shininess=20.0, kappa=0.8, ambient=0.05)),
                     shadows=hj.Shadows("exact", resolution=SIZE))
 
 
@@ -455,7 +455,7 @@ def centre_light_scene() -> hj.Scene:
     hair = hj.furball(30, 5, seed=6, alpha=0.5).transformed(0.6)
     centre = 0.5 * (hair.points.min(axis=0) + hair.points.max(axis=0))
     return hj.Scene(hair, camera=camera(), light=hj.Light(kind="point", position=tuple(centre)),
-                    params=hj.ShadingParams(**DEFAULT), shadows=hj.Shadows("opacity-maps", 4, SIZE))
+                    shading=hj.KajiyaKay(hj.ShadingParams(**DEFAULT)), shadows=hj.Shadows("opacity-maps", 4, SIZE))
 
 
 def flat_scene() -> hj.Scene:
@@ -467,7 +467,7 @@ def flat_scene() -> hj.Scene:
     offsets = np.concatenate([fur.offsets, [fur.offsets[-1] + 1, fur.offsets[-1] + 2]])
     hair = hj.Strands(pts, offsets, 0.6, 1.5)
     return hj.Scene(hair, camera=camera(), light=hj.Light(kind="point", position=(0.0, 0.0, 3.0)),
-                    params=hj.ShadingParams(kd=0.6, ks=0.4, shininess=20.0, kappa=0.8, ambient=0.05),
+                    shading=hj.KajiyaKay(hj.ShadingParams(kd=0.6, ks=0.4, shininess=20.0, kappa=0.8, ambient=0.05)),
                     shadows=hj.Shadows("exact", resolution=SIZE))
 
 
@@ -478,7 +478,7 @@ def inside_scene() -> hj.Scene:
     return hj.Scene(hair, camera=hj.Camera(eye=(0.05, 0.1, 0.02), target=(1.0, 0.2, 0.3), fov=90.0,
                                            width=SIZE, height=SIZE),
                     light=hj.Light(direction=(-0.5, -0.7, -0.4)),
-                    params=hj.ShadingParams(kd=0.6, ks=0.4, shininess=20.0, kappa=0.8, ambient=0.05),
+                    shading=hj.KajiyaKay(hj.ShadingParams(kd=0.6, ks=0.4, shininess=20.0, kappa=0.8, ambient=0.05)),
                     shadows=hj.Shadows("opacity-maps", 4, SIZE))
 
 
@@ -642,7 +642,7 @@ def test_highlight_accuracy_at_p_1e4(request, backend, model):
         got = glsl_highlight(request.getfixturevalue("gl"), t, light, eye, model, p)[:, 0]
     else:
         with precision("float32"):
-            power = jax.jit(jax.vmap(lambda a, b, c: specular_power(kajiya_kay_terms(a, b, c, model)[1],
+            power = jax.jit(jax.vmap(lambda a, b, c: specular_power(kajiya_kay_terms(a, b, c, cone(model))[1],
                                                                     jnp.float32(p))))
             got = np.asarray(power(t, light, eye))
         assert got.dtype == np.float32
@@ -939,7 +939,7 @@ def test_gl_depth_test_keeps_its_resolution_at_1e_minus_4(gl):
     scene = hj.Scene(hj.Strands.from_list(strands, alpha=1.0), camera=cam,
                      light=hj.Light(direction=(0.0, 0.0, -1.0)),
                      occluder=hj.Occluder(center=(0.0, 0.0, 0.0), radius=s, color=(0.2, 0.2, 0.2)),
-                     shadows=hj.Shadows("none"), params=hj.ShadingParams(kd=0.0, ks=0.0, ambient=1.0))
+                     shadows=hj.Shadows("none"), shading=hj.KajiyaKay(hj.ShadingParams(kd=0.0, ks=0.0, ambient=1.0)))
     jax_image = np.asarray(hj.render(scene))
     gl_image = render_gl(scene).image
     # By hand: hair in front (gap > 0) shows white (it runs through the pixel centre:
@@ -959,7 +959,7 @@ def test_gl_depth_test_keeps_its_resolution_at_1e_minus_4(gl):
 def test_guard_zero_tangent_of_repeated_points():
     """_render.tangents/_unit: a zero central difference (repeated points, one-point
     strands) gives the zero tangent, exactly; other tangents are unit vectors."""
-    from hairjax._render import tangents
+    from hairjax._strands import tangents
 
     hair = hj.Strands.from_list([[[0, 0, 0], [0, 0, 0], [1, 0, 0]],       # one-sided p1 − p0 = 0
                                  [[2, 2, 2]],                              # one point
@@ -1066,15 +1066,15 @@ def test_guard_kajiya_kay_gap_on_the_far_side(dtype):
             t, light, eye = (jnp.asarray(a) for a in (t, light, eye))
 
             def power(t, light, eye, p, model=model):
-                return specular_power(kajiya_kay_terms(t, light, eye, model)[1], p)
+                return specular_power(kajiya_kay_terms(t, light, eye, cone(model))[1], p)
 
-            _, gap = kajiya_kay_terms(t, light, eye, model)
+            _, gap = kajiya_kay_terms(t, light, eye, cone(model))
             assert float(gap) == 1.0 - b, (model, float(gap), b)
             value, grads = jax.value_and_grad(power, argnums=(0, 1, 2, 3))(t, light, eye, jnp.asarray(1e4))
             assert float(value) == 0.0
             assert all(np.all(np.asarray(g) == 0.0) for g in grads), (model, grads)
             grad_gap = jax.grad(lambda t, light, eye, model=model: kajiya_kay_terms(
-                t, light, eye, model)[1], argnums=(0, 1, 2))(t, light, eye)
+                t, light, eye, cone(model))[1], argnums=(0, 1, 2))(t, light, eye)
             assert finite(grad_gap)
 
 
@@ -1135,12 +1135,12 @@ def test_guard_no_point_in_front_of_a_point_light():
     assert (frame.zmin, frame.span) == (0.0, 1.0) and frame.drawable.size == 0
     # usable = 16 − 2·margin(width 1) = 12 texels over ±80°.
     assert frame.view.focal == pytest.approx(6 / np.tan(np.radians(80.0)), rel=1e-12)
-    maps = shadow_setup(pts, segs, np.zeros(1, int), np.ones(1), light, "opacity-maps", 2, 16)
+    maps = shadow_setup(pts, segs, np.zeros(1, int), np.ones(1), light, hj.Shadows("opacity-maps", 2, 16))
     np.testing.assert_array_equal(maps.texel, -1)
     omega = point_opacity(jnp.ones((3, 16, 16)), jnp.asarray(maps.plane), jnp.asarray(maps.f),
                           jnp.asarray(maps.texel))
     np.testing.assert_array_equal(omega, 0.0)
-    exact = shadow_setup(pts, segs, np.zeros(1, int), np.ones(1), light, "exact", 2, 16)
+    exact = shadow_setup(pts, segs, np.zeros(1, int), np.ones(1), light, hj.Shadows("exact", resolution=16))
     np.testing.assert_array_equal(exact.weight, 0.0)
     np.testing.assert_array_equal(exact_opacity(jnp.zeros(0), jnp.zeros(0, bool),
                                                 jnp.asarray(exact.index), jnp.asarray(exact.weight)), 0.0)
@@ -1181,8 +1181,9 @@ def test_guard_fragment_below_the_nearest_plane(monkeypatch):
     import dataclasses as dc
 
     import hairjax._shadows as shadows_mod
+    import hairjax._shadows._frame as frame_mod
 
-    real = shadows_mod.rasterize
+    real = frame_mod.rasterize
 
     def nudged(*args):
         frags = real(*args)
@@ -1190,11 +1191,11 @@ def test_guard_fragment_below_the_nearest_plane(monkeypatch):
         depth[np.argmin(depth)] = np.nextafter(depth.min(), -np.inf)  # one ulp below D₀
         return dc.replace(frags, depth=depth)
 
-    monkeypatch.setattr(shadows_mod, "rasterize", nudged)
+    monkeypatch.setattr(frame_mod, "rasterize", nudged)
     hair = hj.furball(6, 4, seed=1)
     segs = hair.segments()
     setup = shadows_mod.shadow_setup(hair.points, segs, hair.strand_of_point[segs[:, 0]], hair.width,
-                                     hj.Light(direction=(0.3, -1.0, 0.2)), "opacity-maps", 4, 16)
+                                     hj.Light(direction=(0.3, -1.0, 0.2)), hj.Shadows("opacity-maps", 4, 16))
     slices = setup.frag_cell // 16**2
     assert slices.min() == 0 and slices.max() <= 4
 
@@ -1272,7 +1273,7 @@ def test_guard_light_sees_all_points_at_one_spot():
     pts = np.array([[0.2, 1.0, 0.3], [0.2, 0.0, 0.3], [0.2, -1.0, 0.3]])
     segs = np.array([[0, 1], [1, 2]])
     setup = shadow_setup(pts, segs, np.zeros(2, int), np.ones(1), hj.Light(direction=(0.0, -1.0, 0.0)),
-                         "exact", 2, 16)
+                         hj.Shadows("exact", resolution=16))
     assert setup.view.focal == 1.0 and setup.frag_strand.size == 0
     np.testing.assert_allclose(setup.view.project(pts)[0], 8.0, atol=1e-15)
 
@@ -1359,7 +1360,7 @@ def test_guard_sphere_rays_that_miss_and_an_eye_inside():
     warn — an error here), and get depth ∞; with the eye inside, every ray takes the far
     root. Hits lie on the sphere; the Lambert term max(N·L, 0) is 0 on the unlit side."""
     from hairjax._projection import camera_view
-    from hairjax._render import sphere_hits
+    from hairjax._occluder import sphere_hits
 
     occ = hj.Occluder(center=(0.0, 0.0, 0.0), radius=0.5)
     for eye, hits in (((0.0, 0.0, 4.0), "some"), ((0.1, 0.0, 0.2), "all")):
@@ -1450,8 +1451,9 @@ def build_random_scene(spec) -> hj.Scene:
     return hj.Scene(hj.furball(**spec["hair"]).transformed(s),
                     camera=hj.Camera(eye=tuple(s * eye), target=(0.0, 0.0, 0.0), up=up, fov=spec["fov"],
                                      width=SIZE, height=SIZE),
-                    light=light, params=hj.ShadingParams(**spec["params"]), shading_model=spec["model"],
-                    shadows=hj.Shadows(spec["shadows"], spec["maps"], SIZE))
+                    light=light,
+                    shading=hj.shading_model_class(spec["model"])(hj.ShadingParams(**spec["params"])),
+                    shadows=shadow_method(spec["shadows"], spec["maps"], SIZE))
 
 
 # Each example compiles its own scene (~1 s): few examples, no deadline.

@@ -11,8 +11,8 @@ from helpers import PIXEL_TOL, small_furball_scene, unexplained_pixels
 
 import hairjax as hj
 from hairjax._errors import SceneError
-from hairjax._render import point_colors
-from hairjax._streaks import Streaks, streak_factor, streak_prefix, streak_texture
+from hairjax._shading import point_colors
+from hairjax._shading._streaks import Streaks, streak_factor, streak_prefix, streak_texture
 
 
 def mean_by_quadrature(texture, u, width, samples=200001):

@@ -54,10 +54,13 @@ def ordering_class(method: str) -> type[AbstractOrdering]:
         raise SceneError(f"ordering.method must be one of {ordering_names()}, got {method!r}") from None
 
 
-def Ordering(method: str = "bins", **options: Any) -> AbstractOrdering:  # noqa: N802 (a factory named like the type it makes)
-    """The registered ordering `method` with its options, e.g. `Ordering("bins", bins=64)`;
-    `SceneError` for an unknown method or an option it does not take."""
+def Ordering(method: str = "bins", *args: Any, **options: Any) -> AbstractOrdering:  # noqa: N802 (a factory named like the type it makes)
+    """The registered ordering `method` with its options (its dataclass fields, in order or
+    by name), e.g. `Ordering("bins", 64)`; `SceneError` for an unknown method or an
+    option it does not take."""
     cls = ordering_class(method)
+    if args:
+        return cls(*args, **options)
     keys = tuple(f.name for f in dataclasses.fields(cls))
     for key in options:
         if key not in keys:

@@ -94,15 +94,14 @@ def check_params(params: eqx.Module, *, colors: tuple[str, ...] = (),
     step) have no values yet and pass: the check is for values a user gives."""
     if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(params)):
         return
-    for kind, names, ok, text in (
-            ("colors", colors, lambda v: v >= 0, "≥ 0 and finite"),
-            ("positive", positive, lambda v: v > 0, "> 0 and finite"),
-            ("non_negative", non_negative, lambda v: v >= 0, "≥ 0 and finite"),
-            ("finite", finite, lambda v: True, "finite")):
+    for names, ok, text in ((colors, lambda v: v >= 0, ">= 0 (finite)"),
+                            (positive, lambda v: v > 0, "> 0 (finite)"),
+                            (non_negative, lambda v: v >= 0, ">= 0 (finite)"),
+                            (finite, lambda v: True, "finite")):
         for name in names:
             v = np.asarray(getattr(params, name), dtype=np.float64)
             if not (np.all(np.isfinite(v)) and np.all(ok(v))):
-                shown = v.tolist() if v.ndim else float(v)
+                shown = "[" + ", ".join(f"{x:g}" for x in v) + "]" if v.ndim else f"{float(v):g}"
                 raise SceneError(f"shading.{name} must be {text}, got {shown}")
 
 

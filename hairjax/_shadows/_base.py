@@ -64,11 +64,14 @@ def shadow_method_class(method: str) -> type[AbstractShadowMethod]:
         raise SceneError(f"shadows.method must be one of {shadow_method_names()}, got {method!r}") from None
 
 
-def Shadows(method: str = "opacity-maps", **options: Any) -> AbstractShadowMethod:  # noqa: N802 (a factory named like the type it makes)
-    """The registered shadow method `method` with its options, e.g.
-    `Shadows("opacity-maps", maps=64, resolution=256)` or `Shadows("exact", resolution=128)`;
-    `SceneError` for an unknown method or an option it does not take."""
+def Shadows(method: str = "opacity-maps", *args: Any, **options: Any) -> AbstractShadowMethod:  # noqa: N802 (a factory named like the type it makes)
+    """The registered shadow method `method` with its options (its dataclass fields, in
+    order or by name), e.g. `Shadows("opacity-maps", 64, 256)`,
+    `Shadows("exact", resolution=128)`; `SceneError` for an unknown method or an option it
+    does not take."""
     cls = shadow_method_class(method)
+    if args:
+        return cls(*args, **options)
     keys = tuple(f.name for f in dataclasses.fields(cls))
     for key in options:
         if key not in keys:
