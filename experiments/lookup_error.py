@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hairjax._compare import image_stats, median_time
+from hairjax.tools import image_stats, median_time
 
 DEFAULT_SIZES = (4, 8, 16, 32, 64, 128, 256, 512, 1024)
 CSV_COLUMNS = ("size", "rmse", "max_abs", "shading_s", "analytic_shading_s",
@@ -118,7 +118,7 @@ def plot(rows, path: Path, gl: bool) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from hairjax._files import atomic_path
+    from hairjax.tools import atomic_path
 
     n = [r["size"] for r in rows]
     fig, ax = plt.subplots(figsize=(5.5, 4))
@@ -140,7 +140,7 @@ def plot(rows, path: Path, gl: bool) -> None:
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
     import hairjax as hj
-    from hairjax._files import write_csv
+    from hairjax.tools import write_csv
 
     scene = hj.load_scene(args.scene or hj.default_scene_path())
     camera = dataclasses.replace(scene.camera, width=args.size, height=args.size)

@@ -169,7 +169,7 @@ def main(argv=None) -> int:
               for key in ("clipped_s", "unclipped_s", "clipped_shadows_s", "unclipped_shadows_s")}
 
     args.out.mkdir(parents=True, exist_ok=True)
-    from hairjax._files import write_csv
+    from hairjax.tools import write_csv
 
     csv_path = write_csv(args.out / "maps_vs_time.csv", CSV_COLUMNS, rows, float_format=".6f")
     png_path = args.out / "maps_vs_time.png"

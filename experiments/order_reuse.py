@@ -70,7 +70,7 @@ def turned(scene, degrees: float):
 
 
 def image_difference(a: np.ndarray, b: np.ndarray) -> dict:
-    from hairjax._compare import image_stats
+    from hairjax.tools import image_stats
 
     a, b = np.asarray(a, np.float64)[..., :3], np.asarray(b, np.float64)[..., :3]
     stats = image_stats(a, b)
@@ -81,9 +81,9 @@ def image_difference(a: np.ndarray, b: np.ndarray) -> dict:
 def _timings(name, scene, repeats: int, gl: bool) -> dict:
     import jax
 
-    from hairjax._compare import median_time
     from hairjax._ordering import draw_order, segment_depth
     from hairjax._render import forget, render, visibility_order
+    from hairjax.tools import median_time
 
     _, _, depth, segments, order = visibility_order(scene)
     seg = segments[order]  # every drawable segment
@@ -220,7 +220,7 @@ def main(argv=None) -> int:
     csv_path = args.out / "order_reuse.csv"
     timings_path = args.out / "order_reuse_timings.csv"
     png_path = args.out / "order_reuse.png"
-    from hairjax._files import write_csv
+    from hairjax.tools import write_csv
 
     write_csv(csv_path, CSV_COLUMNS, rows, float_format=".6g")
     write_csv(timings_path, TIMING_COLUMNS, timing_rows, float_format=".6g")

@@ -27,12 +27,18 @@ from contextlib import redirect_stdout
 from pathlib import Path
 
 import hairjax as hj
-from hairjax._compare import median_time
-from hairjax._files import write_text
 from hairjax._ordering import draw_order, segment_depth
 from hairjax._projection import camera_view
-from hairjax._sweep import KNOBS, QUICK_KNOBS, load_points, run_sweep
-from hairjax._sweep_report import summary_markdown, write_report
+from hairjax.tools import (
+    KNOBS,
+    QUICK_KNOBS,
+    load_points,
+    median_time,
+    run_sweep,
+    summary_markdown,
+    write_report,
+    write_text,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 KIM_2003_LINES_PER_S = 0.7e6  # kim-2003 §3/§6, a 700 MHz Pentium III

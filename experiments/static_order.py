@@ -108,9 +108,9 @@ def _orders(scene, bin_counts, stale):
 
 
 def _timings(name, scene, bin_counts, repeats: int) -> list[dict]:
-    from hairjax._compare import median_time
     from hairjax._ordering import draw_order, hair_centre, segment_depth, static_order
     from hairjax._render import visibility_order
+    from hairjax.tools import median_time
 
     _, _, depth, segments, drawable = visibility_order(scene.replace(ordering=_hj().Ordering("none")))
     seg = segments[drawable]
@@ -244,7 +244,7 @@ def main(argv=None) -> int:
                   + f"  ({time.perf_counter() - started:.0f} s)", flush=True)
         timing_rows += _timings(name, scene, args.bins, args.repeats)
 
-    from hairjax._files import write_csv
+    from hairjax.tools import write_csv
 
     csv_path = args.out / "static_order.csv"
     timings_path = args.out / "static_order_timings.csv"

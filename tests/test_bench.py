@@ -11,9 +11,9 @@ import math
 
 import pytest
 
-from hairjax import _bench
-from hairjax._bench import GL_PASSES, STAGES
 from hairjax.cli import main
+from hairjax.tools import _bench
+from hairjax.tools._bench import GL_PASSES, STAGES
 
 
 def _positive_finite(x) -> bool:

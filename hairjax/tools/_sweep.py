@@ -4,7 +4,7 @@
 and the GL path, and measures each image against that path's converged reference: exact
 shadows, exact ordering, the finest supersampling swept. Each finished point is appended
 to `points.jsonl` at once, so an interrupted sweep resumes where it stopped; the report
-(`hairjax/_sweep_report.py`) is built from that file.
+(`hairjax/tools/_sweep_report.py`) is built from that file.
 
 Knobs (each point changes one; the others keep the scene's settings):
 - `maps`: number of opacity maps N; `map_resolution`: their size in texels;
@@ -26,11 +26,11 @@ from pathlib import Path
 
 import numpy as np
 
+from .._files import atomic_path, write_json, write_text
+from .._lookup import LOOKUP_MODELS
+from .._scene import Ordering, Scene
+from .._supersample import supersample
 from ._compare import image_stats
-from ._files import atomic_path, write_json, write_text
-from ._lookup import LOOKUP_MODELS
-from ._scene import Ordering, Scene
-from ._supersample import supersample
 
 __all__ = ["KNOBS", "QUICK_KNOBS", "PATHS", "SweepError", "run_sweep", "load_points", "knob_scene"]
 
@@ -94,7 +94,7 @@ def _renderer(path: str) -> Callable[[Scene], tuple[np.ndarray, np.ndarray | Non
     if path == "jax":
         import jax
 
-        from ._render import forget, geometry_stage, render
+        from .._render import forget, geometry_stage, render
 
         def run(scene):
             forget(scene)  # time the whole render, not a cached geometry stage
@@ -105,7 +105,7 @@ def _renderer(path: str) -> Callable[[Scene], tuple[np.ndarray, np.ndarray | Non
 
         return run
     if path == "gl":
-        from .gl import render_gl
+        from ..gl import render_gl
 
         def run(scene):
             result = render_gl(scene)

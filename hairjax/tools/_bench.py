@@ -39,9 +39,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from ._files import write_json
+from .._files import write_json
 
-__all__ = ["main", "configurations", "TARGETS", "STAGES"]
+__all__ = ["bench_main", "configurations", "TARGETS", "STAGES", "GL_PASSES"]
 
 # Scene of the benchmark: the default scene's camera and light (hairjax/scenes/default.toml).
 EYE = (0.0, 0.3, 4.2)
@@ -104,9 +104,9 @@ def _median(xs):
 
 
 def _bench_scene(cfg: dict):
-    from ._scene import Camera, Light, Ordering, Scene, Shadows
-    from ._shading import ShadingParams
-    from ._sources import furball
+    from .._scene import Camera, Light, Ordering, Scene, Shadows
+    from .._shading import ShadingParams
+    from .._sources import furball
 
     hair = furball(strands=cfg["strands"], points=POINTS)
     return Scene(
@@ -127,7 +127,7 @@ def _measure_gl(scene, repeats: int, progress) -> dict:
     """Time `render_gl(scene)`: one warm-up run (shader compilation), then `repeats`."""
     import numpy as np
 
-    from .gl import GLUnavailable, get_context, render_gl
+    from ..gl import GLUnavailable, get_context, render_gl
 
     try:
         ctx = get_context()
@@ -180,9 +180,9 @@ def _measure_jax(scene, repeats: int, progress) -> dict:
     import jax
     import jax.numpy as jnp
 
-    from ._ordering import draw_order, segment_depth
-    from ._render import geometry_stage, prepare, render_profiled, shading_stage
-    from ._shading import ShadingParams
+    from .._ordering import draw_order, segment_depth
+    from .._render import geometry_stage, prepare, render_profiled, shading_stage
+    from .._shading import ShadingParams
 
     params = scene.params
 
@@ -330,9 +330,9 @@ def _run_child(cfg: dict, workdir: Path) -> dict:
     cfg_path.write_text(json.dumps(cfg))
     env = dict(os.environ)
     # The child imports this very package, installed or not.
-    package_root = str(Path(__file__).resolve().parent.parent)
+    package_root = str(Path(__file__).resolve().parents[2])
     env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
-    code = ("import sys; from hairjax._bench import _child_main; "
+    code = ("import sys; from hairjax.tools._bench import _child_main; "
             "sys.exit(_child_main(sys.argv[1:]))")
     proc = subprocess.run([sys.executable, "-c", code, str(cfg_path), str(out_path)], env=env)
     if proc.returncode == 0 and out_path.exists():
@@ -516,7 +516,7 @@ def _write_json_atomic(path: Path, data) -> None:
     write_json(path, _finite_or_none(data), allow_nan=False)
 
 
-def main(args) -> int:
+def bench_main(args) -> int:
     """`hairjax bench [--quick] [--repeats N] [--json PATH] [--backend jax|gl|both]`;
     returns the exit status."""
     import jax
