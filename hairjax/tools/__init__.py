@@ -9,11 +9,11 @@ from .._files import atomic_path as atomic_path
 from .._files import write_csv as write_csv
 from .._files import write_json as write_json
 from .._files import write_text as write_text
-from ._bench import GL_PASSES as GL_PASSES
-from ._bench import STAGES as STAGES
-from ._bench import TARGETS as TARGETS
 from ._bench import bench_main as bench_main
-from ._bench import configurations as configurations
+from ._bench_cases import GL_PASSES as GL_PASSES
+from ._bench_cases import STAGES as STAGES
+from ._bench_cases import TARGETS as TARGETS
+from ._bench_cases import configurations as configurations
 from ._compare import compare as compare
 from ._compare import format_report as format_report
 from ._compare import image_stats as image_stats
