@@ -22,7 +22,6 @@ import time
 import numpy as np
 
 import hairjax as hj
-import hairjax._render as render_mod
 from hairjax.gl import render_gl
 
 TRUE = hj.ShadingParams(kd=(0.45, 0.3, 0.2), ks=0.35, shininess=60.0, kappa=3.0, ambient=0.05)
@@ -76,7 +75,7 @@ def unstaged(scene, target):
     rgb = jnp.asarray(target[..., :3])
 
     def fn(v, args):
-        render_mod.forget(scene)
+        hj.forget(scene)
         v = jnp.exp(v)
         p = hj.ShadingParams(kd=v[:3], ks=v[3:6], shininess=v[6], kappa=v[7], ambient=TRUE.ambient)
         return (hj.render(scene, p)[..., :3] - rgb).ravel()

@@ -81,8 +81,7 @@ def image_difference(a: np.ndarray, b: np.ndarray) -> dict:
 def _timings(name, scene, repeats: int, gl: bool) -> dict:
     import jax
 
-    from hairjax._ordering import draw_order, segment_depth
-    from hairjax._render import forget, render, visibility_order
+    from hairjax import draw_order, forget, render, segment_depth, visibility_order
     from hairjax.tools import median_time
 
     _, _, depth, segments, order = visibility_order(scene)
@@ -175,7 +174,7 @@ def main(argv=None) -> int:
     if args.repeats < 1:
         raise SystemExit("--repeats must be at least 1")
     hj = _hj()
-    from hairjax._render import visibility_order
+    from hairjax import visibility_order
 
     if args.quick:
         scenes = {"quick": quick_scene}

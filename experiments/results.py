@@ -27,8 +27,6 @@ from contextlib import redirect_stdout
 from pathlib import Path
 
 import hairjax as hj
-from hairjax._ordering import draw_order, segment_depth
-from hairjax._projection import camera_view
 from hairjax.tools import (
     KNOBS,
     QUICK_KNOBS,
@@ -84,9 +82,9 @@ def ordering_throughput(strand_counts, points: int, repeats: int) -> list[dict]:
     rows = []
     for n in strand_counts:
         strands = hj.furball(n, points, seed=0)
-        _, depth = camera_view(camera).project(strands.points)
+        _, depth = hj.camera_view(camera).project(strands.points)
         segments = strands.segments()
-        median = median_time(lambda: draw_order(segment_depth(depth, segments), "bins", 256), repeats)
+        median = median_time(lambda: hj.draw_order(hj.segment_depth(depth, segments), "bins", 256), repeats)
         rate = len(segments) / median
         rows.append({"strands": n, "segments": len(segments), "median_ms": 1e3 * median,
                      "M segments/s": rate / 1e6, "× kim-2003": rate / KIM_2003_LINES_PER_S})

@@ -67,6 +67,16 @@ from ._strands import Strands as Strands
 from ._streaks import Streaks as Streaks
 from ._supersample import supersample as supersample
 
+# isort: split
+# Used by experiments/ and notebooks/
+from ._ordering import draw_order as draw_order
+from ._ordering import hair_centre as hair_centre
+from ._ordering import segment_depth as segment_depth
+from ._ordering import static_order as static_order
+from ._projection import camera_view as camera_view
+from ._render import forget as forget
+from ._render import visibility_order as visibility_order
+
 try:
     __version__ = version("hairjax")
 except PackageNotFoundError:  # running from a source tree without installation
