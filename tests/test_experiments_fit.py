@@ -1,4 +1,4 @@
-"""experiments/fit_recovery.py runs end to end (its figures are in BENCHMARKS/notes)."""
+"""experiments/01_fit_recovery.py runs end to end (its figures are in BENCHMARKS/notes)."""
 
 import csv
 
@@ -8,7 +8,7 @@ from helpers import load_experiment
 
 @pytest.mark.slow
 def test_fit_recovery_quick(gl, tmp_path, capsys):
-    module = load_experiment("fit_recovery")
+    module = load_experiment("01_fit_recovery")
     out = tmp_path / "r.csv"
     assert module.main(["--quick", "--out", str(out)]) == 0
     with open(out) as f:

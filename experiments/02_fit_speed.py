@@ -9,7 +9,7 @@ All three start from the same point and stop at convergence with the same tolera
 (float32: relative 1e-5, absolute 1e-7); the table gives the time
 after the first geometry stage, the steps, the worst relative error, and the ratios.
 
-    .venv/bin/python experiments/fit_speed.py [--size 512] [--strands 20000]
+    .venv/bin/python experiments/02_fit_speed.py [--size 512] [--strands 20000]
 """
 
 from __future__ import annotations

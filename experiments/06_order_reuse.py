@@ -18,8 +18,8 @@ Timings: the order itself (`visibility_order`: projection, near-plane test and b
 and the bin sort alone) against a full render from scratch (set-up, geometry and shading
 stages: `forget` then `render`), medians of `--repeats` runs after a warm-up.
 
-    python experiments/order_reuse.py                     # default scene + TressFX, 0–45°
-    python experiments/order_reuse.py --quick             # tiny, for the test suite
+    python experiments/06_order_reuse.py                  # default scene + TressFX, 0–45°
+    python experiments/06_order_reuse.py --quick          # tiny, for the test suite
 
 Writes DIR/order_reuse.csv (scene, path, angle, rmse, max_abs, frac_visible),
 DIR/order_reuse_timings.csv and DIR/order_reuse.png, and prints both tables.

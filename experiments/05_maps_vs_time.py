@@ -12,7 +12,7 @@ light frame included). A setting whose first run takes longer than `--single-run
 seconds is run once only (the output says so). The slope of log(time) against log(N) is
 fitted over N >= 16 for both settings.
 
-    python experiments/maps_vs_time.py [--scene PATH] [--repeats 3] [--out out/maps_vs_time]
+    python experiments/05_maps_vs_time.py [--scene PATH] [--repeats 3] [--out out/maps_vs_time]
         [--maps 1,2,4,...,512] [--single-run-above 60]
 
 Writes DIR/maps_vs_time.csv and DIR/maps_vs_time.png, and prints a table.

@@ -8,8 +8,8 @@ within float32 rounding (`hj.renderer_band`, docs/fitting.md). Prints median and
 relative errors per parameter and solver, over the parameters the data identify (not
 undetermined, and with a standard error below half the bound), and writes every fit as CSV.
 
-    .venv/bin/python experiments/fit_recovery.py                   # default scene + TressFX
-    .venv/bin/python experiments/fit_recovery.py --quick           # small, for the test suite
+    .venv/bin/python experiments/01_fit_recovery.py                # default scene + TressFX
+    .venv/bin/python experiments/01_fit_recovery.py --quick        # small, for the test suite
 """
 
 from __future__ import annotations

@@ -9,7 +9,7 @@ computed once and reused, so the time is the table's build plus the shading; GL 
 `--gl`: the whole `render_gl` call, the table's build and upload included). Each timed
 figure is a median of `--repeats` runs after one warm-up run (compilation).
 
-    python experiments/lookup_error.py [--scene PATH] [--size 128] [--sizes 4,8,...,1024]
+    python experiments/08_lookup_error.py [--scene PATH] [--size 128] [--sizes 4,8,...,1024]
         [--repeats 3] [--gl] [--out out/lookup_error]
 
 Writes DIR/lookup_error.csv and DIR/lookup_error.png, and prints a table.

@@ -23,8 +23,8 @@ segments' depths for `exact` and `bins N` — done for every view — and `stati
 `static` (the roots' centre and the distances) — done once; `bins N @0°` costs one bin
 sort, once. The projection itself, common to all, is not included.
 
-    python experiments/static_order.py          # default scene, TressFX, Scheuermann's head (192²)
-    python experiments/static_order.py --quick          # tiny, for the test suite
+    python experiments/07_static_order.py       # default scene, TressFX, Scheuermann's head (192²)
+    python experiments/07_static_order.py --quick       # tiny, for the test suite
 
 Writes DIR/static_order.csv (scene, method, bins, angle, rmse, max_abs, frac_visible),
 DIR/static_order_timings.csv (scene, method, bins, segments, when, order_s) and
@@ -55,7 +55,7 @@ def _sibling(name: str):
     return module
 
 
-_reuse = _sibling("order_reuse")
+_reuse = _sibling("06_order_reuse")
 turned, image_difference, _angles = _reuse.turned, _reuse.image_difference, _reuse._parse_angles
 
 

@@ -32,10 +32,10 @@ The RMSE reported is that of the returned parameters, rendered afresh against th
 (`fit_rmse` is `FitResult.rmse`, which is NaN after a diverged step although the point
 kept is finite; the status then says so).
 
-    python experiments/stiff_fits.py                       # 2000 strands at 128², float32
-    python experiments/stiff_fits.py --x64                 # the same in float64
-    python experiments/stiff_fits.py --no-separable        # the solver searches Kd, Ks too
-    python experiments/stiff_fits.py --quick               # tiny, for the test suite
+    python experiments/03_stiff_fits.py                    # 2000 strands at 128², float32
+    python experiments/03_stiff_fits.py --x64              # the same in float64
+    python experiments/03_stiff_fits.py --no-separable     # the solver searches Kd, Ks too
+    python experiments/03_stiff_fits.py --quick            # tiny, for the test suite
 
 Writes DIR/stiff_fits.csv (one row per fit) and DIR/stiff_fits.md (the table), and prints
 the table.
