@@ -1,4 +1,4 @@
-"""Time a 4-parameter fit to 1e-3 relative error, staged vs two baselines (issue 4).
+"""Time a 4-parameter fit to 1e-3 relative error, staged vs two baselines (BENCHMARKS.md, "Fitting").
 
 - staged: `hairjax.fit` (geometry stage once, Levenberg-Marquardt on the shading stage);
 - (a) `scipy.optimize.least_squares` with finite differences over GL renders;

@@ -1,8 +1,9 @@
 """Stiff fits: each solver on needle-thin highlights, saturated shadows, Ks ≈ 0 and far starts.
 
-Issue 5 §3. For every case a noise-free target is rendered with the JAX renderer
-(`hj.render(scene, truth)`) and each solver fits all four parameters (Kd RGB, Ks, shininess,
-κ; `ks-zero-held` holds Ks) from the case's start with `hj.fit`. Cases:
+The table of docs/results.md §5 (the solvers: docs/fitting.md). For every case a
+noise-free target is rendered with the JAX renderer (`hj.render(scene, truth)`) and each
+solver fits all four parameters (Kd RGB, Ks, shininess, κ; `ks-zero-held` holds Ks) from
+the case's start with `hj.fit`. Cases:
 
 - `reference`: moderate truth and start (a control: every solver should converge here);
 - `shininess-1000`: p = 1500 (needle-thin highlights) from p = 40;

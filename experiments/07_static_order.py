@@ -74,7 +74,7 @@ SCENES = {
     "default": lambda size: _sized(_hj().load_scene(_hj().default_scene_path()), size),
     "tressfx": lambda size: _sized(
         _hj().load_scene(ROOT / "experiments" / "scenes" / "tressfx_ponytail.toml"), size),
-    # The seed's case: scalp hair on an opaque sphere head, which hides the far side.
+    # scheuermann-2004's case (slide 14): scalp hair on an opaque sphere head, which hides the far side.
     "head": lambda size: _sized(
         _hj().load_scene(ROOT / "experiments" / "scenes" / "scheuermann.toml"), size),
 }

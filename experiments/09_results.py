@@ -1,4 +1,4 @@
-"""Regenerate docs/results.md: error against run time, the seeds' claims, stiff fits.
+"""Regenerate docs/results.md: error against run time, kim-2003's claims, stiff fits.
 
     .venv/bin/python experiments/09_results.py [--size 256] [--repeats 3]
 
@@ -6,7 +6,7 @@ runs, each into out/results/<name>/ (the sweep resumes if cut short):
 - `hairjax sweep` of the default scene (both paths, all knobs) at --size;
 - kim-2003 Fig. 16, `experiments/05_maps_vs_time.py` (GL time against N maps, ± §4.2 clipping);
 - kim-2003 Fig. 8, `experiments/06_order_reuse.py` (an order reused while the head turns);
-- kim-2003 §3, ordering throughput against the seed's 0.7 M lines/s;
+- kim-2003 §3, ordering throughput against kim-2003's 0.7 M lines/s (§6, a Pentium III);
 - `experiments/03_stiff_fits.py` (each solver on stiff and degenerate fits);
 then copies the figures to docs/figures/ and writes docs/results.md. `--quick` runs tiny
 versions and writes into --docs (the test suite's smoke run).
@@ -197,7 +197,7 @@ Timings:
 
 ## 4. kim-2003 §3: ordering throughput
 
-Depth-bin ordering (256 bins, NumPy) of fur balls of 16-point strands, against the seed's
+Depth-bin ordering (256 bins, NumPy) of fur balls of 16-point strands, against kim-2003's
 0.7 million lines per second:
 
 {_table(throughput, list(throughput[0]))}

@@ -1,4 +1,4 @@
-"""Error against run time: one quality knob at a time, both renderers (issue 5, §1).
+"""Error against run time: one quality knob at a time, both renderers (docs/results.md §1).
 
 `run_sweep(scene, out)` renders the scene at every value of every knob, with the JAX path
 and the GL path, and measures each image against that path's converged reference: exact

@@ -1,4 +1,4 @@
-"""The sweep's report: a CSV table, a Pareto plot and a markdown summary (issue 5, §1).
+"""The sweep's report: a CSV table, a Pareto plot and a markdown summary (docs/results.md §1).
 
 Everything here reads the points `run_sweep` stored; nothing renders.
 """
