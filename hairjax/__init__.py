@@ -27,7 +27,12 @@ from ._io import load_hair as load_hair
 from ._light import Light as Light
 from ._ordering import AbstractOrdering as AbstractOrdering
 from ._ordering import Ordering as Ordering
+from ._ordering import draw_order as draw_order
+from ._ordering import hair_centre as hair_centre
 from ._ordering import register_ordering as register_ordering
+from ._ordering import segment_depth as segment_depth
+from ._ordering import static_order as static_order
+from ._projection import camera_view as camera_view
 from ._render import render as render
 from ._render import render_profiled as render_profiled
 from ._scene import Camera as Camera

@@ -16,7 +16,7 @@ independently of both renderers' per-pixel code:
   boundary within rounding can change Ω; `transmittance_uncertainty`: what that does to τ
   for any κ;
 - `renderer_band`: pixels either can move by > PIXEL_TOL — what a fit to GL-rendered
-  targets masks (docs/fitting.md, experiments/fit_recovery.py).
+  targets masks (docs/fitting.md, experiments/01_fit_recovery.py).
 
 Tolerances (tests/test_gl.py gives the measurements behind them):
 - PIXEL_TOL, TAU_TOL = 1e-4 per pixel / per τ: float32 arithmetic on values ≤ 1 with ~10²
@@ -383,7 +383,7 @@ def renderer_band(scene: Scene, colour_bound: float = 1.0) -> np.ndarray:
 
     `colour_bound`: a bound on the colours and on every point's fully lit colour; the
     image's brightest value is the practical stand-in (tests/test_gl.py and
-    experiments/fit_recovery.py use it), 1 for images in [0, 1]. The sum is first order:
+    experiments/01_fit_recovery.py use it), 1 for images in [0, 1]. The sum is first order:
     weights as drawn, ignoring that a toggled fragment also changes T behind it. Because
     Δτ holds for every κ, a point whose Ω may differ taints every pixel of its two
     segments where they weigh enough, so the band holds more than MAX_BAND where shadows

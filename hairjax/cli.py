@@ -59,9 +59,9 @@ def _animate(args) -> int:
 
 
 def _compare(args) -> int:
-    from ._compare import compare, format_report
     from ._files import write_json
     from ._scene_file import default_scene_path, load_scene
+    from .tools import compare, format_report
 
     report = compare(load_scene(args.scene or default_scene_path()), repeats=args.repeats)
     print(format_report(report))
@@ -127,8 +127,7 @@ def _sweep(args) -> int:
     import dataclasses
 
     from ._scene_file import default_scene_path, load_scene
-    from ._sweep import KNOBS, PATHS, QUICK_KNOBS, SweepError, load_points, run_sweep
-    from ._sweep_report import write_report
+    from .tools import KNOBS, PATHS, QUICK_KNOBS, SweepError, load_points, run_sweep, write_report
 
     table = QUICK_KNOBS if args.quick else KNOBS
     names = [k.strip() for k in args.knobs.split(",") if k.strip()] if args.knobs else list(table)
@@ -168,7 +167,7 @@ def _info(args) -> int:
 
 
 def _bench(args) -> int:
-    from ._bench import main as bench_main
+    from .tools import bench_main
 
     return bench_main(args)
 

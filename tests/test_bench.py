@@ -11,9 +11,10 @@ import math
 
 import pytest
 
-from hairjax import _bench
-from hairjax._bench import GL_PASSES, STAGES
 from hairjax.cli import main
+from hairjax.tools import GL_PASSES, STAGES
+from hairjax.tools._bench_report import format_table
+from hairjax.tools._bench_timing import measure_gl
 
 
 def _positive_finite(x) -> bool:
@@ -83,9 +84,9 @@ def test_bench_reports_gl_unavailable(monkeypatch):
         raise hairjax.gl.GLUnavailable("no EGL here")
 
     monkeypatch.setattr(hairjax.gl, "get_context", unavailable)
-    r = _bench._measure_gl(None, 1, lambda msg: None)
+    r = measure_gl(None, 1, lambda msg: None)
     assert r == {"status": "unavailable", "error": "GL unavailable: no EGL here"}
     cfg = dict(strands=2000, size=128)
-    table = _bench._format_table([cfg], [{"status": "ok", "gl": r}], "header")
+    table = format_table([cfg], [{"status": "ok", "gl": r}], "header")
     assert "GL status" in table and "unavailable" in table
     assert "GL unavailable: no EGL here" in table

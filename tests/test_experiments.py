@@ -28,7 +28,7 @@ resolution = 32
 
 
 def test_fit_slope():
-    maps_vs_time = load_experiment("maps_vs_time")
+    maps_vs_time = load_experiment("05_maps_vs_time")
     maps = [1, 2, 4, 8, 16, 32, 64]
     assert maps_vs_time.fit_slope(maps, [0.5 * n for n in maps]) == pytest.approx(1.0)
     assert maps_vs_time.fit_slope(maps, [n ** 0.5 for n in maps]) == pytest.approx(0.5)
@@ -39,7 +39,7 @@ def test_maps_vs_time_tiny(tmp_path, capsys, gl):
     scene = tmp_path / "tiny.toml"
     scene.write_text(TINY_SCENE)
     out = tmp_path / "out"
-    status = load_experiment("maps_vs_time").main(
+    status = load_experiment("05_maps_vs_time").main(
         ["--scene", str(scene), "--maps", "1,4", "--repeats", "1", "--out", str(out)])
     assert status == 0
     printed = capsys.readouterr().out

@@ -1,4 +1,4 @@
-"""experiments/order_reuse.py runs end to end in quick mode (kim-2003 Fig. 8's reused order)."""
+"""experiments/06_order_reuse.py runs end to end in quick mode (kim-2003 Fig. 8's reused order)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from helpers import load_experiment
 
 def test_order_reuse_quick(tmp_path, capsys):
     out = tmp_path / "out"
-    assert load_experiment("order_reuse").main(["--quick", "--no-gl", "--out", str(out)]) == 0
+    assert load_experiment("06_order_reuse").main(["--quick", "--no-gl", "--out", str(out)]) == 0
     printed = capsys.readouterr().out
     with open(out / "order_reuse.csv", newline="") as f:
         rows = list(csv.DictReader(f))
@@ -33,7 +33,7 @@ def test_order_reuse_quick(tmp_path, capsys):
 def test_turned_camera_keeps_distance_height_and_target():
     import hairjax as hj
 
-    module = load_experiment("order_reuse")
+    module = load_experiment("06_order_reuse")
     scene = hj.Scene(hj.furball(10, 3, seed=0),
                      camera=hj.Camera(eye=(1.0, 0.5, 4.0), target=(1.0, -0.1, 0.0)))
     view = module.turned(scene, 90.0)
@@ -44,7 +44,7 @@ def test_turned_camera_keeps_distance_height_and_target():
 
 
 def test_image_difference_by_hand():
-    module = load_experiment("order_reuse")
+    module = load_experiment("06_order_reuse")
     a = np.zeros((2, 2, 4))
     b = np.zeros((2, 2, 4))
     b[0, 0, 1] = 0.2   # one channel of one pixel

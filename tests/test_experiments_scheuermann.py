@@ -1,11 +1,11 @@
-"""experiments/scheuermann_fit.py: every Scheuermann parameter it fits is recovered from a
+"""experiments/04_scheuermann_fit.py: every Scheuermann parameter it fits is recovered from a
 GL-rendered target (docs/model.md §17: the model's parameters are fit-able)."""
 
 from helpers import load_experiment
 
 
 def test_scheuermann_fit_recovers_a_gl_target(gl):
-    module = load_experiment("scheuermann_fit")
+    module = load_experiment("04_scheuermann_fit")
     errors, steps, _, rmse = module.run(size=32, strands=150, target="gl")
     # The GL target differs from the JAX model by float32 rounding only (RMSE ~1e-7 on
     # pixel values ~0.1, tests/test_scheuermann.py); with the fit's conditioning that moves

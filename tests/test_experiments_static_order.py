@@ -1,4 +1,4 @@
-"""experiments/static_order.py runs end to end in quick mode (scheuermann-2004 slide 14's
+"""experiments/07_static_order.py runs end to end in quick mode (scheuermann-2004 slide 14's
 static order against per-view bin sorts)."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from helpers import load_experiment
 
 def test_static_order_quick(tmp_path, capsys):
     out = tmp_path / "out"
-    assert load_experiment("static_order").main(["--quick", "--out", str(out)]) == 0
+    assert load_experiment("07_static_order").main(["--quick", "--out", str(out)]) == 0
     printed = capsys.readouterr().out
     with open(out / "static_order.csv", newline="") as f:
         rows = list(csv.DictReader(f))

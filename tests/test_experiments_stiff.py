@@ -1,4 +1,4 @@
-"""experiments/stiff_fits.py runs end to end in quick mode (no timing or accuracy thresholds
+"""experiments/03_stiff_fits.py runs end to end in quick mode (no timing or accuracy thresholds
 beyond what hairjax.fit guarantees)."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from helpers import load_experiment
 
 
 def test_stiff_fits_quick(tmp_path, capsys):
-    module = load_experiment("stiff_fits")
+    module = load_experiment("03_stiff_fits")
     out = tmp_path / "out"
     assert module.main(["--quick", "--out", str(out)]) == 0
     printed = capsys.readouterr().out
@@ -35,7 +35,7 @@ def test_stiff_fits_quick(tmp_path, capsys):
 
 def test_judge_statuses():
     """The status rules of the docstring, on hand-made results."""
-    judge = load_experiment("stiff_fits").judge
+    judge = load_experiment("03_stiff_fits").judge
     fitted = ("kd", "ks", "shininess", "kappa")
     good = dict(kd=1e-4, ks=2e-3, shininess=5e-3, kappa=1e-5)
     assert judge("converged", good, fitted, (), (), 1e-2) == ("converged", False, 5e-3)
@@ -63,7 +63,7 @@ def test_judge_statuses():
 def test_parameter_errors_absolute_at_zero_truth():
     import hairjax as hj
 
-    errors = load_experiment("stiff_fits").parameter_errors
+    errors = load_experiment("03_stiff_fits").parameter_errors
     truth = hj.ShadingParams(kd=(0.5, 0.25, 0.2), ks=0.0, shininess=100.0, kappa=2.0)
     fitted = hj.ShadingParams(kd=(0.5, 0.5, 0.2), ks=0.003, shininess=101.0, kappa=2.0)
     e = errors(fitted, truth)

@@ -203,7 +203,7 @@ def test_gl_lookup_matches_jax(gl, n):
 
 
 def test_lookup_error_experiment_runs(tmp_path, capsys, gl):
-    """experiments/lookup_error.py end to end on a tiny scene, both renderers."""
+    """experiments/08_lookup_error.py end to end on a tiny scene, both renderers."""
     import csv
 
     from helpers import load_experiment
@@ -212,7 +212,7 @@ def test_lookup_error_experiment_runs(tmp_path, capsys, gl):
     scene.write_text('[hair]\nsource = "furball"\nstrands = 200\npoints = 6\n'
                      '[shadows]\nmethod = "none"\n')
     out = tmp_path / "out"
-    status = load_experiment("lookup_error").main(
+    status = load_experiment("08_lookup_error").main(
         ["--scene", str(scene), "--size", "32", "--sizes", "4,64", "--repeats", "1", "--gl",
          "--out", str(out)])
     assert status == 0 and "GL RMSE" in capsys.readouterr().out

@@ -1,4 +1,4 @@
-"""`hairjax sweep` (hairjax/_sweep.py, _sweep_report.py): points, resuming, the report."""
+"""`hairjax sweep` (hairjax/tools/_sweep.py, _sweep_report.py): points, resuming, the report."""
 
 import json
 
@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from helpers import small_furball_scene
 
-import hairjax._sweep as sweep_mod
+import hairjax.tools._sweep as sweep_mod
 from hairjax import cli
-from hairjax._sweep import SweepError, knob_scene, load_points, run_sweep
-from hairjax._sweep_report import cheapest, summary_markdown, write_report
+from hairjax.tools._sweep import SweepError, knob_scene, load_points, run_sweep
+from hairjax.tools._sweep_report import cheapest, summary_markdown, write_report
 
 KNOBS = {"bins": (1, "exact"), "maps": (2, 8)}
 

@@ -1,4 +1,4 @@
-"""Time a 4-parameter fit to 1e-3 relative error, staged vs two baselines (issue 4).
+"""Time a 4-parameter fit to 1e-3 relative error, staged vs two baselines (BENCHMARKS.md, "Fitting").
 
 - staged: `hairjax.fit` (geometry stage once, Levenberg-Marquardt on the shading stage);
 - (a) `scipy.optimize.least_squares` with finite differences over GL renders;
@@ -9,7 +9,7 @@ All three start from the same point and stop at convergence with the same tolera
 (float32: relative 1e-5, absolute 1e-7); the table gives the time
 after the first geometry stage, the steps, the worst relative error, and the ratios.
 
-    .venv/bin/python experiments/fit_speed.py [--size 512] [--strands 20000]
+    .venv/bin/python experiments/02_fit_speed.py [--size 512] [--strands 20000]
 """
 
 from __future__ import annotations
@@ -22,7 +22,6 @@ import time
 import numpy as np
 
 import hairjax as hj
-import hairjax._render as render_mod
 from hairjax.gl import render_gl
 
 TRUE = hj.ShadingParams(kd=(0.45, 0.3, 0.2), ks=0.35, shininess=60.0, kappa=3.0, ambient=0.05)
@@ -76,7 +75,7 @@ def unstaged(scene, target):
     rgb = jnp.asarray(target[..., :3])
 
     def fn(v, args):
-        render_mod.forget(scene)
+        hj.forget(scene)
         v = jnp.exp(v)
         p = hj.ShadingParams(kd=v[:3], ks=v[3:6], shininess=v[6], kappa=v[7], ambient=TRUE.ambient)
         return (hj.render(scene, p)[..., :3] - rgb).ravel()

@@ -1,13 +1,13 @@
-"""Regenerate docs/results.md: error against run time, the seeds' claims, stiff fits.
+"""Regenerate docs/results.md: error against run time, kim-2003's claims, stiff fits.
 
-    .venv/bin/python experiments/results.py [--size 256] [--repeats 3]
+    .venv/bin/python experiments/09_results.py [--size 256] [--repeats 3]
 
 runs, each into out/results/<name>/ (the sweep resumes if cut short):
 - `hairjax sweep` of the default scene (both paths, all knobs) at --size;
-- kim-2003 Fig. 16, `experiments/maps_vs_time.py` (GL time against N maps, ± §4.2 clipping);
-- kim-2003 Fig. 8, `experiments/order_reuse.py` (an order reused while the head turns);
-- kim-2003 §3, ordering throughput against the seed's 0.7 M lines/s;
-- `experiments/stiff_fits.py` (each solver on stiff and degenerate fits);
+- kim-2003 Fig. 16, `experiments/05_maps_vs_time.py` (GL time against N maps, ± §4.2 clipping);
+- kim-2003 Fig. 8, `experiments/06_order_reuse.py` (an order reused while the head turns);
+- kim-2003 §3, ordering throughput against kim-2003's 0.7 M lines/s (§6, a Pentium III);
+- `experiments/03_stiff_fits.py` (each solver on stiff and degenerate fits);
 then copies the figures to docs/figures/ and writes docs/results.md. `--quick` runs tiny
 versions and writes into --docs (the test suite's smoke run).
 """
@@ -27,12 +27,16 @@ from contextlib import redirect_stdout
 from pathlib import Path
 
 import hairjax as hj
-from hairjax._compare import median_time
-from hairjax._files import write_text
-from hairjax._ordering import draw_order, segment_depth
-from hairjax._projection import camera_view
-from hairjax._sweep import KNOBS, QUICK_KNOBS, load_points, run_sweep
-from hairjax._sweep_report import summary_markdown, write_report
+from hairjax.tools import (
+    KNOBS,
+    QUICK_KNOBS,
+    load_points,
+    median_time,
+    run_sweep,
+    summary_markdown,
+    write_report,
+    write_text,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 KIM_2003_LINES_PER_S = 0.7e6  # kim-2003 §3/§6, a 700 MHz Pentium III
@@ -78,9 +82,9 @@ def ordering_throughput(strand_counts, points: int, repeats: int) -> list[dict]:
     rows = []
     for n in strand_counts:
         strands = hj.furball(n, points, seed=0)
-        _, depth = camera_view(camera).project(strands.points)
+        _, depth = hj.camera_view(camera).project(strands.points)
         segments = strands.segments()
-        median = median_time(lambda: draw_order(segment_depth(depth, segments), "bins", 256), repeats)
+        median = median_time(lambda: hj.draw_order(hj.segment_depth(depth, segments), "bins", 256), repeats)
         rate = len(segments) / median
         rows.append({"strands": n, "segments": len(segments), "median_ms": 1e3 * median,
                      "M segments/s": rate / 1e6, "× kim-2003": rate / KIM_2003_LINES_PER_S})
@@ -126,14 +130,14 @@ def main(argv=None) -> int:
                         '[camera]\nwidth = 48\nheight = 48\n'
                         '[shadows]\nmethod = "opacity-maps"\nresolution = 32\n')
         scene_arg = ["--scene", str(tiny)]
-    maps_printed = _run("maps_vs_time", ["--maps", maps, "--repeats", str(repeats), "--out", str(maps_out),
+    maps_printed = _run("05_maps_vs_time", ["--maps", maps, "--repeats", str(repeats), "--out", str(maps_out),
                                          *scene_arg])
     shutil.copy(maps_out / "maps_vs_time.png", figures / "maps_vs_time.png")
 
     # 3. kim-2003 Fig. 8.
     order_out = out / "order_reuse"
     order_args = ["--quick"] if args.quick else ["--repeats", str(repeats)]
-    _run("order_reuse", order_args + ["--out", str(order_out)])
+    _run("06_order_reuse", order_args + ["--out", str(order_out)])
     shutil.copy(order_out / "order_reuse.png", figures / "order_reuse.png")
     order_rows = _csv(order_out / "order_reuse.csv")
     timing_rows = _csv(order_out / "order_reuse_timings.csv")
@@ -143,12 +147,13 @@ def main(argv=None) -> int:
 
     # 5. Stiff fits.
     stiff_out, searched_out = out / "stiff_fits", out / "stiff_fits_searched"
-    _run("stiff_fits", (["--quick"] if args.quick else []) + ["--out", str(stiff_out)])
-    _run("stiff_fits", (["--quick"] if args.quick else []) + ["--no-separable", "--out", str(searched_out)])
+    quick = ["--quick"] if args.quick else []
+    _run("03_stiff_fits", quick + ["--out", str(stiff_out)])
+    _run("03_stiff_fits", quick + ["--no-separable", "--out", str(searched_out)])
     stiff_table = (stiff_out / "stiff_fits.md").read_text()
     searched_table = (searched_out / "stiff_fits.md").read_text()
 
-    command = "python experiments/results.py" + (" --quick" if args.quick else
+    command = "python experiments/09_results.py" + (" --quick" if args.quick else
                                                  f" --size {args.size} --repeats {args.repeats}")
     text = f"""# Results
 
@@ -166,7 +171,7 @@ medians and only comparable within one run. This run took {time.perf_counter() -
 {summary}
 ## 2. kim-2003 Fig. 16: time against the number of opacity maps
 
-`experiments/maps_vs_time.py` (GL path, default scene): without §4.2 clipping every
+`experiments/05_maps_vs_time.py` (GL path, default scene): without §4.2 clipping every
 segment is drawn into every map and the time grows linearly in N; with clipping each
 segment is drawn only into the slices its depth range meets, and it grows sub-linearly.
 
@@ -178,7 +183,7 @@ segment is drawn only into the slices its depth range meets, and it grows sub-li
 
 ## 3. kim-2003 Fig. 8: one visibility order while the head turns
 
-`experiments/order_reuse.py`: the order computed for the camera at 0° is reused as the
+`experiments/06_order_reuse.py`: the order computed for the camera at 0° is reused as the
 camera turns about the hair's vertical axis; the error is against the order recomputed
 for each view.
 
@@ -192,14 +197,14 @@ Timings:
 
 ## 4. kim-2003 §3: ordering throughput
 
-Depth-bin ordering (256 bins, NumPy) of fur balls of 16-point strands, against the seed's
+Depth-bin ordering (256 bins, NumPy) of fur balls of 16-point strands, against kim-2003's
 0.7 million lines per second:
 
 {_table(throughput, list(throughput[0]))}
 
 ## 5. Stiff fits
 
-`experiments/stiff_fits.py`: each solver on needle-thin highlights, saturated shadows,
+`experiments/03_stiff_fits.py`: each solver on needle-thin highlights, saturated shadows,
 Ks ≈ 0 and starts two orders of magnitude off. As `hj.fit` runs by default: Kd and Ks
 solved for at every step, the solver searching the shininess and κ (variable projection,
 docs/fitting.md), convergence confirmed by the Gauss-Newton test, with a restart when the

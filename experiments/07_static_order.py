@@ -23,8 +23,8 @@ segments' depths for `exact` and `bins N` — done for every view — and `stati
 `static` (the roots' centre and the distances) — done once; `bins N @0°` costs one bin
 sort, once. The projection itself, common to all, is not included.
 
-    python experiments/static_order.py          # default scene, TressFX, Scheuermann's head (192²)
-    python experiments/static_order.py --quick          # tiny, for the test suite
+    python experiments/07_static_order.py       # default scene, TressFX, Scheuermann's head (192²)
+    python experiments/07_static_order.py --quick       # tiny, for the test suite
 
 Writes DIR/static_order.csv (scene, method, bins, angle, rmse, max_abs, frac_visible),
 DIR/static_order_timings.csv (scene, method, bins, segments, when, order_s) and
@@ -55,7 +55,7 @@ def _sibling(name: str):
     return module
 
 
-_reuse = _sibling("order_reuse")
+_reuse = _sibling("06_order_reuse")
 turned, image_difference, _angles = _reuse.turned, _reuse.image_difference, _reuse._parse_angles
 
 
@@ -74,7 +74,7 @@ SCENES = {
     "default": lambda size: _sized(_hj().load_scene(_hj().default_scene_path()), size),
     "tressfx": lambda size: _sized(
         _hj().load_scene(ROOT / "experiments" / "scenes" / "tressfx_ponytail.toml"), size),
-    # The seed's case: scalp hair on an opaque sphere head, which hides the far side.
+    # scheuermann-2004's case (slide 14): scalp hair on an opaque sphere head, which hides the far side.
     "head": lambda size: _sized(
         _hj().load_scene(ROOT / "experiments" / "scenes" / "scheuermann.toml"), size),
 }
@@ -93,8 +93,7 @@ def _label(method: str, bins: int) -> str:
 
 def _orders(scene, bin_counts, stale):
     """The draw orders of this view: method label → (method, bins, order)."""
-    from hairjax._ordering import draw_order, segment_depth
-    from hairjax._render import visibility_order
+    from hairjax import draw_order, segment_depth, visibility_order
 
     _, _, depth, segments, drawable = visibility_order(scene.replace(ordering=_hj().Ordering("none")))
     seg_depth = segment_depth(depth, segments[drawable])
@@ -108,9 +107,8 @@ def _orders(scene, bin_counts, stale):
 
 
 def _timings(name, scene, bin_counts, repeats: int) -> list[dict]:
-    from hairjax._compare import median_time
-    from hairjax._ordering import draw_order, hair_centre, segment_depth, static_order
-    from hairjax._render import visibility_order
+    from hairjax import draw_order, hair_centre, segment_depth, static_order, visibility_order
+    from hairjax.tools import median_time
 
     _, _, depth, segments, drawable = visibility_order(scene.replace(ordering=_hj().Ordering("none")))
     seg = segments[drawable]
@@ -209,7 +207,7 @@ def main(argv=None) -> int:
     if args.repeats < 1 or args.size < 4:
         raise SystemExit("--repeats must be at least 1 and --size at least 4")
     hj = _hj()
-    from hairjax._render import visibility_order
+    from hairjax import visibility_order
 
     if args.quick:
         scenes = {"quick": lambda size: quick_scene()}
@@ -244,7 +242,7 @@ def main(argv=None) -> int:
                   + f"  ({time.perf_counter() - started:.0f} s)", flush=True)
         timing_rows += _timings(name, scene, args.bins, args.repeats)
 
-    from hairjax._files import write_csv
+    from hairjax.tools import write_csv
 
     csv_path = args.out / "static_order.csv"
     timings_path = args.out / "static_order_timings.csv"

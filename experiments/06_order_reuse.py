@@ -18,8 +18,8 @@ Timings: the order itself (`visibility_order`: projection, near-plane test and b
 and the bin sort alone) against a full render from scratch (set-up, geometry and shading
 stages: `forget` then `render`), medians of `--repeats` runs after a warm-up.
 
-    python experiments/order_reuse.py                     # default scene + TressFX, 0–45°
-    python experiments/order_reuse.py --quick             # tiny, for the test suite
+    python experiments/06_order_reuse.py                  # default scene + TressFX, 0–45°
+    python experiments/06_order_reuse.py --quick          # tiny, for the test suite
 
 Writes DIR/order_reuse.csv (scene, path, angle, rmse, max_abs, frac_visible),
 DIR/order_reuse_timings.csv and DIR/order_reuse.png, and prints both tables.
@@ -70,7 +70,7 @@ def turned(scene, degrees: float):
 
 
 def image_difference(a: np.ndarray, b: np.ndarray) -> dict:
-    from hairjax._compare import image_stats
+    from hairjax.tools import image_stats
 
     a, b = np.asarray(a, np.float64)[..., :3], np.asarray(b, np.float64)[..., :3]
     stats = image_stats(a, b)
@@ -81,9 +81,8 @@ def image_difference(a: np.ndarray, b: np.ndarray) -> dict:
 def _timings(name, scene, repeats: int, gl: bool) -> dict:
     import jax
 
-    from hairjax._compare import median_time
-    from hairjax._ordering import draw_order, segment_depth
-    from hairjax._render import forget, render, visibility_order
+    from hairjax import draw_order, forget, render, segment_depth, visibility_order
+    from hairjax.tools import median_time
 
     _, _, depth, segments, order = visibility_order(scene)
     seg = segments[order]  # every drawable segment
@@ -175,7 +174,7 @@ def main(argv=None) -> int:
     if args.repeats < 1:
         raise SystemExit("--repeats must be at least 1")
     hj = _hj()
-    from hairjax._render import visibility_order
+    from hairjax import visibility_order
 
     if args.quick:
         scenes = {"quick": quick_scene}
@@ -220,7 +219,7 @@ def main(argv=None) -> int:
     csv_path = args.out / "order_reuse.csv"
     timings_path = args.out / "order_reuse_timings.csv"
     png_path = args.out / "order_reuse.png"
-    from hairjax._files import write_csv
+    from hairjax.tools import write_csv
 
     write_csv(csv_path, CSV_COLUMNS, rows, float_format=".6g")
     write_csv(timings_path, TIMING_COLUMNS, timing_rows, float_format=".6g")

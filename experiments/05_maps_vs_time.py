@@ -12,7 +12,7 @@ light frame included). A setting whose first run takes longer than `--single-run
 seconds is run once only (the output says so). The slope of log(time) against log(N) is
 fitted over N >= 16 for both settings.
 
-    python experiments/maps_vs_time.py [--scene PATH] [--repeats 3] [--out out/maps_vs_time]
+    python experiments/05_maps_vs_time.py [--scene PATH] [--repeats 3] [--out out/maps_vs_time]
         [--maps 1,2,4,...,512] [--single-run-above 60]
 
 Writes DIR/maps_vs_time.csv and DIR/maps_vs_time.png, and prints a table.
@@ -169,7 +169,7 @@ def main(argv=None) -> int:
               for key in ("clipped_s", "unclipped_s", "clipped_shadows_s", "unclipped_shadows_s")}
 
     args.out.mkdir(parents=True, exist_ok=True)
-    from hairjax._files import write_csv
+    from hairjax.tools import write_csv
 
     csv_path = write_csv(args.out / "maps_vs_time.csv", CSV_COLUMNS, rows, float_format=".6f")
     png_path = args.out / "maps_vs_time.png"

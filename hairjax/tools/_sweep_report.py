@@ -1,4 +1,4 @@
-"""The sweep's report: a CSV table, a Pareto plot and a markdown summary (issue 5, §1).
+"""The sweep's report: a CSV table, a Pareto plot and a markdown summary (docs/results.md §1).
 
 Everything here reads the points `run_sweep` stored; nothing renders.
 """
@@ -8,7 +8,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from ._files import atomic_path, write_csv, write_text
+from .._files import atomic_path, write_csv, write_text
 
 __all__ = ["write_report", "summary_markdown", "cheapest", "pareto_plot", "THRESHOLDS"]
 

@@ -8,12 +8,12 @@ import time
 import jax
 import numpy as np
 
-from ._band import PIXEL_TOL
-from ._cache import forget
-from ._geometry_stage import geometry_stage
-from ._render import render
-from ._scene import Scene
-from ._shading import transmittance
+from .._band import PIXEL_TOL
+from .._cache import forget
+from .._geometry_stage import geometry_stage
+from .._render import render
+from .._scene import Scene
+from .._shading import transmittance
 
 __all__ = ["compare", "image_stats", "format_report"]
 
@@ -44,7 +44,7 @@ def median_time(fn, repeats: int) -> float:
 
 def compare(scene: Scene, repeats: int = 3) -> dict:
     """Render with JAX and GL, and report image and τ differences and median timings."""
-    from .gl import render_gl
+    from ..gl import render_gl
 
     jax_image = np.asarray(render(scene))
     gl = render_gl(scene)

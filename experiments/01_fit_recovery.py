@@ -1,4 +1,4 @@
-"""Recover hidden shading parameters from GL-rendered targets (issue 4 acceptance).
+"""Recover hidden shading parameters from GL-rendered targets (BENCHMARKS.md, "Recovery").
 
 For N random hidden parameter sets (Kd ∈ [0.05, 1] RGB, Ks ∈ [0, 1], shininess ∈ [2, 500],
 κ ∈ [0.1, 20]) the GL renderer draws a target; each solver fits all four parameters with
@@ -6,10 +6,11 @@ the JAX renderer from one fixed start, without noise and with Gaussian pixel noi
 of the target's peak, masking the pixels where GL and JAX may differ by a discontinuity
 within float32 rounding (`hj.renderer_band`, docs/fitting.md). Prints median and worst
 relative errors per parameter and solver, over the parameters the data identify (not
-undetermined, and with a standard error below half the bound), and writes every fit as CSV.
+undetermined, and with a standard error below half the bound: 1e-3 without noise, 2e-2
+with it), and writes every fit as CSV.
 
-    .venv/bin/python experiments/fit_recovery.py                   # default scene + TressFX
-    .venv/bin/python experiments/fit_recovery.py --quick           # small, for the test suite
+    .venv/bin/python experiments/01_fit_recovery.py                # default scene + TressFX
+    .venv/bin/python experiments/01_fit_recovery.py --quick        # small, for the test suite
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@ JAX — on experiments/scenes/scheuermann.toml's settings at a smaller size; `ha
 (Levenberg-Marquardt on the shading stage, the geometry stage once) starts from a point
 20-100 % off and recovers Kd (RGB), both highlights' colours, exponents and shifts.
 
-    .venv/bin/python experiments/scheuermann_fit.py [--size 96] [--strands 1000] [--target jax]
+    .venv/bin/python experiments/04_scheuermann_fit.py [--size 96] [--strands 1000] [--target jax]
 """
 
 from __future__ import annotations

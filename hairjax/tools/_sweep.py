@@ -1,10 +1,10 @@
-"""Error against run time: one quality knob at a time, both renderers (issue 5, §1).
+"""Error against run time: one quality knob at a time, both renderers (docs/results.md §1).
 
 `run_sweep(scene, out)` renders the scene at every value of every knob, with the JAX path
 and the GL path, and measures each image against that path's converged reference: exact
 shadows, exact ordering, the finest supersampling swept. Each finished point is appended
 to `points.jsonl` at once, so an interrupted sweep resumes where it stopped; the report
-(`hairjax/_sweep_report.py`) is built from that file.
+(`hairjax/tools/_sweep_report.py`) is built from that file.
 
 Knobs (each point changes one; the others keep the scene's settings):
 - `maps`: number of opacity maps N; `map_resolution`: their size in texels;
@@ -27,12 +27,12 @@ from pathlib import Path
 import jax
 import numpy as np
 
+from .._files import atomic_path, write_json, write_text
+from .._ordering import Ordering
+from .._scene import Scene
+from .._shadows import Shadows
+from .._supersample import supersample
 from ._compare import image_stats
-from ._files import atomic_path, write_json, write_text
-from ._ordering import Ordering
-from ._scene import Scene
-from ._shadows import Shadows
-from ._supersample import supersample
 
 __all__ = ["KNOBS", "QUICK_KNOBS", "PATHS", "SweepError", "run_sweep", "load_points", "knob_scene"]
 
@@ -96,9 +96,9 @@ def _renderer(path: str) -> Callable[[Scene], tuple[np.ndarray, np.ndarray | Non
     if path == "jax":
         import jax
 
-        from ._cache import forget
-        from ._geometry_stage import geometry_stage
-        from ._render import render
+        from .._cache import forget
+        from .._geometry_stage import geometry_stage
+        from .._render import render
 
         def run(scene):
             forget(scene)  # time the whole render, not a cached geometry stage
@@ -109,7 +109,7 @@ def _renderer(path: str) -> Callable[[Scene], tuple[np.ndarray, np.ndarray | Non
 
         return run
     if path == "gl":
-        from .gl import render_gl
+        from ..gl import render_gl
 
         def run(scene):
             result = render_gl(scene)

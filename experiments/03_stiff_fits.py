@@ -1,8 +1,9 @@
 """Stiff fits: each solver on needle-thin highlights, saturated shadows, Ks ≈ 0 and far starts.
 
-Issue 5 §3. For every case a noise-free target is rendered with the JAX renderer
-(`hj.render(scene, truth)`) and each solver fits all four parameters (Kd RGB, Ks, shininess,
-κ; `ks-zero-held` holds Ks) from the case's start with `hj.fit`. Cases:
+The table of docs/results.md §5 (the solvers: docs/fitting.md). For every case a
+noise-free target is rendered with the JAX renderer (`hj.render(scene, truth)`) and each
+solver fits all four parameters (Kd RGB, Ks, shininess, κ; `ks-zero-held` holds Ks) from
+the case's start with `hj.fit`. Cases:
 
 - `reference`: moderate truth and start (a control: every solver should converge here);
 - `shininess-1000`: p = 1500 (needle-thin highlights) from p = 40;
@@ -32,10 +33,10 @@ The RMSE reported is that of the returned parameters, rendered afresh against th
 (`fit_rmse` is `FitResult.rmse`, which is NaN after a diverged step although the point
 kept is finite; the status then says so).
 
-    python experiments/stiff_fits.py                       # 2000 strands at 128², float32
-    python experiments/stiff_fits.py --x64                 # the same in float64
-    python experiments/stiff_fits.py --no-separable        # the solver searches Kd, Ks too
-    python experiments/stiff_fits.py --quick               # tiny, for the test suite
+    python experiments/03_stiff_fits.py                    # 2000 strands at 128², float32
+    python experiments/03_stiff_fits.py --x64              # the same in float64
+    python experiments/03_stiff_fits.py --no-separable     # the solver searches Kd, Ks too
+    python experiments/03_stiff_fits.py --quick            # tiny, for the test suite
 
 Writes DIR/stiff_fits.csv (one row per fit) and DIR/stiff_fits.md (the table), and prints
 the table.
@@ -309,7 +310,7 @@ def main(argv=None) -> int:
 
     text = table(rows, [c.name for c in cases], solvers, header)
     csv_path, md_path = args.out / "stiff_fits.csv", args.out / "stiff_fits.md"
-    from hairjax._files import write_csv, write_text
+    from hairjax.tools import write_csv, write_text
 
     write_csv(csv_path, CSV_COLUMNS, rows, float_format=".6g")
     write_text(md_path, text)

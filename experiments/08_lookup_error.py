@@ -9,7 +9,7 @@ computed once and reused, so the time is the table's build plus the shading; GL 
 `--gl`: the whole `render_gl` call, the table's build and upload included). Each timed
 figure is a median of `--repeats` runs after one warm-up run (compilation).
 
-    python experiments/lookup_error.py [--scene PATH] [--size 128] [--sizes 4,8,...,1024]
+    python experiments/08_lookup_error.py [--scene PATH] [--size 128] [--sizes 4,8,...,1024]
         [--repeats 3] [--gl] [--out out/lookup_error]
 
 Writes DIR/lookup_error.csv and DIR/lookup_error.png, and prints a table.
@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hairjax._compare import image_stats, median_time
+from hairjax.tools import image_stats, median_time
 
 DEFAULT_SIZES = (4, 8, 16, 32, 64, 128, 256, 512, 1024)
 CSV_COLUMNS = ("size", "rmse", "max_abs", "shading_s", "analytic_shading_s",
@@ -66,7 +66,7 @@ def measure(scene, sizes, repeats: int, gl: bool) -> list[dict]:
 
     import hairjax as hj
 
-    analytic = scene.replace(shading_model="kajiya-kay")
+    analytic = scene.replace(shading=hj.KajiyaKay(scene.params))
     geometry = hj.geometry_stage(analytic)
     shade = lambda g: jax.block_until_ready(hj.shading_stage(g, scene.params))  # noqa: E731
     reference = np.asarray(shade(geometry))
@@ -79,13 +79,13 @@ def measure(scene, sizes, repeats: int, gl: bool) -> list[dict]:
         gl_analytic_s = median_time(lambda: render_gl(analytic, omega=omega), repeats)
     rows = []
     for n in sizes:
-        lookup = dataclasses.replace(geometry, model="kajiya-kay-lookup", lookup_size=n)
+        lookup = dataclasses.replace(geometry, shading=hj.KajiyaKayLookup(scene.params, size=n))
         image = np.asarray(shade(lookup))
         rmse, max_abs = errors(image, reference)
         row = dict(size=n, rmse=rmse, max_abs=max_abs, shading_s=median_time(lambda: shade(lookup), repeats),
                    analytic_shading_s=analytic_s)
         if gl:
-            lookup_scene = scene.replace(shading_model="kajiya-kay-lookup", lookup_size=n)
+            lookup_scene = scene.replace(shading=hj.KajiyaKayLookup(scene.params, size=n))
             image = render_gl(lookup_scene, omega=omega).image
             row["gl_rmse"], row["gl_max_abs"] = errors(image, gl_reference)
             row["gl_render_s"] = median_time(lambda: render_gl(lookup_scene, omega=omega), repeats)
@@ -118,7 +118,7 @@ def plot(rows, path: Path, gl: bool) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from hairjax._files import atomic_path
+    from hairjax.tools import atomic_path
 
     n = [r["size"] for r in rows]
     fig, ax = plt.subplots(figsize=(5.5, 4))
@@ -140,7 +140,7 @@ def plot(rows, path: Path, gl: bool) -> None:
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
     import hairjax as hj
-    from hairjax._files import write_csv
+    from hairjax.tools import write_csv
 
     scene = hj.load_scene(args.scene or hj.default_scene_path())
     camera = dataclasses.replace(scene.camera, width=args.size, height=args.size)

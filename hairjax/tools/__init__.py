@@ -1,0 +1,32 @@
+"""hairjax.tools: the benchmark, the sweep and its report, and the compare report.
+
+Built on the library (`import hairjax`), which never imports them: `hairjax bench`,
+`hairjax sweep` and `hairjax compare` import them when they run, and so do experiments/
+and notebooks/.
+"""
+
+from .._files import atomic_path as atomic_path
+from .._files import write_csv as write_csv
+from .._files import write_json as write_json
+from .._files import write_text as write_text
+from ._bench import bench_main as bench_main
+from ._bench_cases import GL_PASSES as GL_PASSES
+from ._bench_cases import STAGES as STAGES
+from ._bench_cases import TARGETS as TARGETS
+from ._bench_cases import configurations as configurations
+from ._compare import compare as compare
+from ._compare import format_report as format_report
+from ._compare import image_stats as image_stats
+from ._compare import median_time as median_time
+from ._sweep import KNOBS as KNOBS
+from ._sweep import PATHS as PATHS
+from ._sweep import QUICK_KNOBS as QUICK_KNOBS
+from ._sweep import SweepError as SweepError
+from ._sweep import knob_scene as knob_scene
+from ._sweep import load_points as load_points
+from ._sweep import run_sweep as run_sweep
+from ._sweep_report import THRESHOLDS as THRESHOLDS
+from ._sweep_report import cheapest as cheapest
+from ._sweep_report import pareto_plot as pareto_plot
+from ._sweep_report import summary_markdown as summary_markdown
+from ._sweep_report import write_report as write_report

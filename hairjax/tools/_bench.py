@@ -1,0 +1,186 @@
+"""`hairjax bench`: time the renderer's stages on fur balls (BENCHMARKS.md).
+
+Every configuration runs in a fresh child process (the same interpreter), so that
+
+- its peak resident memory is its own (``ru_maxrss`` of that process, KiB on Linux),
+- running out of memory (a ``MemoryError``, or the kernel's OOM killer ending the
+  process) is reported in the table and the benchmark goes on with the next one,
+- compiled JAX programs and cached set-ups of one configuration do not linger into the
+  next.
+
+The configurations and targets are in `_bench_cases.py`, what the child measures in
+`_bench_timing.py`, the table and the JSON in `_bench_report.py`.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from ._bench_cases import (
+    BACKENDS,
+    EYE,
+    FOV,
+    FULL_RENDER_TARGET_CONFIG,
+    GL_TARGET_RATIO,
+    KIM_2003_SEGMENTS_PER_S,
+    ORDERING_BINS,
+    POINTS,
+    QUICK_REPEATS,
+    TARGET,
+    TARGETS,
+    config_name,
+    configurations,
+)
+from ._bench_report import format_table, write_json_strict
+
+__all__ = ["bench_main"]
+
+
+def _run_child(cfg: dict, workdir: Path) -> dict:
+    cfg_path = workdir / f"config-{cfg['index']}.json"
+    out_path = workdir / f"result-{cfg['index']}.json"
+    cfg_path.write_text(json.dumps(cfg))
+    env = dict(os.environ)
+    # The child imports this very package, installed or not.
+    package_root = str(Path(__file__).resolve().parents[2])
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
+    code = ("import sys; from hairjax.tools._bench_timing import child_main; "
+            "sys.exit(child_main(sys.argv[1:]))")
+    proc = subprocess.run([sys.executable, "-c", code, str(cfg_path), str(out_path)], env=env)
+    if proc.returncode == 0 and out_path.exists():
+        return json.loads(out_path.read_text())
+    if proc.returncode < 0:
+        sig = -proc.returncode
+        why = "killed by SIGKILL (out of memory?)" if sig == 9 else f"killed by signal {sig}"
+        return {"status": "MemoryError" if sig == 9 else "error", "error": why}
+    return {"status": "error", "error": f"child process exited with status {proc.returncode}"}
+
+
+def _machine_info(results: list[dict]) -> dict:
+    import jax
+    import numpy as np
+
+    backend = next((r.get("jax_backend") for r in results if r.get("jax_backend")), None)
+    devices = next((r.get("jax_devices") for r in results if r.get("jax_devices")), None)
+    return {
+        "platform": platform.platform(),
+        "machine": platform.machine(),
+        "processor": platform.processor() or None,
+        "python": platform.python_version(),
+        "cpu_count": os.cpu_count(),
+        "cpu_affinity": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None,
+        "numpy_version": np.__version__,
+        "jax_version": jax.__version__,
+        "jax_backend": backend,
+        "jax_devices": devices,
+    }
+
+
+def _targets_met(cfg: dict, r: dict) -> dict:
+    if r.get("status") != "ok":
+        return {}
+    met = {}
+    target_config = (cfg["strands"], cfg["size"]) == FULL_RENDER_TARGET_CONFIG
+    if target_config and "jax_over_gl" in r:
+        met["jax_over_gl"] = r["jax_over_gl"] >= GL_TARGET_RATIO
+    if "stages" not in r:
+        return met
+    met |= {
+        "shading_s": r["stages"]["shading"]["median_s"] <= TARGETS["shading_s"],
+        "gradient_over_shading":
+            r["gradient_over_shading"] <= TARGETS["gradient_over_shading"],
+        "ordering_msegments_per_s":
+            r["ordering"]["msegments_per_s"] >= TARGETS["ordering_msegments_per_s"],
+    }
+    if target_config:
+        met["full_render_s"] = r["stages"]["full_render"]["median_s"] <= TARGETS["full_render_s"]
+    return met
+
+
+def bench_main(args) -> int:
+    """`hairjax bench [--quick] [--repeats N] [--json PATH] [--backend jax|gl|both]`;
+    returns the exit status."""
+    import jax
+
+    quick = bool(getattr(args, "quick", False))
+    backend = getattr(args, "backend", None) or "jax"
+    if backend not in BACKENDS:
+        raise ValueError(f"--backend must be one of {BACKENDS}, got {backend!r}")
+    repeats = int(getattr(args, "repeats", 5))
+    if repeats < 1:
+        raise ValueError(f"--repeats must be at least 1, got {repeats}")
+    if quick:
+        repeats = min(repeats, QUICK_REPEATS)
+    x64 = bool(jax.config.jax_enable_x64)
+
+    configs = configurations(quick)
+    results = []
+    started = time.perf_counter()
+    with tempfile.TemporaryDirectory(prefix="hairjax-bench-") as tmp:
+        for i, cfg in enumerate(configs):
+            cfg = dict(cfg, index=i, name=config_name(cfg), repeats=repeats, x64=x64,
+                       backend=backend)
+            print(f"[{i + 1}/{len(configs)}] {cfg['name']}: {cfg['strands']:,} strands x "
+                  f"{POINTS} points, {cfg['maps']} opacity maps of {cfg['map_resolution']}^2",
+                  flush=True)
+            t0 = time.perf_counter()
+            r = _run_child(cfg, Path(tmp))
+            r["targets_met"] = _targets_met(cfg, r)
+            results.append(r)
+            print(f"      {r['status']} in {time.perf_counter() - t0:.1f} s", flush=True)
+
+    machine = _machine_info(results)
+    dtype = next((r["dtype"] for r in results if r.get("dtype")), "?")
+    gl_info = next((r["gl"] for r in results if r.get("gl", {}).get("status") == "ok"), None)
+    if gl_info is not None:
+        machine["gl_renderer"] = gl_info.get("gl_renderer")
+        machine["gl_version"] = gl_info.get("gl_version")
+    gl_line = ""
+    if backend != "jax":
+        gl_line = ("\nGL: " + (f"{gl_info['gl_renderer']} ({gl_info['gl_version']})"
+                               if gl_info else next((r["gl"]["error"] for r in results
+                                                     if r.get("gl", {}).get("error")), "-")))
+    header = (f"hairjax bench ({backend}): median of {repeats} run(s) after 1 warm-up; "
+              f"{machine['platform']}, {machine['cpu_count']} CPUs, "
+              f"jax {machine['jax_version']} ({machine['jax_backend']}, {dtype})\n"
+              f"scene: fur balls of {POINTS}-point strands, directional light, bins ordering "
+              f"({ORDERING_BINS}), camera eye {EYE} target {TARGET} fov {FOV:g}{gl_line}")
+    print()
+    print(format_table(configs, results, header))
+    print(f"\ntotal {time.perf_counter() - started:.1f} s")
+
+    if getattr(args, "json", None):
+        data = {
+            "schema": 1,
+            "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+            "quick": quick,
+            "backend": backend,
+            "repeats": repeats,
+            "warmup_runs": 1,
+            "machine": machine,
+            "targets": dict(TARGETS, full_render_config={
+                "strands": FULL_RENDER_TARGET_CONFIG[0], "size": FULL_RENDER_TARGET_CONFIG[1]},
+                jax_over_gl=GL_TARGET_RATIO),
+            "kim_2003_segments_per_s": KIM_2003_SEGMENTS_PER_S,
+            "configurations": [
+                {"name": config_name(c), "strands": c["strands"], "points_per_strand": POINTS,
+                 "width": c["size"], "height": c["size"], "maps": c["maps"],
+                 "map_resolution": c["map_resolution"], "light": "directional",
+                 "camera": {"eye": EYE, "target": TARGET, "fov": FOV}, **r}
+                for c, r in zip(configs, results)
+            ],
+        }
+        write_json_strict(args.json, data)
+        print(f"wrote {args.json}")
+    # Running out of memory is a property of the machine, not a failure of the benchmark.
+    # So is a machine without OpenGL ("unavailable"); a GL error is a failure.
+    failed = any(r["status"] not in ("ok", "MemoryError")
+                 or r.get("gl", {}).get("status") == "error" for r in results)
+    return 1 if failed else 0

@@ -1,0 +1,235 @@
+"""The child process of `hairjax bench`: one configuration, timed (BENCHMARKS.md).
+
+Each figure is the median of ``--repeats`` runs after one warm-up run that is not
+counted (it holds JAX's compilation). One run is `render_profiled(scene)`: the NumPy
+set-up (`prepare`, with the scene's cached set-up and geometry cleared first), the JAX
+opacity stage (`geometry_stage`) and the shading stage, each waited for with
+`jax.block_until_ready`; "full render" is their sum within a run. The shading stage
+alone and the gradient of ``sum((image - target)^2)`` with respect to kd, ks, shininess
+and kappa are then timed as warm calls on the last run's geometry, and the ordering as
+`draw_order(segment_depth(...), Ordering("bins", bins=256))` on the scene's camera depths.
+
+`--backend gl` times the GL renderer instead (`hairjax.gl.render_gl(scene)`: upload, the
+opacity-map passes and the camera pass, each waited for with ``glFinish``; "full render"
+is the wall time of the call, medians after one warm-up run that compiles the shaders);
+`--backend both` times both paths on the same scene in the same child process, GL first,
+and prints the ratio JAX full render / GL full render. If no OpenGL context can be
+created (`hairjax.gl.GLUnavailable`) the table says "GL unavailable: ..." and the JAX
+figures are measured as usual.
+"""
+
+from __future__ import annotations
+
+import json
+import statistics
+import sys
+import time
+from pathlib import Path
+
+from ._bench_cases import KIM_2003_SEGMENTS_PER_S, ORDERING_BINS, bench_scene
+from ._bench_report import write_json_strict
+
+__all__ = ["child_main", "measure_gl"]
+
+
+def _median(xs):
+    return statistics.median(xs) if xs else float("nan")
+
+
+def measure_gl(scene, repeats: int, progress) -> dict:
+    """Time `render_gl(scene)`: one warm-up run (shader compilation), then `repeats`."""
+    import numpy as np
+
+    from ..gl import GLUnavailable, get_context, render_gl
+
+    try:
+        ctx = get_context()
+    except GLUnavailable as err:
+        return {"status": "unavailable", "error": f"GL unavailable: {err}"}
+    info = {"gl_renderer": ctx.info.get("GL_RENDERER"), "gl_version": ctx.info.get("GL_VERSION")}
+    progress("GL warm-up run (compiles the shaders)")
+    result = render_gl(scene)
+    total: list[float] = []
+    passes: dict[str, list[float]] = {}
+    for i in range(repeats):
+        del result
+        progress(f"GL run {i + 1}/{repeats}")
+        t0 = time.perf_counter()
+        result = render_gl(scene)
+        total.append(time.perf_counter() - t0)
+        for key, value in result.timings.items():
+            passes.setdefault(key, []).append(value)
+    return {
+        "status": "ok", "error": None, **info,
+        "full_render": {"median_s": _median(total), "runs_s": total},
+        "passes": {k: {"median_s": _median(v), "runs_s": v} for k, v in passes.items()},
+        "image_finite": bool(np.all(np.isfinite(result.image))),
+    }
+
+
+def _measure(cfg: dict, repeats: int, progress) -> dict:
+    backend = cfg.get("backend", "jax")
+    scene = bench_scene(cfg)
+    out = {}
+    if backend in ("gl", "both"):
+        try:
+            out["gl"] = measure_gl(scene, repeats, progress)
+        except MemoryError:
+            raise
+        except Exception as err:  # a GL failure is reported; the JAX figures still come
+            out["gl"] = {"status": "error", "error": f"GL: {type(err).__name__}: {err}"[:2000]}
+        if out["gl"]["status"] == "unavailable":
+            progress(out["gl"]["error"])
+    if backend == "gl" and out["gl"]["status"] == "ok":
+        return out
+    out.update(_measure_jax(scene, repeats, progress))
+    if out.get("gl", {}).get("status") == "ok":
+        out["jax_over_gl"] = (out["stages"]["full_render"]["median_s"]
+                              / out["gl"]["full_render"]["median_s"])
+    return out
+
+
+def _measure_jax(scene, repeats: int, progress) -> dict:
+    import jax
+    import jax.numpy as jnp
+
+    from .._geometry_stage import geometry_stage
+    from .._ordering import Ordering, draw_order, segment_depth
+    from .._render import render_profiled
+    from .._setup import prepare
+    from .._shading import ShadingParams, shading_stage
+
+    params = scene.params
+
+    # One run is `render_profiled`: it clears the scene's cached set-up and geometry, then
+    # times prepare, geometry_stage and shading_stage, blocking between them.
+    runs: dict[str, list[float]] = {k: [] for k in ("geometry_setup", "geometry_opacity",
+                                                    "full_render")}
+    substeps: dict[str, list[float]] = {}
+    progress("warm-up run (compiles)")
+    image, _ = render_profiled(scene)
+    for i in range(repeats):
+        del image  # so that two runs' arrays never coexist
+        progress(f"run {i + 1}/{repeats}")
+        image, timings = render_profiled(scene)
+        runs["geometry_setup"].append(timings["geometry set-up (NumPy)"])
+        runs["geometry_opacity"].append(timings["geometry opacity (JAX)"])
+        runs["full_render"].append(timings["total"])
+        for key, value in timings.items():
+            if key.startswith("geometry/"):
+                substeps.setdefault(key.split("/", 1)[1], []).append(value)
+    setup = prepare(scene)  # the last run's, cached
+    geom = geometry_stage(scene)
+
+    # The shading stage alone, geometry reused: warm calls, as the gradient below. (Its
+    # time within a full render, right after a fresh geometry, is noisier.)
+    progress("shading stage alone")
+    runs["shading"] = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        image = jax.block_until_ready(shading_stage(geom, params))
+        runs["shading"].append(time.perf_counter() - t0)
+
+    # Gradient of an image loss with respect to the shading parameters, geometry reused.
+    # The geometry is an argument rather than a closed-over constant, so that XLA does not
+    # embed tens of millions of fragments in the compiled program.
+    target = jax.block_until_ready(shading_stage(
+        geom, ShadingParams(kd=(0.4, 0.3, 0.25), ks=0.5, shininess=20.0, kappa=1.5,
+                            ambient=params.ambient)))
+
+    def loss(sub, geometry, target_image):
+        p = ShadingParams(kd=sub["kd"], ks=sub["ks"], shininess=sub["shininess"],
+                          kappa=sub["kappa"], ambient=params.ambient)
+        return jnp.sum((shading_stage(geometry, p) - target_image) ** 2)
+
+    grad_fn = jax.jit(jax.grad(loss))
+    sub = {"kd": params.kd, "ks": params.ks, "shininess": params.shininess,
+           "kappa": params.kappa}
+    progress("gradient (compiles, then warm calls)")
+    grads = jax.block_until_ready(grad_fn(sub, geom, target))
+    runs["gradient"] = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        grads = jax.block_until_ready(grad_fn(sub, geom, target))
+        runs["gradient"].append(time.perf_counter() - t0)
+    grads_finite = all(bool(jnp.all(jnp.isfinite(g))) for g in jax.tree_util.tree_leaves(grads))
+
+    # Visibility ordering throughput on the scene's camera depths.
+    progress("ordering")
+    _, depth = setup.view.project(scene.strands.points)
+    segments = scene.strands.segments()
+    draw_order(segment_depth(depth, segments), Ordering("bins", bins=ORDERING_BINS))  # warm-up
+    order_runs = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        draw_order(segment_depth(depth, segments), Ordering("bins", bins=ORDERING_BINS))
+        order_runs.append(time.perf_counter() - t0)
+    order_s = _median(order_runs)
+
+    stages = {k: {"median_s": _median(v), "runs_s": v} for k, v in runs.items()}
+    for key, values in substeps.items():
+        stages[f"geometry_setup/{key}"] = {"median_s": _median(values), "runs_s": values}
+    mseg = len(segments) / order_s / 1e6 if order_s > 0 else float("inf")
+    return {
+        "stages": stages,
+        "gradient_over_shading": stages["gradient"]["median_s"] / stages["shading"]["median_s"],
+        "gradient_finite": grads_finite,
+        "ordering": {
+            "method": "bins",
+            "bins": ORDERING_BINS,
+            "segments": int(len(segments)),
+            "median_s": order_s,
+            "runs_s": order_runs,
+            "msegments_per_s": mseg,
+            "speedup_over_kim_2003": mseg * 1e6 / KIM_2003_SEGMENTS_PER_S,
+        },
+        "points": int(scene.strands.num_points),
+        "segments": int(len(segments)),
+        "fragments": int(len(setup.frag_pixel)),
+        "shadow_fragments": (None if setup.shadow is None
+                             else int(len(setup.shadow.frag_coverage))),
+        "image_finite": bool(jnp.all(jnp.isfinite(image))),
+        "dtype": str(image.dtype),
+    }
+
+
+def _peak_rss_kib() -> int:
+    import resource
+
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    # ru_maxrss is KiB on Linux and bytes on macOS.
+    return int(peak // 1024) if sys.platform == "darwin" else int(peak)
+
+
+def child_main(argv) -> int:
+    """Entry point of the child process: `<config.json> <result.json>`."""
+    cfg_path, out_path = argv
+    cfg = json.loads(Path(cfg_path).read_text())
+    if cfg.get("x64"):
+        import jax
+
+        jax.config.update("jax_enable_x64", True)
+
+    def progress(msg):
+        print(f"  {cfg['name']}: {msg}", file=sys.stderr, flush=True)
+
+    result = {"status": "ok", "error": None}
+    start = time.perf_counter()
+    try:
+        result.update(_measure(cfg, cfg["repeats"], progress))
+    except MemoryError as err:
+        result.update(status="MemoryError", error=f"MemoryError: {err}")
+    except Exception as err:  # reported in the table; the parent exits non-zero
+        # XLA reports an allocation failure as a RuntimeError "RESOURCE_EXHAUSTED".
+        oom = "RESOURCE_EXHAUSTED" in str(err) or "out of memory" in str(err).lower()
+        result.update(status="MemoryError" if oom else "error",
+                      error=f"{type(err).__name__}: {err}"[:2000])
+    import jax
+
+    result["wall_s"] = time.perf_counter() - start
+    result["peak_rss_kib"] = _peak_rss_kib()
+    result["jax_backend"] = jax.default_backend()
+    result["jax_devices"] = [str(d) for d in jax.devices()]
+    result["x64"] = bool(jax.config.jax_enable_x64)
+    write_json_strict(Path(out_path), result)
+    return 0
