@@ -21,7 +21,6 @@ Writes DIR/maps_vs_time.csv and DIR/maps_vs_time.png, and prints a table.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import math
 import statistics
 import sys
@@ -145,8 +144,8 @@ def main(argv=None) -> int:
           f"run exceeds {args.single_run_above:g} s is run once")
 
     def with_maps(n):
-        return base.replace(shadows=dataclasses.replace(
-            base.shadows, method="opacity-maps", maps=n))
+        return base.replace(shadows=hairjax.Shadows("opacity-maps", maps=n,
+                                                    resolution=base.shadows.resolution))
 
     render_gl(with_maps(args.maps[0]))  # warm-up: shader compilation
 

@@ -93,8 +93,7 @@ def _timings(name, scene, repeats: int, gl: bool) -> dict:
 
     row = dict(scene=name, segments=len(order),
                order_s=median_time(lambda: visibility_order(scene), repeats),
-               sort_s=median_time(lambda: draw_order(segment_depth(depth, seg), scene.ordering.method,
-                                                     scene.ordering.bins), repeats),
+               sort_s=median_time(lambda: draw_order(segment_depth(depth, seg), scene.ordering), repeats),
                render_jax_s=median_time(full_render, repeats), render_gl_s=float("nan"))
     if gl:
         from hairjax.gl import render_gl

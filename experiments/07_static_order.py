@@ -117,7 +117,8 @@ def _timings(name, scene, bin_counts, repeats: int) -> list[dict]:
     base = dict(scene=name, segments=len(drawable))
 
     def sort(method, n=256):
-        return lambda: draw_order(segment_depth(depth, seg), method, n)
+        ordering = _hj().Ordering(method, n) if method == "bins" else _hj().Ordering(method)
+        return lambda: draw_order(segment_depth(depth, seg), ordering)
 
     rows = [dict(base, method="exact", bins=0, when="every view",
                  order_s=median_time(sort("exact"), repeats)),

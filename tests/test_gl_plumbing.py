@@ -98,18 +98,19 @@ def test_render_gl_and_compare_from_the_cli(gl, tmp_path, capsys):
 
 def small_scene(tmp_path, shadows="opacity-maps"):
     path = tmp_path / "s.toml"
-    path.write_text(SMALL.replace("maps = 4", f'maps = 4\nmethod = "{shadows}"'))
+    options = {"opacity-maps": "maps = 4\nresolution = 32", "exact": "resolution = 32", "none": ""}
+    path.write_text(SMALL.replace("maps = 4\nresolution = 32", f'{options[shadows]}\nmethod = "{shadows}"'))
     return hj.load_scene(path)
 
 
 def test_no_shadow_passes_without_shadows(gl, tmp_path, monkeypatch):
-    from hairjax.gl import _renderer, render_gl
+    from hairjax.gl import _shadow_passes, render_gl
 
     def forbidden(*args, **kwargs):
         raise AssertionError("shadow passes ran for a scene without shadows")
 
-    monkeypatch.setattr(_renderer, "opacity_maps", forbidden)
-    monkeypatch.setattr(_renderer, "exact_opacity", forbidden)
+    for method in ("opacity-maps", "exact"):
+        monkeypatch.setitem(_shadow_passes._PASSES, method, forbidden)
     result = render_gl(small_scene(tmp_path, "none"))
     assert result.omega is None and "shadows" not in result.timings
 

@@ -40,7 +40,7 @@ def test_a_quad_in_front_hides_the_hair_behind_it():
     params = hj.ShadingParams(kd=0.5, ks=0.0, ambient=0.1)
     front = hj.Occluder(kind="mesh", color=k, **quad([[-3, -3, 0], [0, -3, 0], [0, 3, 0], [-3, 3, 0]]))
     base = dict(camera=hj.Camera(eye=(0, 0, 5), width=32, height=32), shadows=hj.Shadows("none"),
-                light=hj.Light(direction=(0, 0, -1)), params=params)
+                light=hj.Light(direction=(0, 0, -1)), shading=hj.KajiyaKay(params))
     img = np.asarray(hj.render(hj.Scene(hair, occluder=front, **base)))
     plain = np.asarray(hj.render(hj.Scene(hair, **base)))
     row = 16 if plain[16, 8, 3] > 0 else 15  # the hair's row (y = 0 is on a pixel edge)
@@ -60,7 +60,7 @@ def test_a_quad_between_light_and_hair_leaves_only_ambient():
     occ = hj.Occluder(kind="mesh", **quad([[-3, 1, 3], [0, 1, 3], [0, 1, -3], [-3, 1, -3]]))
     params = hj.ShadingParams(kd=0.5, ks=0.2, ambient=0.07, kappa=0.0)
     scene = hj.Scene(hair, camera=hj.Camera(eye=(0, 0, 5), width=32, height=32),
-                     light=hj.Light(direction=(0, -1, 0)), params=params, occluder=occ,
+                     light=hj.Light(direction=(0, -1, 0)), shading=hj.KajiyaKay(params), occluder=occ,
                      shadows=hj.Shadows("opacity-maps", maps=4, resolution=32))
     geom = hj.geometry_stage(scene)
     x = scene.strands.points[:, 0]
@@ -244,13 +244,13 @@ def test_a_scene_without_occluder_does_no_occluder_work(monkeypatch):
     carries no occluder fields (the image is the one of tests/test_render.py)."""
     from helpers import small_furball_scene
 
-    from hairjax import _render as render_mod
+    from hairjax import _setup as setup_mod
 
     def forbidden(*args, **kwargs):
         raise AssertionError("occluder work in a scene without occluder")
 
     for name in ("occluder_hits", "occluder_light_view", "occluder_visibility"):
-        monkeypatch.setattr(render_mod, name, forbidden)
+        monkeypatch.setattr(setup_mod, name, forbidden)
     geom = hj.geometry_stage(small_furball_scene())
     assert geom.occluder_pixel is None and geom.light_visibility is None
     assert geom.occluder_omega is None

@@ -5,6 +5,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+import hairjax as hj
 from hairjax._ordering import bin_index, draw_order, segment_depth, stable_argsort_uint32
 
 

@@ -7,7 +7,9 @@ import pytest
 from helpers import central_difference, small_furball_scene
 
 import hairjax as hj
-import hairjax._render as render_mod
+import hairjax._geometry_stage as stage_mod
+import hairjax._setup as setup_mod
+import hairjax._shadows._frame as frame_mod
 
 
 def stacked_hairs(ordering="bins", front_first=False):
@@ -22,7 +24,7 @@ def stacked_hairs(ordering="bins", front_first=False):
                       np.repeat([colors[i] for i in idx], 5, axis=0))
     return hj.Scene(hair, camera=hj.Camera(eye=(0, 0, 5), target=(0, 0, 0), width=16, height=9),
                     shading=hj.KajiyaKay(hj.ShadingParams(kd=0.0, ks=0.0, ambient=1.0)),
-                    shadows=hj.Shadows("none"), ordering=hj.Ordering(ordering, 8),
+                    shadows=hj.Shadows("none"), ordering=hj.Ordering(ordering, 8) if ordering == "bins" else hj.Ordering(ordering),
                     background=(0.2, 0.2, 0.2))
 
 
@@ -127,17 +129,17 @@ def test_extreme_values_stay_finite():
 def test_geometry_reused_and_unneeded_work_skipped(monkeypatch):
     scene = small_furball_scene(shadows="none")
     calls, opacity_calls = [], []
-    original = render_mod._prepare
-    monkeypatch.setattr(render_mod, "_prepare", lambda s: calls.append(s) or original(s))
-    original_weights = render_mod._composite_weights
-    monkeypatch.setattr(render_mod, "_composite_weights",
+    original = setup_mod._prepare
+    monkeypatch.setattr(setup_mod, "_prepare", lambda s: calls.append(s) or original(s))
+    original_weights = stage_mod._composite_weights
+    monkeypatch.setattr(stage_mod, "_composite_weights",
                         lambda *a: opacity_calls.append(1) or original_weights(*a))
 
     def forbidden(*args, **kwargs):
         raise AssertionError("this stage must not run for this scene")
 
-    monkeypatch.setattr(render_mod, "shadow_setup", forbidden)
-    monkeypatch.setattr(render_mod, "sphere_hits", forbidden)
+    monkeypatch.setattr(frame_mod, "light_fragments", forbidden)  # every shadow method's set-up
+    monkeypatch.setattr(setup_mod, "occluder_hits", forbidden)
     a = hj.render(scene)
     b = hj.render(scene, hj.ShadingParams(kd=0.1))
     assert len(calls) == 1 and len(opacity_calls) == 1
@@ -180,7 +182,7 @@ def test_a_given_draw_order_replaces_the_sort():
     composites in that order, and the scene's cached stages are left alone."""
     scene = small_furball_scene()
     plain = np.asarray(hj.render(scene))
-    own = render_mod.visibility_order(scene)[4]
+    own = setup_mod.visibility_order(scene)[4]
     np.testing.assert_array_equal(np.asarray(hj.render(scene, order=own)), plain)
     np.testing.assert_array_equal(np.asarray(hj.geometry_stage(scene, order=own).frag_weight),
                                   np.asarray(hj.geometry_stage(scene).frag_weight))

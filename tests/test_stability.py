@@ -597,8 +597,6 @@ def run_glsl(gl, body: str, inputs: np.ndarray, outputs: int, uniforms: str = ""
 def glsl_highlight(gl, t, light, eye, model: str, p: float) -> np.ndarray:
     """model.glsl on rows (T, L, V): `[n, 2]` of (Ks·max(b, 0)^p from shade_point with Ks = 1
     and nothing else, the renderer's path; kajiya_kay_gap)."""
-    from hairjax.gl._programs import SHADING_MODEL_IDS
-
     body = """
     vec3 T = vec3(inp[9u * i], inp[9u * i + 1u], inp[9u * i + 2u]);
     vec3 L = vec3(inp[9u * i + 3u], inp[9u * i + 4u], inp[9u * i + 5u]);
@@ -608,7 +606,7 @@ def glsl_highlight(gl, t, light, eye, model: str, p: float) -> np.ndarray:
     outp[2u * i + 1u] = kajiya_kay_gap(model, dot(T, L), dot(T, V), safe_norm(cross(T, L)),
                                        safe_norm(cross(T, V)));"""
     return run_glsl(gl, body, np.concatenate([t, light, eye], axis=1), 2,
-                    "uniform int model;\nuniform float p;", model=SHADING_MODEL_IDS[model], p=p)
+                    "uniform int model;\nuniform float p;", model=hj.shading_model_class(model).gl_id, p=p)
 
 
 @pytest.mark.parametrize("model", ["kajiya-kay", "kajiya-kay-mirror"])

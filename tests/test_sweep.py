@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from helpers import small_furball_scene
 
+import hairjax as hj
 import hairjax.tools._sweep as sweep_mod
 from hairjax import cli
 from hairjax.tools._sweep import SweepError, knob_scene, load_points, run_sweep
@@ -34,7 +35,7 @@ def test_points_and_their_errors(scene, tmp_path, gl):
 
 
 def test_a_point_with_the_reference_settings_has_no_error(scene, tmp_path):
-    exact = scene.replace(shadows=scene.shadows.__class__("exact", 4, 16))
+    exact = scene.replace(shadows=hj.Shadows("exact", resolution=16))
     points = run_sweep(exact, tmp_path, knobs={"bins": ("exact", 4)}, paths=("jax",), repeats=1,
                        progress=False)
     by_value = {p["value"]: p for p in points}
@@ -164,7 +165,7 @@ def test_a_refused_setting_is_recorded_and_the_sweep_goes_on(scene, tmp_path, mo
     original = sweep_mod._measure
 
     def refuse_four(run, variant, s, repeats):
-        if variant.ordering.bins == 4 and variant.ordering.method == "bins":
+        if variant.ordering == hj.Ordering("bins", 4):
             raise ValueError("4 bins exceed the test's budget")
         return original(run, variant, s, repeats)
 

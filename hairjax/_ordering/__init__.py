@@ -22,7 +22,10 @@ from ._static import StaticOrder as StaticOrder
 from ._static import static_order as static_order
 
 
-def draw_order(seg_depth: np.ndarray, ordering: AbstractOrdering) -> np.ndarray:
+def draw_order(seg_depth: np.ndarray, ordering: AbstractOrdering | str, *options) -> np.ndarray:
     """Indices of all segments in drawing order for segment depths `seg_depth` (`[E]`),
-    under a depth-based `ordering` (`Ordering("bins", bins=…)`, `Ordering("exact")`, …)."""
+    under a depth-based `ordering`: an object (`Ordering("bins", 64)`) or a registered
+    method's name and its options (`draw_order(d, "bins", 64)`, `draw_order(d, "exact")`)."""
+    if isinstance(ordering, str):
+        ordering = Ordering(ordering, *options)
     return ordering.order(None, None, seg_depth, np.arange(len(seg_depth), dtype=np.int64))

@@ -94,9 +94,9 @@ def check_params(params: eqx.Module, *, colors: tuple[str, ...] = (),
     step) have no values yet and pass: the check is for values a user gives."""
     if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(params)):
         return
-    for names, ok, text in ((colors, lambda v: v >= 0, ">= 0 (finite)"),
-                            (positive, lambda v: v > 0, "> 0 (finite)"),
-                            (non_negative, lambda v: v >= 0, ">= 0 (finite)"),
+    for names, ok, text in ((colors, lambda v: v >= 0, ">= 0"),
+                            (positive, lambda v: v > 0, "> 0"),
+                            (non_negative, lambda v: v >= 0, ">= 0"),
                             (finite, lambda v: True, "finite")):
         for name in names:
             v = np.asarray(getattr(params, name), dtype=np.float64)
