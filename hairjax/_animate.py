@@ -19,9 +19,9 @@ from pathlib import Path
 import numpy as np
 
 from ._errors import SceneError
-from ._scene import Scene
-from ._scene_file import load_scene, scene_from_dict, scene_tables
-from ._scene_table import Table, build
+from ._scene._file import load_scene, scene_from_dict, scene_tables
+from ._scene._scene import Scene
+from ._scene._table import Table, build
 
 __all__ = ["Motion", "Animation", "load_animation", "path_position", "path_acceleration",
            "inertia_vector", "write_frames"]
@@ -132,7 +132,7 @@ def write_frames(animation: Animation, out_dir, frames: int | None = None, backe
 
     `frames` (default the file's `animation.frames`): frame k is at t = k/frames. Every
     file is written atomically. Returns the paths written."""
-    from ._image import linear_to_srgb, write_image
+    from ._io._image import linear_to_srgb, write_image
 
     frames = animation.motion.frames if frames is None else frames
     if isinstance(frames, bool) or int(frames) != frames or frames < 1:
@@ -174,7 +174,7 @@ def _write_gif(path: Path, frames: list[np.ndarray], fps: float = 24.0) -> Path:
     """An endlessly looping GIF of 8-bit sRGB frames (Pillow; 256 colours per frame)."""
     from PIL import Image
 
-    from ._files import atomic_path
+    from ._io._files import atomic_path
 
     images = [Image.fromarray(f) for f in frames]
     with atomic_path(path, ".gif") as tmp:

@@ -19,7 +19,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float
 
 if TYPE_CHECKING:
-    from ._geometry_stage import Geometry
+    from ._geometry._stage import Geometry
 
 __all__ = ["segmented_scan", "over_weights", "composite"]
 

@@ -27,10 +27,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ._constants import FIT_TRANSMITTANCE_CUTOFF
 from ._composite import composite
-from ._geometry_stage import geometry_stage
-from ._scene import Scene
+from ._constants import FIT_TRANSMITTANCE_CUTOFF
+from ._geometry._stage import geometry_stage
+from ._scene._scene import Scene
 from ._shading import KajiyaKayLookup, Scheuermann, ShadingParams, occluder_colors, transmittance
 from ._shading._kajiya_kay import kajiya_kay_terms, specular_power
 from ._shading._lookup import lookup_coordinates, lookup_terms

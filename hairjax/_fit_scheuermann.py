@@ -26,7 +26,7 @@ from ._fit import (
     _softplus_inv,
     _solve,
 )
-from ._geometry_stage import geometry_stage
+from ._geometry._stage import geometry_stage
 from ._shading import ScheuermannParams, shading_stage
 
 __all__ = ["SCHEUERMANN_FITTABLE", "fit_scheuermann"]

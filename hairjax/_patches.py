@@ -27,13 +27,13 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ._constants import PATCH_OPAQUE_EPS
-from ._geometry_stage import geometry_stage
-from ._occluder import drawable_triangles, pixel_fragments
-from ._ordering import hair_centre, static_order
-from ._projection import View, camera_view
+from ._geometry._occluder import drawable_triangles, pixel_fragments
+from ._geometry._ordering import hair_centre, static_order
+from ._geometry._projection import View, camera_view
+from ._geometry._stage import geometry_stage
+from ._scene._strands import tangents
 from ._shading import point_colors
 from ._shading._scheuermann_inputs import strand_normals
-from ._strands import tangents
 
 __all__ = ["scene_patches", "scene_point_colors", "render_patches", "Patches", "patch_mesh",
            "patch_alpha", "PatchFragments", "patch_fragments", "PatchWeights", "four_pass_weights",

@@ -19,9 +19,9 @@ import jax
 from jaxtyping import Array, Float
 
 from ._cache import forget
-from ._geometry_stage import geometry_stage
-from ._scene import Scene
-from ._setup import prepare
+from ._geometry._setup import prepare
+from ._geometry._stage import geometry_stage
+from ._scene._scene import Scene
 from ._shading import shading_stage
 
 __all__ = ["render", "render_profiled"]

@@ -13,7 +13,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ._scene import Scene
+from ._scene._scene import Scene
 
 __all__ = ["supersample", "supersample_offsets", "shifted"]
 

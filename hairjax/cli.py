@@ -12,9 +12,9 @@ __all__ = ["main"]
 def _render(args) -> int:
     import numpy as np
 
-    from ._image import write_image
+    from ._io._image import write_image
     from ._render import render, render_profiled
-    from ._scene_file import default_scene_path, load_scene
+    from ._scene._file import default_scene_path, load_scene
 
     scene = load_scene(args.scene or default_scene_path())
     if args.backend == "gl":
@@ -59,8 +59,8 @@ def _animate(args) -> int:
 
 
 def _compare(args) -> int:
-    from ._files import write_json
-    from ._scene_file import default_scene_path, load_scene
+    from ._io._files import write_json
+    from ._scene._file import default_scene_path, load_scene
     from .tools import compare, format_report
 
     report = compare(load_scene(args.scene or default_scene_path()), repeats=args.repeats)
@@ -73,11 +73,11 @@ def _compare(args) -> int:
 def _fit(args) -> int:
     import numpy as np
 
-    from ._files import write_json
     from ._fit import FitError, fit
-    from ._image import read_image, write_image
+    from ._io._files import write_json
+    from ._io._image import read_image, write_image
     from ._render import render
-    from ._scene_file import default_scene_path, load_scene
+    from ._scene._file import default_scene_path, load_scene
 
     if len(args.scenes) >= len(args.target):
         raise FitError(f"{1 + len(args.scenes)} scenes for {len(args.target)} targets: "
@@ -126,7 +126,7 @@ def _fit(args) -> int:
 def _sweep(args) -> int:
     import dataclasses
 
-    from ._scene_file import default_scene_path, load_scene
+    from ._scene._file import default_scene_path, load_scene
     from .tools import KNOBS, PATHS, QUICK_KNOBS, SweepError, load_points, run_sweep, write_report
 
     table = QUICK_KNOBS if args.quick else KNOBS
@@ -264,7 +264,7 @@ def _enable_compilation_cache() -> None:
 
 def main(argv=None) -> int:
     from ._errors import HairFormatError, SceneError
-    from ._image import ImageError
+    from ._io._image import ImageError
     from .gl import GLError, GLUnavailable
 
     args = build_parser().parse_args(argv)

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 import hairjax as hj
-from hairjax._band import MAX_BAND, PIXEL_TOL, TAU_TOL, camera_band, shadow_band  # noqa: F401 (tests')
+from hairjax._disagreement import MAX_BAND, PIXEL_TOL, TAU_TOL, camera_band, shadow_band  # noqa: F401 (tests')
 
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"

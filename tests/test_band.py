@@ -12,7 +12,7 @@ import pytest
 from helpers import small_furball_scene
 
 import hairjax as hj
-from hairjax._band import (
+from hairjax._disagreement import (
     MAX_BAND,
     PIXEL_TOL,
     camera_band,

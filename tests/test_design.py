@@ -290,8 +290,8 @@ NAME_SOURCES = (
         "shadow_method_names",
         (
             "hairjax",
-            "hairjax._shadows",
-            "hairjax._shadows._base",
+            "hairjax._geometry._shadows",
+            "hairjax._geometry._shadows._base",
             "hairjax._geometry._shadows",
             "hairjax._geometry",
         ),
@@ -301,8 +301,8 @@ NAME_SOURCES = (
         "ordering_names",
         (
             "hairjax",
-            "hairjax._ordering",
-            "hairjax._ordering._base",
+            "hairjax._geometry._ordering",
+            "hairjax._geometry._ordering._base",
             "hairjax._geometry._ordering",
             "hairjax._geometry",
         ),

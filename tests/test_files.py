@@ -5,7 +5,7 @@ import os
 
 import pytest
 
-from hairjax._files import atomic_path, write_csv, write_json, write_text
+from hairjax._io._files import atomic_path, write_csv, write_json, write_text
 
 
 def test_failed_block_leaves_nothing(tmp_path):

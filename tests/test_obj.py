@@ -81,7 +81,7 @@ def test_the_sintel_head():
     """shared/data/README.md: 3,046 vertices, 5,952 faces (all triangles in the file). The
     reader's vertex normals (hairjax/_occluder.py) point the way of the file's own `vn`
     at the same corners: the winding is outward."""
-    from hairjax._occluder import vertex_normals
+    from hairjax._geometry._occluder import vertex_normals
 
     path = DATA / "tressfx" / "sintel_head.obj"
     v, f = load_obj(path)

@@ -12,11 +12,11 @@ import pytest
 from helpers import DATA, central_difference, shadow_method, unexplained_pixels
 
 import hairjax as hj
-from hairjax._band import OCCLUDER_VERTEX_STEP, PIXEL_TOL
-from hairjax._occluder import interpolation_bound
-from hairjax._projection import camera_view
+from hairjax._disagreement import OCCLUDER_VERTEX_STEP, PIXEL_TOL
+from hairjax._geometry._occluder import interpolation_bound
+from hairjax._geometry._projection import camera_view
+from hairjax._geometry._shadows import light_frame
 from hairjax._shading import occluder_colors, point_colors
-from hairjax._shadows import light_frame
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "experiments" / "scenes"
 
@@ -289,8 +289,8 @@ def test_guard_degenerate_triangles_and_a_mesh_behind_the_eye(gl):
     zero-length edge is a point for silhouette_pixels (_near_segments); a mesh entirely
     behind the eye is drawn by neither renderer (drawable_triangles; GL's empty index
     buffer and depth_far without it); points outside the occluder's light map are lit."""
-    from hairjax._occluder import mesh_hits, occluder_visibility, silhouette_pixels, vertex_normals
-    from hairjax._projection import camera_view
+    from hairjax._geometry._occluder import mesh_hits, occluder_visibility, silhouette_pixels, vertex_normals
+    from hairjax._geometry._projection import camera_view
     from hairjax.gl import render_gl
 
     flat = np.array([[-3, -3, 0], [0, -3, 0], [0, 3, 0], [-3, 3, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]], float)

@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import hairjax as hj
-from hairjax._ordering import bin_index, draw_order, segment_depth, stable_argsort_uint32
+from hairjax._geometry._ordering import bin_index, draw_order, segment_depth, stable_argsort_uint32
 
 
 def test_bin_formula_by_hand():
@@ -58,7 +58,7 @@ def test_radix_argsort_is_a_stable_sort(keys):
 # --- the static inside-to-outside order (scheuermann-2004 slide 14, docs/model.md §4) ---
 
 def test_static_order_by_hand():
-    from hairjax._ordering import static_order
+    from hairjax._geometry._ordering import static_order
 
     # Distances from the centre (0, 0, 0), by hand: each segment's key is its nearer end's.
     points = np.array([[3.0, 0, 0], [0, 2.0, 0],     # seg 0: r 3 → 2, key 2
@@ -73,7 +73,7 @@ def test_static_order_by_hand():
 
 
 def test_hair_centre_is_the_roots_bounding_box_centre():
-    from hairjax._ordering import hair_centre
+    from hairjax._geometry._ordering import hair_centre
 
     # Three strands with roots (0,0,0), (2,−1,4), (1,3,0): box [0,2]×[−1,3]×[0,4].
     points = np.array([[0.0, 0, 0], [9, 9, 9], [2, -1, 4], [1, 3, 0], [-9, -9, -9]])
@@ -84,7 +84,7 @@ def test_hair_centre_is_the_roots_bounding_box_centre():
 @given(st.integers(0, 2**31 - 1), st.integers(1, 40))
 @settings(max_examples=50, deadline=None)
 def test_static_order_is_a_permutation_inside_first(seed, n_points):
-    from hairjax._ordering import static_order
+    from hairjax._geometry._ordering import static_order
 
     rng = np.random.default_rng(seed)
     points = rng.normal(size=(n_points + 1, 3))
@@ -102,7 +102,7 @@ def test_static_order_is_the_same_from_every_view():
     import dataclasses
 
     import hairjax as hj
-    from hairjax._setup import visibility_order
+    from hairjax._geometry._setup import visibility_order
 
     scene = hj.Scene(hj.furball(30, 5, seed=1), ordering=hj.Ordering("static"),
                      camera=hj.Camera(eye=(0.0, 0.3, 3.5), width=16, height=16))
@@ -120,7 +120,7 @@ def test_static_order_is_the_same_from_every_view():
 
 def test_static_order_skips_segments_behind_the_near_plane():
     import hairjax as hj
-    from hairjax._setup import visibility_order
+    from hairjax._geometry._setup import visibility_order
 
     # A camera inside the ball: some segments have an end nearer than `near` or behind it.
     scene = hj.Scene(hj.furball(30, 5, seed=1), ordering=hj.Ordering("static"),

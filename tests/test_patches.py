@@ -9,10 +9,12 @@ import numpy as np
 import pytest
 
 import hairjax as hj
+from hairjax import Camera, PatchGeometry
 from hairjax._constants import PATCH_OPAQUE_EPS
 from hairjax._errors import SceneError
-from hairjax._occluder import _near_segments, corner_nudges
-from hairjax._ordering import hair_centre
+from hairjax._geometry._occluder import _near_segments, corner_nudges
+from hairjax._geometry._ordering import hair_centre
+from hairjax._geometry._projection import camera_view
 from hairjax._patches import (
     Patches,
     composite_patches,
@@ -23,11 +25,9 @@ from hairjax._patches import (
     scene_patches,
     scene_point_colors,
 )
-from hairjax._projection import camera_view
-from hairjax._strands import tangents
-from hairjax._scene import Camera, PatchGeometry
+from hairjax._scene._procedural import furball
+from hairjax._scene._strands import tangents
 from hairjax._shading._scheuermann_inputs import strand_normals
-from hairjax._sources import furball
 
 BG = np.array([0.1, 0.2, 0.3])
 RED, GREEN, BLUE = np.eye(3)

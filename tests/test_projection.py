@@ -3,7 +3,7 @@
 import numpy as np
 
 from hairjax import Camera
-from hairjax._projection import camera_view
+from hairjax._geometry._projection import camera_view
 
 
 def test_target_at_centre_up_is_up_right_is_right():

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from hairjax._raster import rasterize, ribbon_coverage
+from hairjax._geometry._raster import rasterize, ribbon_coverage
 
 
 def image(frags, w, h, weights=None):
@@ -91,7 +91,7 @@ def test_perspective_correct_depth():
 # --- ribbons of world-space width (kim-2003 Fig. 2; docs/model.md §5) ---
 
 def test_ribbon_widths_by_hand():
-    from hairjax._raster import ribbon_widths
+    from hairjax._geometry._raster import ribbon_widths
 
     w = np.array([0.1, 0.3])
     d0, d1 = np.array([2.0, 5.0]), np.array([4.0, 5.0])

@@ -12,12 +12,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hairjax._errors import HairFormatError, SceneError
 import hairjax as hj
 from hairjax import Camera, Light, Occluder, Ordering, Shadows
-from hairjax._scene_file import default_scene_path, load_scene, scene_from_dict
-from hairjax._sources import furball, scalp
-from hairjax._strands import Strands
+from hairjax._errors import HairFormatError, SceneError
+from hairjax._scene._file import default_scene_path, load_scene, scene_from_dict
+from hairjax._scene._procedural import furball, scalp
+from hairjax._scene._strands import Strands
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "experiments" / "scenes"
@@ -561,7 +561,7 @@ DOCS = ROOT / "docs" / "scenes.md"
 
 
 def test_docs_list_exactly_the_keys_of_each_table():
-    from hairjax._scene_file import TOP_LEVEL_KEYS, scene_tables
+    from hairjax._scene._file import TOP_LEVEL_KEYS, scene_tables
 
     sections = {}
     for chunk in DOCS.read_text(encoding="utf-8").split("\n## ")[1:]:

@@ -15,16 +15,16 @@ from helpers import (
     PIXEL_TOL,
     TAU_TOL,
     render_gl_with_edited_shader,
-    shadow_method,
     shadow_band,
+    shadow_method,
     unexplained_pixels,
 )
 
 import hairjax as hj
-from hairjax._errors import SceneError
 from hairjax import geometry_stage, prepare
+from hairjax._errors import SceneError
+from hairjax._scene._file import scene_from_dict
 from hairjax._shading import point_colors
-from hairjax._scene_file import scene_from_dict
 from hairjax._shading._scheuermann import (
     ScheuermannParams,
     scheuermann,
@@ -478,8 +478,8 @@ def test_a_scene_may_hold_traced_parameters():
 def test_numpy_exact_omega_equals_the_renderers():
     """exact_omega_numpy (hair_occlusion's Ω) against _shadows.exact_opacity (the renderer's
     `exact` Ω, float64) on the same light-space set-up: equal to rounding."""
+    from hairjax._geometry._shadows import exact_opacity, shadow_setup
     from hairjax._shading._scheuermann_inputs import exact_omega_numpy
-    from hairjax._shadows import exact_opacity, shadow_setup
 
     s = small_scene(strands=60).strands
     segs = s.segments()

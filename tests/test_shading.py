@@ -4,7 +4,6 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-
 from helpers import cone
 
 from hairjax import ShadingParams, kajiya_kay

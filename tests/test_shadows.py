@@ -2,13 +2,12 @@
 
 import numpy as np
 import pytest
-
 from helpers import shadow_method
 
 import hairjax as hj
 from hairjax import geometry_stage
+from hairjax._geometry._shadows import map_margin
 from hairjax._shading import point_colors
-from hairjax._shadows import map_margin
 
 # Light travels straight down (−y). Three layers of hairs along x at y = 0, −0.5, −1.
 # The map: R = 36 texels, margin 2 (width 1) → 32 usable texels over the slab's 3.2 units,

@@ -121,7 +121,15 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from helpers import MAX_BAND, TAU_TOL, central_difference, cone, shadow_band, shadow_method, unexplained_pixels
+from helpers import (
+    MAX_BAND,
+    TAU_TOL,
+    central_difference,
+    cone,
+    shadow_band,
+    shadow_method,
+    unexplained_pixels,
+)
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -791,7 +799,7 @@ def test_omega_in_the_thousands(request, backend):
 def test_point_light_at_a_strand_point(request, backend):
     """L = 0 at the point under the light (_unit's guard): ambient light only there; the
     points behind the light's near plane or beyond its ±80° map get Ω = 0."""
-    from hairjax._shadows import light_frame
+    from hairjax._geometry._shadows import light_frame
     from hairjax.gl import render_gl
 
     image, res = check(backend, request, "point_light")
@@ -816,7 +824,7 @@ def test_point_light_at_the_hairs_centre(request, backend):
     """The light at the bounding-box centre (light_view's axis fallback, near ≈ 1e-303):
     the points at or above the light's level are unseen and get Ω = 0; the rest are
     shadowed as usual (some Ω > 0)."""
-    from hairjax._shadows import light_frame
+    from hairjax._geometry._shadows import light_frame
     from hairjax.gl import render_gl
 
     _, res = check(backend, request, "centre_light")
@@ -917,7 +925,7 @@ def test_gl_depth_test_keeps_its_resolution_at_1e_minus_4(gl):
     GL's depth test must classify each like JAX. The depth buffer stores depth/far in 2⁻²⁴
     steps; with `far` floored at 2 units the step was 4e-4 of these depths (bug, fixed in
     _camera_pass)."""
-    from hairjax._projection import camera_view
+    from hairjax._geometry._projection import camera_view
     from hairjax.gl import render_gl
 
     s = 1e-4
@@ -957,7 +965,7 @@ def test_gl_depth_test_keeps_its_resolution_at_1e_minus_4(gl):
 def test_guard_zero_tangent_of_repeated_points():
     """_render.tangents/_unit: a zero central difference (repeated points, one-point
     strands) gives the zero tangent, exactly; other tangents are unit vectors."""
-    from hairjax._strands import tangents
+    from hairjax._scene._strands import tangents
 
     hair = hj.Strands.from_list([[[0, 0, 0], [0, 0, 0], [1, 0, 0]],       # one-sided p1 − p0 = 0
                                  [[2, 2, 2]],                              # one point
@@ -1109,7 +1117,7 @@ def test_guard_light_sees_all_points_at_one_depth():
     """_shadows.light_frame's span fallback: every point at one light depth gives span 1
     (any positive spacing: nothing is strictly nearer than anything, Ω = 0, asserted on
     both renderers in test_all_points_at_one_depth)."""
-    from hairjax._shadows import light_frame
+    from hairjax._geometry._shadows import light_frame
 
     pts = np.array([[0.0, 0.0, 0.0], [1.0, 0.5, 0.0], [-0.5, 1.0, 0.0]])
     frame = light_frame(pts, np.array([[0, 1], [1, 2]]), np.ones(1),
@@ -1122,7 +1130,7 @@ def test_guard_no_point_in_front_of_a_point_light():
     light_view looks down −y (axis fallback), near = 1e-3·max(0, 1e-300), the field of
     view falls back to ±80°; light_frame sees no point (zmin = 0, span 1); every point
     gets Ω = 0 (texel −1 for the maps, zero weights for `exact`)."""
-    from hairjax._shadows import exact_opacity, light_frame, point_opacity, shadow_setup
+    from hairjax._geometry._shadows import exact_opacity, light_frame, point_opacity, shadow_setup
 
     pts = np.array([[-1.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
     segs = np.array([[0, 1]])
@@ -1147,7 +1155,7 @@ def test_guard_no_point_in_front_of_a_point_light():
 def test_guard_points_outside_the_light_map():
     """_shadows.point_opacity's maximum/where: texel −1 (a point outside the map) gets
     Ω = 0 exactly and passes no gradient to the maps; a point inside interpolates."""
-    from hairjax._shadows import point_opacity
+    from hairjax._geometry._shadows import point_opacity
 
     maps = jnp.arange(2 * 4 * 4, dtype=float).reshape(2, 4, 4)
     plane, f, texel = jnp.asarray([0, 0]), jnp.asarray([0.25, 0.25]), jnp.asarray([-1, 5])
@@ -1159,8 +1167,8 @@ def test_guard_points_outside_the_light_map():
 def test_guard_plane_clamps():
     """_shadows.point_planes: a point at D_N (u = N) takes plane N − 1 with f = 1, i.e.
     Ω̄(D_N); a point nearer than D₀ (behind a point light, u < 0) plane 0 with f = 0."""
-    from hairjax._projection import View
-    from hairjax._shadows import LightFrame, point_planes
+    from hairjax._geometry._projection import View
+    from hairjax._geometry._shadows import LightFrame, point_planes
 
     view = View(np.zeros(3), np.array([0.0, 0.0, -1.0]), np.array([1.0, 0, 0]), np.array([0, 1.0, 0]),
                 8, 8, 1.0, 4.0, 4.0, False, -np.inf)
@@ -1178,8 +1186,8 @@ def test_guard_fragment_below_the_nearest_plane(monkeypatch):
     planes 1 … N), never to slice −1; one at D_N to slice N (beyond the last plane)."""
     import dataclasses as dc
 
-    import hairjax._shadows as shadows_mod
-    import hairjax._shadows._frame as frame_mod
+    import hairjax._geometry._shadows as shadows_mod
+    import hairjax._geometry._shadows._frame as frame_mod
 
     real = frame_mod.rasterize
 
@@ -1220,7 +1228,7 @@ def test_guard_exact_shadows_without_fragments(request):
 def test_guard_map_margin_without_strands():
     """_shadows.map_margin's initial=1.0: no strands (an empty width array) → the margin
     of width 1: ⌈½ + ½⌉ + 1 = 2."""
-    from hairjax._shadows import map_margin
+    from hairjax._geometry._shadows import map_margin
 
     assert map_margin(np.zeros(0)) == 2 == map_margin(np.ones(1))
 
@@ -1229,7 +1237,7 @@ def test_guard_projection_at_and_behind_the_eye():
     """_projection.View.project: depth ≤ near (behind or at the eye) divides by near, so
     the coordinates stay finite (those segments are culled by the near plane); GLSL's
     project() has the same max(z, near), exercised by test_camera_inside_the_hair."""
-    from hairjax._projection import camera_view
+    from hairjax._geometry._projection import camera_view
 
     cam = hj.Camera(eye=(0.0, 0.0, 0.0), target=(0.0, 0.0, -1.0), width=8, height=8, near=0.01)
     view = camera_view(cam)
@@ -1246,7 +1254,7 @@ def test_guard_basis_when_up_is_parallel_to_forward():
     relative bound (1e-12); any up it accepts, however short or close to forward, gives
     docs/model.md §2's right = normalise(d × up) (up = (0, 1e-10, 0) used to fall back to
     another axis: the image turned by 90°)."""
-    from hairjax._projection import _basis, camera_view, light_view
+    from hairjax._geometry._projection import _basis, camera_view, light_view
 
     view = light_view(hj.Light(direction=(0.0, -1.0, 0.0)), np.eye(3), 16, 2)
     basis = np.stack([view.right, view.up, view.forward])
@@ -1266,7 +1274,7 @@ def test_guard_light_sees_all_points_at_one_spot():
     """_projection.light_view: hair along a directional light projects to one point of the
     light's view (extent 0): focal falls back to 1, every point lands on the map centre,
     no light-space fragment (zero-length ribbons), Ω = 0."""
-    from hairjax._shadows import shadow_setup
+    from hairjax._geometry._shadows import shadow_setup
 
     pts = np.array([[0.2, 1.0, 0.3], [0.2, 0.0, 0.3], [0.2, -1.0, 0.3]])
     segs = np.array([[0, 1], [1, 2]])
@@ -1280,7 +1288,7 @@ def test_guard_point_light_field_of_view_clamps():
     """_projection.light_view's tan(half fov) clamps: points on the light's axis (lateral 0)
     take the 1e-6 floor (finite focal, all on the centre texel); a point 85° off the axis
     the ±80° cap, and it falls outside the map (Ω = 0, point_light case)."""
-    from hairjax._projection import light_view
+    from hairjax._geometry._projection import light_view
 
     light = hj.Light(kind="point", position=(0.0, 0.0, 2.0))
     on_axis = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
@@ -1299,7 +1307,7 @@ def test_guard_point_light_field_of_view_clamps():
 def test_guard_depth_bins_of_one_depth_and_of_a_subnormal_span():
     """_ordering.bin_index: one depth puts everything in bin 0; with a subnormal span
     ε = span/2N rounds to 0, so D_max would land in bin N: the minimum keeps it in N − 1."""
-    from hairjax._ordering import bin_index
+    from hairjax._geometry._ordering import bin_index
 
     np.testing.assert_array_equal(bin_index(np.full(5, 3.25), 64), 0)
     span = 5e-322
@@ -1310,7 +1318,7 @@ def test_guard_depth_bins_of_one_depth_and_of_a_subnormal_span():
 def test_guard_rasteriser_zero_length_and_empty_input():
     """_raster.rasterize: zero-length segments get no columns (no fragments, no division
     by L = 0); no columns at all returns empty fragments of the working float type."""
-    from hairjax._raster import rasterize
+    from hairjax._geometry._raster import rasterize
 
     p = np.array([[5.5, 5.5], [3.0, 4.0]])
     frags = rasterize(p, p, np.ones(2), np.ones(2), np.ones(2), 16, 16, True)
@@ -1324,7 +1332,7 @@ def test_guard_rasteriser_zero_length_and_empty_input():
 def test_guard_rasteriser_padding_columns(dtype):
     """_raster._candidates: padding columns (all zeros: L = 0, depths 0) divide by the
     guards' 1 instead of 0 — every output finite, coverage 0 — next to a real column."""
-    from hairjax._raster import _candidates
+    from hairjax._geometry._raster import _candidates
 
     with precision(dtype):
         real = [2.2, 3.5, 5.7, 0.0, 5.7, 1.0, 2.0, 3.0, 2.0, 1.0, 1.0]  # x0 y0 dx dy L w z0 z1 k xm reach
@@ -1341,7 +1349,7 @@ def test_guard_constant_depth_fragments_keep_z(dtype):
     """_raster._candidates's za == zb guard (and GLSL fragment_depth's): a segment at one
     depth gives every fragment exactly that depth, although the perspective formula
     1/((1 − t)/z + t/z) rounds away from z (checked here, the guard's reason)."""
-    from hairjax._raster import rasterize
+    from hairjax._geometry._raster import rasterize
 
     z = 1.469  # 1/(1/z) ≠ z in float64 and float32
     with precision(dtype):
@@ -1357,8 +1365,8 @@ def test_guard_sphere_rays_that_miss_and_an_eye_inside():
     """_render.sphere_hits: rays that miss (disc < 0) take sqrt(0), not NaN (NumPy would
     warn — an error here), and get depth ∞; with the eye inside, every ray takes the far
     root. Hits lie on the sphere; the Lambert term max(N·L, 0) is 0 on the unlit side."""
-    from hairjax._projection import camera_view
-    from hairjax._occluder import sphere_hits
+    from hairjax._geometry._occluder import sphere_hits
+    from hairjax._geometry._projection import camera_view
 
     occ = hj.Occluder(center=(0.0, 0.0, 0.0), radius=0.5)
     for eye, hits in (((0.0, 0.0, 4.0), "some"), ((0.1, 0.0, 0.2), "all")):
@@ -1398,7 +1406,7 @@ def test_guard_point_light_on_the_occluder(gl):
 def test_guard_fur_sources():
     """_sources: a normal draw of exactly 0 (a stub generator) gives the direction +y;
     a step where gravity + inertia cancel the direction keeps the direction."""
-    from hairjax._sources import _grow, _unit_vectors
+    from hairjax._scene._procedural import _grow, _unit_vectors
 
     class Zeros:
         def normal(self, size):

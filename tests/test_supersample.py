@@ -5,7 +5,7 @@ import pytest
 from helpers import small_furball_scene
 
 import hairjax as hj
-from hairjax._projection import camera_view
+from hairjax._geometry._projection import camera_view
 from hairjax._supersample import shifted, supersample_offsets
 
 

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import HairFormatError
-from .._strands import Strands
+from .._scene._strands import Strands
 from ._hair import parse_hair
 from ._ply import parse_ply
 from ._tfx import parse_tfx

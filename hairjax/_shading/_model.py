@@ -34,7 +34,7 @@ from jaxtyping import Array, Float
 from .._errors import SceneError
 
 if TYPE_CHECKING:  # types only: the scene reader imports the registry, not the reverse
-    from .._scene_file import Table
+    from .._scene._file import Table
 
 __all__ = ["AbstractShadingModel", "PointInputs", "ShadingPoints", "Reflectance", "Transform",
            "register_shading_model", "shading_model_class", "shading_model_names",

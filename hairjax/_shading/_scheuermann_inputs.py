@@ -13,9 +13,9 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from .._errors import SceneError
-from .._light import Light
-from .._ordering import hair_centre
-from .._shadows import ExactShadows
+from .._geometry._ordering import hair_centre
+from .._geometry._shadows import ExactShadows
+from .._scene._light import Light
 
 __all__ = ["ScheuermannMaps", "ScheuermannPoints", "strand_normals", "strand_position",
            "scheuermann_inputs", "segment_alpha", "hair_occlusion", "sphere_directions",

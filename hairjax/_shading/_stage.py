@@ -21,7 +21,7 @@ from ._model import Reflectance, ShadingPoints
 from ._transmittance import transmittance
 
 if TYPE_CHECKING:
-    from .._geometry_stage import Geometry
+    from .._geometry._stage import Geometry
 
 __all__ = ["shading_points", "light_factor", "combine", "point_colors", "occluder_colors",
            "shading_stage"]

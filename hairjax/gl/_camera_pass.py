@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._occluder import drawable_triangles
-from .._projection import View
-from .._scene import Scene
+from .._geometry._occluder import drawable_triangles
+from .._geometry._projection import View
+from .._scene._scene import Scene
 from ._buffers import Strands
 from ._context import check, release
 from ._occluder import OccluderLight, OccluderSurface, draw_occluder_color

@@ -8,9 +8,9 @@ import dataclasses
 
 import numpy as np
 
-from .._occluder import drawable_triangles, occluder_extent, occluder_light_view, vertex_normals
-from .._projection import View
-from .._scene import Scene
+from .._geometry._occluder import drawable_triangles, occluder_extent, occluder_light_view, vertex_normals
+from .._geometry._projection import View
+from .._scene._scene import Scene
 from ._buffers import Points, Strands
 from ._context import check, release
 from ._programs import workgroups

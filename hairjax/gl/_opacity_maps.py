@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._scene import Scene
-from .._shadows import LightFrame, point_planes
+from .._geometry._shadows import LightFrame, point_planes
+from .._scene._scene import Scene
 from ._buffers import Points, Strands
 from ._context import check, release
 from ._programs import workgroups

@@ -15,9 +15,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._occluder import drawable_triangles
+from .._geometry._occluder import drawable_triangles
+from .._geometry._projection import View
 from .._patches import Patches
-from .._projection import View
 from ._context import check, release
 from ._programs import programs
 from ._uniforms import set_uniforms, view_uniforms

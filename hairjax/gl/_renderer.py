@@ -18,15 +18,15 @@ import time
 
 import numpy as np
 
+from .._geometry._projection import camera_view
+from .._geometry._setup import visibility_order
+from .._geometry._shadows import light_frame, with_receivers
 from .._patches import scene_patches, scene_point_colors
-from .._projection import camera_view
-from .._setup import visibility_order
-from .._scene import Scene
-from .._shadows import light_frame, with_receivers
+from .._scene._scene import Scene
+from . import _exact_opacity, _opacity_maps  # noqa: F401 (they register their passes)
 from ._buffers import Points, Strands
 from ._camera_pass import camera_depth_far, camera_pass
 from ._context import get_context
-from . import _exact_opacity, _opacity_maps  # noqa: F401 (they register their passes)
 from ._occluder import OccluderLight, OccluderSurface, occluder_shadow
 from ._patches import render_patches_gl
 from ._programs import programs

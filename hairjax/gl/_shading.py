@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._scene import Scene
+from .._scene._scene import Scene
 from .._shading._streaks import strand_coordinates, streak_prefix
 from .._shading._streaks import streak_texture as streak_values
 from ._uniforms import set_uniforms

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._scene import Scene
-from .._shadows import LightFrame
+from .._geometry._shadows import LightFrame
+from .._scene._scene import Scene
 
 __all__ = ["light_pass_uniforms", "light_uniforms", "set_uniforms", "vec", "view_uniforms"]
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from .._files import write_json
+from .._io._files import write_json
 from ._bench_cases import (
     FULL_RENDER_TARGET_CONFIG,
     GL_PASSES,

@@ -93,10 +93,10 @@ def _measure_jax(scene, repeats: int, progress) -> dict:
     import jax
     import jax.numpy as jnp
 
-    from .._geometry_stage import geometry_stage
-    from .._ordering import Ordering, draw_order, segment_depth
+    from .._geometry._ordering import Ordering, draw_order, segment_depth
+    from .._geometry._setup import prepare
+    from .._geometry._stage import geometry_stage
     from .._render import render_profiled
-    from .._setup import prepare
     from .._shading import ShadingParams, shading_stage
 
     params = scene.params

@@ -8,11 +8,11 @@ import time
 import jax
 import numpy as np
 
-from .._band import PIXEL_TOL
 from .._cache import forget
-from .._geometry_stage import geometry_stage
+from .._disagreement import PIXEL_TOL
+from .._geometry._stage import geometry_stage
 from .._render import render
-from .._scene import Scene
+from .._scene._scene import Scene
 from .._shading import transmittance
 
 __all__ = ["compare", "image_stats", "format_report"]

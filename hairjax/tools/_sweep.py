@@ -27,10 +27,10 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from .._files import atomic_path, write_json, write_text
-from .._ordering import Ordering
-from .._scene import Scene
-from .._shadows import Shadows
+from .._geometry._ordering import Ordering
+from .._geometry._shadows import Shadows
+from .._io._files import atomic_path, write_json, write_text
+from .._scene._scene import Scene
 from .._supersample import supersample
 from ._compare import image_stats
 
@@ -97,7 +97,7 @@ def _renderer(path: str) -> Callable[[Scene], tuple[np.ndarray, np.ndarray | Non
         import jax
 
         from .._cache import forget
-        from .._geometry_stage import geometry_stage
+        from .._geometry._stage import geometry_stage
         from .._render import render
 
         def run(scene):

@@ -8,7 +8,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from .._files import atomic_path, write_csv, write_text
+from .._io._files import atomic_path, write_csv, write_text
 
 __all__ = ["write_report", "summary_markdown", "cheapest", "pareto_plot", "THRESHOLDS"]
 

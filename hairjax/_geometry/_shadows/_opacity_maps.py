@@ -22,7 +22,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, Int
 
-from .._constants import SHADOW_FILTER_RADIUS
+from ..._constants import SHADOW_FILTER_RADIUS
 from ._base import AbstractShadowMethod, check_resolution, register_shadow_method
 from ._frame import LightFrame, light_fragments
 
@@ -61,7 +61,7 @@ class OpacityMaps(AbstractShadowMethod):
     def __post_init__(self):
         n = self.maps
         if isinstance(n, bool) or int(n) != n or not 1 <= n <= 65536:
-            from .._errors import SceneError
+            from ..._errors import SceneError
 
             raise SceneError(f"shadows.maps must be an integer in [1, 65536], got {n!r}")
         object.__setattr__(self, "maps", int(n))

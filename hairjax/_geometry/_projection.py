@@ -11,7 +11,7 @@ import dataclasses
 
 import numpy as np
 
-from ._constants import NEAR_FRACTION
+from .._constants import NEAR_FRACTION
 
 __all__ = ["View", "camera_view", "light_view"]
 

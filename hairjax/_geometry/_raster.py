@@ -26,7 +26,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ._constants import PIXEL_HALF_EXTENT
+from .._constants import PIXEL_HALF_EXTENT
 
 __all__ = ["Fragments", "rasterize", "ribbon_coverage", "ribbon_widths"]
 

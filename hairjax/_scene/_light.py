@@ -8,7 +8,7 @@ from typing import Literal
 
 import numpy as np
 
-from ._errors import SceneError
+from .._errors import SceneError
 
 __all__ = ["Light", "vec3", "rgb"]
 

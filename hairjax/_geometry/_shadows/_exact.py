@@ -12,8 +12,8 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, Int
 
-from .._composite import segmented_scan
-from .._constants import SHADOW_FILTER_RADIUS
+from ..._composite import segmented_scan
+from ..._constants import SHADOW_FILTER_RADIUS
 from ._base import AbstractShadowMethod, check_resolution, register_shadow_method
 from ._frame import light_fragments
 

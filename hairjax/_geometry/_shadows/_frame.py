@@ -9,7 +9,7 @@ import dataclasses
 
 import numpy as np
 
-from .._constants import PIXEL_HALF_EXTENT, SHADOW_FILTER_RADIUS
+from ..._constants import PIXEL_HALF_EXTENT, SHADOW_FILTER_RADIUS
 from .._projection import View, light_view
 from .._raster import rasterize, ribbon_widths
 

@@ -14,7 +14,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from .._errors import SceneError
+from ..._errors import SceneError
 
 __all__ = ["AbstractOrdering", "register_ordering", "ordering_class", "ordering_names", "Ordering"]
 

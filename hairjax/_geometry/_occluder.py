@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._constants import OCCLUDER_SHADOW_BIAS
+from .._constants import OCCLUDER_SHADOW_BIAS
 from ._projection import View, light_view
 
 __all__ = ["occluder_hits", "sphere_hits", "mesh_hits", "vertex_normals", "occluder_extent",

@@ -34,12 +34,18 @@ import numpy as np
 
 from ._cache import cached
 from ._constants import SHADOW_FILTER_RADIUS
-from ._geometry_stage import geometry_stage
-from ._occluder import interpolation_bound, occluder_hits, occluder_light_view, shadow_bias, silhouette_pixels
-from ._raster import Fragments, rasterize, ribbon_widths
-from ._scene import Scene
-from ._setup import prepare, visibility_order
-from ._shadows import OpacityMaps, light_frame, with_receivers
+from ._geometry._occluder import (
+    interpolation_bound,
+    occluder_hits,
+    occluder_light_view,
+    shadow_bias,
+    silhouette_pixels,
+)
+from ._geometry._raster import Fragments, rasterize, ribbon_widths
+from ._geometry._setup import prepare, visibility_order
+from ._geometry._shadows import OpacityMaps, light_frame, with_receivers
+from ._geometry._stage import geometry_stage
+from ._scene._scene import Scene
 
 __all__ = ["renderer_band", "camera_band", "shadow_band", "omega_uncertainty", "occluder_light_uncertainty",
            "transmittance_uncertainty", "PIXEL_TOL", "TAU_TOL", "SLICE_DELTA", "MAX_BAND"]

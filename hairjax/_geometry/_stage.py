@@ -14,12 +14,12 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from ._cache import cached
-from ._composite import over_weights
-from ._scene import Scene
+from .._cache import cached
+from .._composite import over_weights
+from .._scene._scene import Scene
+from .._shading import AbstractShadingModel
+from .._shading._streaks import streak_factors
 from ._setup import prepare
-from ._shading import AbstractShadingModel
-from ._shading._streaks import streak_factors
 
 __all__ = ["Geometry", "geometry_stage"]
 

@@ -16,14 +16,14 @@ from typing import Any
 import jax
 import numpy as np
 
-from ._cache import cached
+from .._cache import cached
+from .._scene._scene import Scene
+from .._scene._strands import tangents, unit_rows
+from .._shading import PointInputs
 from ._occluder import occluder_hits, occluder_light_view, occluder_visibility
 from ._ordering import segment_depth, stable_argsort_uint32
 from ._projection import View, camera_view
 from ._raster import rasterize, ribbon_widths
-from ._scene import Scene
-from ._shading import PointInputs
-from ._strands import tangents, unit_rows
 
 __all__ = ["GeometrySetup", "prepare", "visibility_order", "to_light"]
 

@@ -13,7 +13,7 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-from ._errors import SceneError
+from .._errors import SceneError
 
 __all__ = ["Table", "build", "given", "is_number", "describe"]
 

@@ -16,7 +16,7 @@ from typing import Any, ClassVar
 import numpy as np
 from jaxtyping import Array, Float
 
-from .._errors import SceneError
+from ..._errors import SceneError
 
 __all__ = ["AbstractShadowMethod", "register_shadow_method", "shadow_method_class",
            "shadow_method_names", "Shadows", "check_resolution"]

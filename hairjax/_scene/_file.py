@@ -24,15 +24,17 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from ._errors import SceneError
+from .._errors import SceneError
+from .._geometry._ordering import ordering_class, ordering_names
+from .._geometry._shadows import shadow_method_class, shadow_method_names
+from .._shading import Streaks, shading_model_class, shading_model_names
+from ._camera import Camera
 from ._light import Light
-from ._ordering import ordering_class, ordering_names
-from ._scene import OCCLUDER_KINDS, Camera, Occluder, PatchGeometry, Scene
-from ._scene_table import Table, build, describe, given
-from ._shading import Streaks, shading_model_class, shading_model_names
-from ._shadows import shadow_method_class, shadow_method_names
-from ._sources import furball, scalp
+from ._occluder import OCCLUDER_KINDS, Occluder
+from ._procedural import furball, scalp
+from ._scene import PatchGeometry, Scene
 from ._strands import WIDTH_UNITS, Strands
+from ._table import Table, build, describe, given
 
 __all__ = ["load_scene", "scene_from_dict", "default_scene_path", "scene_tables"]
 
@@ -89,7 +91,7 @@ def scene_tables() -> dict[str, tuple[str, ...]]:
 
 def default_scene_path() -> Path:
     """The built-in default scene, `hairjax/scenes/default.toml` (shipped as package data)."""
-    return Path(__file__).parent / "scenes" / "default.toml"
+    return Path(__file__).parents[1] / "scenes" / "default.toml"
 
 
 def load_scene(path: str | os.PathLike) -> Scene:
@@ -277,7 +279,7 @@ def _load_hair_file(table: Table, source: str, base_dir: Path, alpha: float,
         raise SceneError(f"{table.where}: hair.source file not found: {path} (from "
                          f"{source!r}; relative paths are resolved against the scene "
                          "file's directory)")
-    from ._io import load_hair  # Lazy: only file sources need the readers.
+    from .._io import load_hair  # Lazy: only file sources need the readers.
 
     try:
         return load_hair(path, alpha=alpha, width=width)

@@ -1,0 +1,5 @@
+"""The geometry stage (docs/model.md §2–§7, §13; docs/architecture.md): projection, the
+visibility orderings (`_ordering/`, one module each), the ribbons' fragments, the shadow
+methods (`_shadows/`, one module each), the occluder's tests, the NumPy set-up
+(`_setup.py`) and the JAX stage (`_stage.py`). Geometry, camera and light only: no shading
+parameter enters here."""

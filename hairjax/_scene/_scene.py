@@ -1,0 +1,100 @@
+"""The scene: what to render, as plain immutable values.
+
+A `Scene` is configuration, not a pytree: the geometry stage reads it with NumPy, and the
+shading stage takes its differentiable parameters from its shading model
+(`Scene.shading.params`, also `Scene.params`). Construction validates every value, so a
+`Scene` that exists can be rendered.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from .._errors import SceneError
+from .._geometry._ordering import AbstractOrdering, DepthBins
+from .._geometry._shadows import AbstractShadowMethod, OpacityMaps
+from .._shading import AbstractShadingModel, KajiyaKay, Streaks
+from ._camera import Camera
+from ._light import Light, rgb
+from ._occluder import Occluder
+from ._strands import Strands
+
+__all__ = ["PatchGeometry", "Scene"]
+
+
+@dataclasses.dataclass(frozen=True)
+class PatchGeometry:
+    """Draw the strands as polygonal hair patches (docs/model.md §18, scheuermann-2004
+    slides 4–6, 14–17): ribbons `width` world units wide, alpha texture with an opaque
+    core of fraction `opaque_core`, drawn with slide 17's four passes."""
+
+    width: float
+    opaque_core: float = 0.5
+
+    def __post_init__(self):
+        w = self.width
+        if isinstance(w, bool) or not isinstance(w, (int, float)) or not (np.isfinite(w) and w > 0):
+            raise SceneError(f"hair.patch_width must be a positive finite number, got {w!r}")
+        c = self.opaque_core
+        if isinstance(c, bool) or not isinstance(c, (int, float)) or not 0 <= c <= 1:
+            raise SceneError(f"hair.opaque_core must be a number in [0, 1], got {c!r}")
+        object.__setattr__(self, "width", float(w))
+        object.__setattr__(self, "opaque_core", float(c))
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Scene:
+    """Everything needed to render one image.
+
+    `shading`: the shading model with its differentiable parameters (`KajiyaKay`,
+    `KajiyaKayMirror`, `KajiyaKayLookup`, `Scheuermann`, or any registered model,
+    docs/architecture.md); `scene.params` is `scene.shading.params`. `shadows`: the
+    self-shadowing method (`Shadows(...)`, docs/model.md §7); `ordering`: the visibility
+    order (`Ordering(...)`, §4). `streaks`: wenzel-2002's streak texture along the hairs
+    (§16), or None. `patches`: draw the strands as hair patches (§18) instead of ribbons,
+    or None; the strands' opacity maps still give the self-shadows; no occluder.
+    """
+
+    strands: Strands
+    camera: Camera = Camera()
+    light: Light = Light()
+    shading: AbstractShadingModel = dataclasses.field(default_factory=KajiyaKay)
+    shadows: AbstractShadowMethod = OpacityMaps()
+    ordering: AbstractOrdering = DepthBins()
+    occluder: Occluder | None = None
+    background: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    name: str = "scene"
+    streaks: Streaks | None = None
+    patches: PatchGeometry | None = None
+
+    def __post_init__(self):
+        for key, kind in (("strands", Strands), ("camera", Camera), ("light", Light),
+                          ("shading", AbstractShadingModel), ("shadows", AbstractShadowMethod),
+                          ("ordering", AbstractOrdering)):
+            if not isinstance(getattr(self, key), kind):
+                raise SceneError(f"scene.{key} must be a {kind.__name__}, "
+                                 f"got {type(getattr(self, key)).__name__}")
+        if self.streaks is not None and not isinstance(self.streaks, Streaks):
+            raise SceneError("scene.streaks must be a Streaks or None")
+        object.__setattr__(self, "background", rgb("background.color", self.background))
+        if self.patches is not None:
+            if not isinstance(self.patches, PatchGeometry):
+                raise SceneError("scene.patches must be a PatchGeometry or None")
+            if self.occluder is not None:
+                raise SceneError("hair.geometry = 'patches' does not draw an occluder: "
+                                 "remove [occluder] or use geometry = 'strands'")
+
+    @property
+    def params(self):
+        """The shading model's parameters (`scene.shading.params`)."""
+        return self.shading.params
+
+    def replace(self, **changes) -> Scene:
+        """A copy with some fields changed; `params=` replaces the shading model's
+        parameters (`scene.shading.replace_params`)."""
+        if "params" in changes:
+            shading = changes.pop("shading", self.shading)
+            changes["shading"] = shading.replace_params(changes.pop("params"))
+        return dataclasses.replace(self, **changes)
