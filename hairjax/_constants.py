@@ -1,6 +1,7 @@
 """Numerical constants of the hair model, each with its reason.
 
-One definition for the JAX renderer, the GLSL shaders (issue 3 injects these) and the tests.
+One definition for the JAX renderer, the GLSL shaders (hairjax/gl/_programs.py injects
+them as `const` declarations) and the tests.
 """
 
 # Antialiasing: a pixel is a unit box aligned with the ribbon; coverage across the ribbon

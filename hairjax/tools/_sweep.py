@@ -59,23 +59,29 @@ class SweepError(ValueError):
     """Bad sweep input, or an output folder that holds a different sweep."""
 
 
+def _with_width(scene: Scene, factor: float) -> Scene:
+    """Ribbons `factor` times as wide and as much more transparent (the same hair mass)."""
+    strands = scene.strands
+    return scene.replace(strands=strands.replace(width=strands.width * factor,
+                                                 alpha=np.minimum(strands.alpha / factor, 1.0)))
+
+
+# Each knob: (scene, value) → (scene, supersampling factor). A `bins` value is a bin
+# count, or the name of a registered ordering (e.g. "exact") to draw with instead.
+_KNOB_SETTERS: dict[str, Callable] = {
+    "maps": lambda s, v: (s.replace(shadows=dataclasses.replace(s.shadows, maps=int(v))), 1),
+    "map_resolution": lambda s, v: (s.replace(shadows=dataclasses.replace(s.shadows, resolution=int(v))), 1),
+    "bins": lambda s, v: (s.replace(ordering=Ordering(v) if isinstance(v, str) else Ordering("bins", int(v))), 1),
+    "width": lambda s, v: (_with_width(s, float(v)), 1),
+    "supersampling": lambda s, v: (s, int(v)),
+}
+
+
 def knob_scene(scene: Scene, knob: str, value) -> tuple[Scene, int]:
     """The scene with one knob set, and the supersampling factor to render it with."""
-    if knob == "maps":
-        return scene.replace(shadows=dataclasses.replace(scene.shadows, maps=int(value))), 1
-    if knob == "map_resolution":
-        return scene.replace(shadows=dataclasses.replace(scene.shadows, resolution=int(value))), 1
-    if knob == "bins":
-        ordering = Ordering("exact") if value == "exact" else Ordering("bins", bins=int(value))
-        return scene.replace(ordering=ordering), 1
-    if knob == "width":
-        f = float(value)
-        strands = scene.strands
-        return scene.replace(strands=strands.replace(width=strands.width * f,
-                                                     alpha=np.minimum(strands.alpha / f, 1.0))), 1
-    if knob == "supersampling":
-        return scene, int(value)
-    raise SweepError(f"unknown knob {knob!r}; knobs: {', '.join(KNOBS)}")
+    if knob not in _KNOB_SETTERS:
+        raise SweepError(f"unknown knob {knob!r}; knobs: {', '.join(KNOBS)}")
+    return _KNOB_SETTERS[knob](scene, value)
 
 
 def reference_scene(scene: Scene, knobs: dict) -> tuple[Scene, int]:
