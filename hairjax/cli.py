@@ -74,8 +74,7 @@ def _fit(args) -> int:
     import numpy as np
 
     from ._files import write_json
-    from ._fit import FITTABLE, FitError, fit
-    from ._fit_scheuermann import SCHEUERMANN_FITTABLE
+    from ._fit import FITTABLE, SCHEUERMANN_FITTABLE, FitError, fit
     from ._image import read_image, write_image
     from ._render import render
     from ._scene_file import default_scene_path, load_scene

@@ -7,7 +7,7 @@ import pytest
 from helpers import small_furball_scene
 
 import hairjax as hj
-import hairjax._fit as fit_mod
+import hairjax._fit._entry as fit_mod
 
 TRUE = hj.ShadingParams(kd=(0.3, 0.5, 0.2), ks=0.4, shininess=25.0, kappa=2.5, ambient=0.05)
 INIT = hj.ShadingParams(kd=0.5, ks=0.2, shininess=10.0, kappa=1.0, ambient=0.05)

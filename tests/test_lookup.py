@@ -236,7 +236,7 @@ def test_fit_terms_and_derivatives_for_the_lookup_model():
     fit's stated 1e-5 × brightest colour, tests/test_fit.py), and its one-pass derivative
     rule equals forward-mode autodiff of the plain images (as tests/test_fit.py checks for
     the formula; rtol 1e-10: the same maths summed in another order)."""
-    from hairjax import _fit
+    from hairjax._fit import _entry as _fit
 
     scene = lookup_scene(size=32, lookup_size=16)
     exact = np.asarray(hj.render(scene, TRUE))[..., :3].reshape(-1, 3)

@@ -103,7 +103,7 @@ def test_fit_terms_carry_the_streaks():
     """The fit's own image (Kd and Ks images, hairjax/_fit.py) equals the renderer's for a
     scene with streaks (the fit leaves out fragments behind T < 1e-5, so to 1e-5 × the
     brightest colour, as tests/test_fit.py states)."""
-    from hairjax import _fit
+    from hairjax._fit import _entry as _fit
 
     scene = small_furball_scene(strands=60, size=32, streaks=Streaks(contrast=0.8, seed=2))
     p = scene.params

@@ -1,6 +1,6 @@
 """`hairjax.fit` for Scheuermann scenes (docs/model.md §17, docs/fitting.md).
 
-The Kajiya-Kay fit (`_fit.py`) is built on that model's terms: Kd and Ks solved for by
+The Kajiya-Kay fit (`_entry.py`) is built on that model's terms: Kd and Ks solved for by
 variable projection, b precomputed per point. Here the solver iterates on every fitted
 parameter through the differentiable shading stage; the geometry stage runs once per
 target. Colours are fitted through a softplus (≥ 0), exponents and κ through exp
@@ -16,7 +16,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ._fit import (
+from .._render import geometry_stage, shading_stage
+from .._scheuermann import ScheuermannParams
+from ._entry import (
     _FLOOR,
     FitError,
     FitResult,
@@ -26,8 +28,6 @@ from ._fit import (
     _softplus_inv,
     _solve,
 )
-from ._render import geometry_stage, shading_stage
-from ._scheuermann import ScheuermannParams
 
 __all__ = ["SCHEUERMANN_FITTABLE", "fit_scheuermann"]
 
@@ -165,7 +165,7 @@ def _error_jacobian(u, fitted, problem: _Problem):
 
 def _standard_errors(fitted: ScheuermannParams, problem: _Problem):
     """σ²(JᵀJ)⁻¹ in the error space, mapped to the parameters (delta method); undetermined
-    directions as `_fit._covariance` decides them."""
+    directions as `_entry._covariance` decides them."""
     names, scalar = problem.names, problem.scalar
     u = _to_flat(fitted, names, scalar, _ERROR_SPACE)
     covariance = _covariance(*_error_jacobian(u, fitted, problem))

@@ -27,11 +27,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ._constants import FIT_TRANSMITTANCE_CUTOFF
-from ._lookup import LOOKUP_MODELS, lookup_coordinates, lookup_terms
-from ._render import composite, geometry_stage, occluder_colors
-from ._scene import Scene
-from ._shading import ShadingParams, kajiya_kay_terms, specular_power
+from .._constants import FIT_TRANSMITTANCE_CUTOFF
+from .._lookup import LOOKUP_MODELS, lookup_coordinates, lookup_terms
+from .._render import composite, geometry_stage, occluder_colors
+from .._scene import Scene
+from .._shading import ShadingParams, kajiya_kay_terms, specular_power
 
 __all__ = ["fit", "FitResult", "FitError", "FITTABLE", "SOLVERS"]
 
@@ -772,7 +772,7 @@ def fit(
     init = scenes[0].params if init is None else init
     arrays = [_target_arrays(s, t, m, w) for s, t, m, w in zip(scenes, target_list, mask_list, weight_list)]
     if scheuermann:
-        from ._fit_scheuermann import fit_scheuermann
+        from ._scheuermann import fit_scheuermann
 
         return fit_scheuermann(scenes, arrays, names, init, opt, least_squares, scalar, max_steps,
                                rtol, atol, progress)
@@ -818,9 +818,9 @@ def fit(
 
 
 def _scheuermann_names(scenes, names, scalar) -> tuple[str, ...]:
-    """The names a Scheuermann fit takes (`_fit_scheuermann.py`; every scene must be one):
+    """The names a Scheuermann fit takes (`_scheuermann.py`; every scene must be one):
     FITTABLE, `fit`'s default, stands for all of that model's parameters."""
-    from ._fit_scheuermann import SCHEUERMANN_FITTABLE, check_names
+    from ._scheuermann import SCHEUERMANN_FITTABLE, check_names
 
     if any(s.shading_model != "scheuermann" for s in scenes):
         raise FitError("scenes of one fit share a shading model; got Scheuermann and Kajiya-Kay")
