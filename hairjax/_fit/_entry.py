@@ -16,7 +16,6 @@ step, and the solver iterates on the shininess and κ only (variable projection)
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import itertools
 import time
@@ -32,16 +31,13 @@ from .._lookup import LOOKUP_MODELS, lookup_coordinates, lookup_terms
 from .._render import composite, geometry_stage, occluder_colors
 from .._scene import Scene
 from .._shading import ShadingParams, kajiya_kay_terms, specular_power
+from ._result import FitError, FitResult
 
-__all__ = ["fit", "FitResult", "FitError", "FITTABLE", "SOLVERS"]
+__all__ = ["fit", "FITTABLE", "SOLVERS"]
 
 FITTABLE = ("kd", "ks", "shininess", "kappa")
 SOLVERS = ("levenberg-marquardt", "gauss-newton", "dogleg", "bfgs")
 _ALIASES = {"lm": "levenberg-marquardt", "gn": "gauss-newton"}
-
-
-class FitError(ValueError):
-    """Bad fit input (unknown parameter, target size, NaN pixels, …), raised before work."""
 
 
 # Transforms from the optimiser's unconstrained z to the parameter x (docs/fitting.md):
@@ -75,52 +71,6 @@ _SHININESS_SCAN = tuple(float(p) for p in np.geomspace(0.5, 1e4, 25))
 # without effect, in the solvers' steps and in the standard errors alike: far above the
 # rounding of an SVD in float32 (~1e-7), far below any effect the data resolve.
 _NULL_RATIO = 1e-5
-
-
-@dataclasses.dataclass(frozen=True)
-class FitResult:
-    """The outcome of `fit`.
-
-    `params`, `initial`: ShadingParams; `loss`: ½‖r‖² after each step (index 0: initial);
-    `steps`, `time_s` (after the geometry stage), `termination` (why it stopped);
-    `restarts`: times the solver's tolerance test passed where Gauss-Newton still predicted a
-    decrease, and the solver was started afresh from its point (docs/fitting.md);
-    `std_error`: name → standard error (array like the parameter) from (JᵀJ)⁻¹σ², or
-    None where it is not defined; `undetermined`: names the data cannot determine;
-    `rmse` over the fitted pixels; `geometry_s`: time of the geometry stages.
-    """
-
-    params: ShadingParams
-    initial: ShadingParams
-    fitted: tuple[str, ...]
-    loss: list
-    steps: int
-    time_s: float
-    geometry_s: float
-    termination: str
-    std_error: dict
-    undetermined: tuple[str, ...]
-    rmse: float
-    restarts: int = 0
-
-    def to_json(self) -> dict:
-        def value(p, name):
-            v = np.asarray(getattr(p, name), dtype=float)
-            return v.tolist() if v.ndim else float(v)
-
-        # The parameters' fields: kd, ks, shininess, kappa, ambient for ShadingParams.
-        names = [f.name for f in dataclasses.fields(self.params)]
-        return {
-            "params": {n: value(self.params, n) for n in names},
-            "initial": {n: value(self.initial, n) for n in names},
-            "fitted": list(self.fitted),
-            "std_error": {k: (None if v is None else np.asarray(v, float).tolist())
-                          for k, v in self.std_error.items()},
-            "undetermined": list(self.undetermined),
-            "steps": self.steps, "time_s": self.time_s, "geometry_s": self.geometry_s,
-            "loss": [float(x) for x in self.loss], "rmse": self.rmse,
-            "termination": self.termination, "restarts": self.restarts,
-        }
 
 
 class _Terms(eqx.Module):

@@ -20,14 +20,13 @@ from .._render import geometry_stage, shading_stage
 from .._scheuermann import ScheuermannParams
 from ._entry import (
     _FLOOR,
-    FitError,
-    FitResult,
     _covariance,
     _half_square,
     _softplus,
     _softplus_inv,
     _solve,
 )
+from ._result import FitError, FitResult
 
 __all__ = ["SCHEUERMANN_FITTABLE", "fit_scheuermann"]
 
