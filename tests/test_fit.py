@@ -8,6 +8,7 @@ from helpers import small_furball_scene
 
 import hairjax as hj
 import hairjax._fit._entry as fit_mod
+from hairjax._fit import _nnls
 
 TRUE = hj.ShadingParams(kd=(0.3, 0.5, 0.2), ks=0.4, shininess=25.0, kappa=2.5, ambient=0.05)
 INIT = hj.ShadingParams(kd=0.5, ks=0.2, shininess=10.0, kappa=1.0, ambient=0.05)
@@ -70,13 +71,13 @@ def test_zero_specular_fitted_comes_back_zero(scene, solver):
 
 
 def test_nnls_matches_scipy():
-    """_nnls against scipy.optimize.nnls (an active-set solver, independent code) on random
+    """nnls against scipy.optimize.nnls (an active-set solver, independent code) on random
     problems with 1-6 columns, many with negative unconstrained solutions, a zero column and
     two exactly collinear columns."""
     import jax
     from scipy.optimize import nnls
 
-    nnls_jit = jax.jit(fit_mod._nnls)  # one compile per column count
+    nnls_jit = jax.jit(_nnls.nnls)  # one compile per column count
     rng = np.random.default_rng(0)
     for trial in range(60):
         n = 1 + trial % 6
@@ -325,11 +326,11 @@ def fresh_jit():
 @pytest.mark.parametrize("solver", ["gauss-newton", "bfgs"])
 def test_a_second_fit_reuses_the_compiled_steps(scene, target, monkeypatch, fresh_jit, solver):
     """A second fit of the same shapes and names (other values, another start) traces
-    nothing: counted by a wrapper around _nnls, which every step's trace calls."""
+    nothing: counted by a wrapper around nnls, which every step's trace calls."""
     hj.fit(scene, target, init=INIT, solver=solver, max_steps=3)
     calls = []
-    original = fit_mod._nnls
-    monkeypatch.setattr(fit_mod, "_nnls", lambda *a: calls.append(1) or original(*a))
+    original = fit_mod.nnls
+    monkeypatch.setattr(fit_mod, "nnls", lambda *a: calls.append(1) or original(*a))
     other = hj.ShadingParams(kd=0.2, ks=0.5, shininess=30.0, kappa=1.5, ambient=0.05)
     r = hj.fit(scene, 0.9 * target, init=other, solver=solver, max_steps=3)
     assert r.steps >= 1 and calls == []
