@@ -8,7 +8,7 @@ from helpers import small_furball_scene
 
 import hairjax as hj
 import hairjax._fit._entry as fit_mod
-from hairjax._fit import _nnls
+from hairjax._fit import _nnls, _solvers
 
 TRUE = hj.ShadingParams(kd=(0.3, 0.5, 0.2), ks=0.4, shininess=25.0, kappa=2.5, ambient=0.05)
 INIT = hj.ShadingParams(kd=0.5, ks=0.2, shininess=10.0, kappa=1.0, ambient=0.05)
@@ -226,7 +226,7 @@ def test_bfgs_first_step_has_unit_length():
     """The first step is −∇f/‖∇f‖ whatever the loss's scale (a 1e6-times steeper bowl)."""
     import jax
 
-    opt = fit_mod._bfgs(rtol=1e-8, atol=1e-10)
+    opt = _solvers.bfgs(rtol=1e-8, atol=1e-10)
     fn = lambda z, args: (1e6 * jnp.sum((z - 3.0) ** 2), None)  # noqa: E731
     z0 = jnp.zeros(4)
     f_struct, aux_struct = jax.eval_shape(lambda: fn(z0, None))
@@ -239,7 +239,7 @@ def test_bfgs_update_satisfies_the_secant_equation_at_small_scale():
     """After the first pair, H s = y even when sᵀy ≈ 1e-12 (optimistix skips below ε)."""
     import optimistix as optx
 
-    opt = fit_mod._bfgs(rtol=1e-8, atol=1e-10)
+    opt = _solvers.bfgs(rtol=1e-8, atol=1e-10)
     z = jnp.zeros(3)
     info, count = opt.init_hessian(z, jnp.asarray(0.0), z)
     g0 = jnp.asarray([1e-6, -2e-6, 5e-7])
@@ -358,7 +358,7 @@ def test_divergence_ends_cleanly(scene, monkeypatch, fresh_jit):
     import optimistix as optx
 
     far, start = _overflow_beyond_kappa_5(monkeypatch, scene)
-    monkeypatch.setattr(fit_mod, "_solver", lambda name, rtol, atol: (
+    monkeypatch.setattr(fit_mod, "make_solver", lambda name, rtol, atol: (
         optx.GaussNewton(rtol=rtol, atol=atol), True))
     r = hj.fit(scene, far, fit=("kappa",), init=start, solver="gauss-newton")
     assert r.termination.startswith("stopped: diverged")
@@ -384,7 +384,7 @@ def test_a_weak_direction_is_not_dropped_from_the_step(solver):
     """Linear least squares in float32 with 100k residuals and a column 1000 times weaker
     than the other (a faint highlight's shininess beside κ). lineax's default SVD cutoff,
     2·eps·max(m, n) = 2.4 % of the largest singular value, dropped the weak direction: the
-    solver never moved it and "converged". With the cutoff at _NULL_RATIO both solvers
+    solver never moved it and "converged". With the cutoff at NULL_RATIO both solvers
     solve it; its rounding floor is eps / 1e-3 ≈ 1e-4 relative."""
     import optimistix as optx
 
@@ -394,7 +394,7 @@ def test_a_weak_direction_is_not_dropped_from_the_step(solver):
     with jax.enable_x64(False):
         b = jnp.asarray(a @ truth)
         a = jnp.asarray(a)
-        opt, _ = fit_mod._solver(solver, 1e-6, 1e-8)
+        opt, _ = _solvers.make_solver(solver, 1e-6, 1e-8)
         z = optx.least_squares(lambda z, _: a @ z - b, opt, jnp.zeros(2, jnp.float32), max_steps=20).value
     assert rel(z, truth) < 1e-3, z
 

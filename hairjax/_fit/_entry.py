@@ -16,7 +16,6 @@ step, and the solver iterates on the shininess and κ only (variable projection)
 
 from __future__ import annotations
 
-import functools
 import time
 from collections.abc import Callable, Sequence
 
@@ -32,12 +31,11 @@ from .._scene import Scene
 from .._shading import ShadingParams, kajiya_kay_terms, specular_power
 from ._nnls import nnls
 from ._result import FitError, FitResult
+from ._solvers import NULL_RATIO, SOLVERS, make_solver
 
 __all__ = ["fit", "FITTABLE", "SOLVERS"]
 
 FITTABLE = ("kd", "ks", "shininess", "kappa")
-SOLVERS = ("levenberg-marquardt", "gauss-newton", "dogleg", "bfgs")
-_ALIASES = {"lm": "levenberg-marquardt", "gn": "gauss-newton"}
 
 
 # Transforms from the optimiser's unconstrained z to the parameter x (docs/fitting.md):
@@ -67,10 +65,6 @@ _STALL_STEPS = 10
 # Where `fit` looks for a lower loss when it stops with every solved Ks at 0 (p then has no
 # effect): the shininess on a log grid over the range we support, 1.5× apart.
 _SHININESS_SCAN = tuple(float(p) for p in np.geomspace(0.5, 1e4, 25))
-# A direction of J whose singular value is below _NULL_RATIO of the largest is taken as
-# without effect, in the solvers' steps and in the standard errors alike: far above the
-# rounding of an SVD in float32 (~1e-7), far below any effect the data resolve.
-_NULL_RATIO = 1e-5
 
 
 class _Terms(eqx.Module):
@@ -285,115 +279,6 @@ def _unpack_linear(c: jax.Array, linear, scalar) -> dict:
     return out
 
 
-def _solver(name: str, rtol: float, atol: float):
-    import lineax as lx
-    import optimistix as optx
-
-    name = _ALIASES.get(name, name)
-    if name == "levenberg-marquardt":
-        return optx.LevenbergMarquardt(rtol=rtol, atol=atol), True
-    # A parameter with no effect (p when Ks = 0) leaves a zero column in J: Gauss-Newton's
-    # and dogleg's default solve then returned NaN or never moved. Least squares through an
-    # SVD takes the minimum-norm step instead; LM's damping needs none. Its cutoff is ours:
-    # lineax's default, 2·eps·max(m, n) of the largest singular value, is 3.6 % with 150k
-    # float32 residuals; it dropped a faint highlight's shininess from every step, and both
-    # solvers "converged" at the start's p (Ks 48 %, p 90 % off on fit_recovery's set 0).
-    rank_deficient = lx.SVD(rcond=_NULL_RATIO)
-    if name == "gauss-newton":
-        return _damped_gauss_newton(rtol, atol, rank_deficient), True
-    if name == "dogleg":
-        return optx.Dogleg(rtol=rtol, atol=atol, linear_solver=rank_deficient), True
-    if name == "bfgs":
-        return _bfgs(rtol, atol), False
-    raise FitError(f"unknown solver {name!r}; choose from {', '.join(SOLVERS)} (or lm, gn)")
-
-
-def _quiet(*args, **kwargs) -> None:
-    """optimistix's `verbose` hook: `fit` reports progress itself."""
-
-
-# Cached, so that every fit gets the same solver class and its compiled steps are reused.
-@functools.cache
-def _damped_gauss_newton(rtol: float, atol: float, linear_solver):
-    """Gauss-Newton steps with Armijo backtracking (Nocedal & Wright 2006, §10.3, "damped
-    Gauss-Newton") instead of optimistix's full steps (`LearningRate(1.0)`). From a start
-    100 times too low a full step raised κ from 0.02 to 4e7 and the loss from 57 to 159:
-    every strand then lies in shadow, κ has no effect, and the solver "converged" there."""
-    import optimistix as optx
-
-    class _GaussNewton(optx.AbstractGaussNewton):
-        rtol: float
-        atol: float
-        descent: optx.AbstractDescent
-        norm: Callable = optx.max_norm
-        search: optx.AbstractSearch = optx.BacktrackingArmijo()
-        verbose: Callable = _quiet
-
-    return _GaussNewton(rtol=rtol, atol=atol, descent=optx.NewtonDescent(linear_solver=linear_solver))
-
-
-@functools.cache  # as _damped_gauss_newton
-def _bfgs(rtol: float, atol: float):
-    """BFGS on ½‖r‖² over a flat z (docs/fitting.md, "BFGS"): optimistix's quasi-Newton
-    step and Armijo backtracking, with the initial Hessian scaled as Nocedal & Wright
-    (2006, §6.1) advise instead of left at the identity, and a scale-free test for skipping
-    an update. Both matter here:
-    - With H₀ = I the first step is −∇f, which grows with the pixel count; it threw a faint
-      Ks deep into the softplus's flat tail, where its gradient vanishes, and BFGS
-      "converged" with Ks = 0. Here the first step is −∇f/‖∇f‖ (unit length in z: one
-      e-fold of p or κ), and before the first update H is reset to (yᵀy / sᵀy)·I.
-    - optimistix updates only when sᵀy > ε (absolute). In float32 sᵀy falls below 1.2e-7
-      near the optimum of a small loss, every update was skipped and BFGS crawled on a stale
-      Hessian; here the test is sᵀy > ε‖s‖‖y‖."""
-    import lineax as lx
-    import optimistix as optx
-
-    def operator(matrix):
-        return lx.MatrixLinearOperator(matrix, lx.positive_semidefinite_tag)
-
-    class _BFGS(optx.AbstractBFGS):
-        rtol: float
-        atol: float
-        norm: Callable = optx.max_norm
-        use_inverse: bool = False
-        descent: optx.AbstractDescent = optx.NewtonDescent(linear_solver=lx.Cholesky())
-        search: optx.AbstractSearch = optx.BacktrackingArmijo()
-        verbose: Callable = _quiet
-
-        def init_hessian(self, y, f, grad):
-            # The state counts the updates made: 0 before the first step, 1 before the first
-            # (s, y) pair.
-            eye = jnp.eye(y.size, dtype=y.dtype)
-            return optx.FunctionInfo.EvalGradHessian(f, grad, operator(eye)), jnp.array(0)
-
-        def update_hessian(self, y, y_eval, f_info, f_eval_info, count):
-            g = f_eval_info.grad
-            s, dg = y_eval - y, g - f_info.grad
-            sy, yy = s @ dg, dg @ dg
-            # Fires when sᵀy is not positive beyond rounding (on the first step s = 0, or the
-            # curvature condition fails and the update would make H indefinite): keep H.
-            ok = sy > jnp.finfo(sy.dtype).eps * jnp.linalg.norm(s) * jnp.sqrt(yy)
-            sy_safe = jnp.where(ok, sy, 1.0)  # fires with `ok` false: the value is unused
-            g_norm = jnp.linalg.norm(g)
-            g_norm = jnp.where(g_norm > 0, g_norm, 1.0)  # fires for a start at a stationary point
-            # H before this update: ‖g‖·I on the first step (a unit first step), (yᵀy/sᵀy)·I at
-            # the first (s, y) pair, else the running approximation.
-            previous = f_info.hessian.as_matrix()
-            scale = jnp.where(count == 0, g_norm, yy / sy_safe)
-            h = jnp.where(count <= 1, scale * jnp.eye(y.size, dtype=y.dtype), previous)
-            hs = h @ s
-            shs = s @ hs
-            # shs > 0 whenever ok (h is positive definite and s ≠ 0); guarded all the same.
-            update = ok & (shs > 0)
-            shs_safe = jnp.where(update, shs, 1.0)
-            updated = h + jnp.outer(dg, dg) / sy_safe - jnp.outer(hs, hs) / shs_safe
-            h = jnp.where(update, updated, jnp.where(count == 0, h, previous))
-            info = optx.FunctionInfo.EvalGradHessian(f_eval_info.f, g, operator(h))
-            return info, count + jnp.where((count == 0) | ok, 1, 0)
-
-    return _BFGS(rtol=rtol, atol=atol)
-
-
 class _Problem(eqx.Module):
     """Everything a solver step needs besides z: the targets' terms and the held values
     (arrays), and which names the solver searches and which gains are solved for (static).
@@ -458,7 +343,7 @@ def _loss_fn(z, problem: _Problem):
 def _stationarity(residuals: Callable, z, problem):
     """(decrease, effect) at z for the residual function `residuals(z, problem)`.
     `decrease`: the loss a Gauss-Newton step from z would remove were the residuals linear,
-    ½‖U_kᵀ r‖², U_k the left singular vectors of J = ∂r/∂z above _NULL_RATIO (JΔ = −U_k U_kᵀ r
+    ½‖U_kᵀ r‖², U_k the left singular vectors of J = ∂r/∂z above NULL_RATIO (JΔ = −U_k U_kᵀ r
     for the least-squares step Δ). It is 0 exactly at a stationary point, whatever the
     solver's state; the solvers' own tests look at the last step's size instead, which a
     poor curvature estimate (BFGS) or a shrunken trust region makes small far from one.
@@ -466,7 +351,7 @@ def _stationarity(residuals: Callable, z, problem):
     r, jvp = jax.linearize(lambda z: residuals(z, problem), z)
     jac = jax.vmap(jvp, out_axes=1)(jnp.eye(z.size, dtype=z.dtype))
     u, sv, _ = jnp.linalg.svd(jac, full_matrices=False)
-    keep = sv > _NULL_RATIO * sv[0]
+    keep = sv > NULL_RATIO * sv[0]
     return 0.5 * jnp.sum(jnp.where(keep, u.T @ r, 0.0) ** 2), jnp.linalg.norm(jac, axis=0)
 
 
@@ -477,7 +362,7 @@ def _half_square(residuals: Callable, z, problem):
 
 
 def _plateau_exit(z, problem: _Problem, effect, loss: float, rtol: float, atol: float):
-    """From a stationary z where the shininess has no effect (‖∂r/∂log p‖ below _NULL_RATIO
+    """From a stationary z where the shininess has no effect (‖∂r/∂log p‖ below NULL_RATIO
     of the largest column of J: the solved Ks is 0, or the highlight is a needle nowhere
     near a strand) — so every p is stationary and the solver can never leave — the z with
     the shininess of `_SHININESS_SCAN` whose loss is lowest, if it beats `loss` beyond the
@@ -485,7 +370,7 @@ def _plateau_exit(z, problem: _Problem, effect, loss: float, rtol: float, atol: 
     if "ks" not in problem.linear or "shininess" not in problem.solved:
         return None
     i = problem.solved.index("shininess")  # scalar entries only precede it (gains are solved)
-    if not effect[i] <= _NULL_RATIO * effect.max():
+    if not effect[i] <= NULL_RATIO * effect.max():
         return None
     candidates = [z.at[i].set(np.log(p)) for p in _SHININESS_SCAN]
     losses = [float(_jit_loss(c, problem)) for c in candidates]
@@ -580,7 +465,7 @@ def _solve(opt, fn, residuals: Callable, z, problem, losses: list, *, max_steps:
 def _covariance(jac, r):
     """From J and r at a fit's point: (σ²·diag (JᵀJ)⁺ over the determined directions, which
     entries have weight in an undetermined one), σ² = ‖r‖²/(m − n); None where J or r is not
-    finite. A direction is undetermined when its JᵀJ eigenvalue is ≤ _NULL_RATIO²·λ_max
+    finite. A direction is undetermined when its JᵀJ eigenvalue is ≤ NULL_RATIO²·λ_max
     (numerically singular) or ≤ m·1e-12 (one unit along it moves the m residuals by under
     1e-6 RMS, below float32 resolution of an image)."""
     jac, r = np.asarray(jac, dtype=np.float64), np.asarray(r, dtype=np.float64)
@@ -589,7 +474,7 @@ def _covariance(jac, r):
         return None
     m, n = jac.shape
     evals, evecs = np.linalg.eigh(jac.T @ jac)
-    null = (evals <= _NULL_RATIO**2 * max(evals.max(initial=0.0), 1e-300)) | (evals <= m * 1e-12)
+    null = (evals <= NULL_RATIO**2 * max(evals.max(initial=0.0), 1e-300)) | (evals <= m * 1e-12)
     sigma2 = float(r @ r) / max(m - n, 1)
     var = sigma2 * np.diag((evecs[:, ~null] / evals[~null]) @ evecs[:, ~null].T)
     in_null = (np.abs(evecs[:, null]) > 0.1).any(axis=1) if null.any() else np.zeros(n, bool)
@@ -675,7 +560,7 @@ def fit(
     double = jnp.result_type(float) == jnp.float64
     rtol = (1e-8 if double else 1e-5) if rtol is None else rtol
     atol = (1e-10 if double else 1e-7) if atol is None else atol
-    opt, least_squares = _solver(solver, rtol, atol)
+    opt, least_squares = make_solver(solver, rtol, atol)
     init = scenes[0].params if init is None else init
     arrays = [_target_arrays(s, t, m, w) for s, t, m, w in zip(scenes, target_list, mask_list, weight_list)]
     if scheuermann:
