@@ -8,7 +8,7 @@ from helpers import small_furball_scene
 
 import hairjax as hj
 import hairjax._fit._entry as fit_mod
-from hairjax._fit import _nnls, _solvers
+from hairjax._fit import _convergence, _nnls, _solvers
 
 TRUE = hj.ShadingParams(kd=(0.3, 0.5, 0.2), ks=0.4, shininess=25.0, kappa=2.5, ambient=0.05)
 INIT = hj.ShadingParams(kd=0.5, ks=0.2, shininess=10.0, kappa=1.0, ambient=0.05)
@@ -400,7 +400,7 @@ def test_a_weak_direction_is_not_dropped_from_the_step(solver):
 
 
 def test_predicted_decrease_is_the_gauss_newton_step_of_the_residuals(scene, target):
-    """`_stationarity` against ½‖J Δ‖², Δ = numpy's least-squares step, and the column
+    """`stationarity` against ½‖J Δ‖², Δ = numpy's least-squares step, and the column
     norms of J, with J from central differences of the residuals in float64 (truncation
     O(h²) ~ 1e-10 relative)."""
     terms = [fit_mod._prepare_terms(scene, INIT, ("kd", "ks", "shininess", "kappa"),
@@ -415,7 +415,7 @@ def test_predicted_decrease_is_the_gauss_newton_step_of_the_residuals(scene, tar
     step = np.linalg.lstsq(jac, -r, rcond=None)[0]
     expected = 0.5 * np.sum((jac @ step) ** 2)
     assert expected > 1e-6 * 0.5 * np.sum(r**2)  # far from the optimum: a real decrease
-    decrease, effect = fit_mod._stationarity(fit_mod._residuals, z, problem)
+    decrease, effect = _convergence.stationarity(fit_mod._residuals, z, problem)
     assert float(decrease) == pytest.approx(expected, rel=1e-6)
     np.testing.assert_allclose(effect, np.linalg.norm(jac, axis=0), rtol=1e-6)
 
@@ -423,12 +423,12 @@ def test_predicted_decrease_is_the_gauss_newton_step_of_the_residuals(scene, tar
 def test_a_tolerance_test_passed_too_early_restarts_the_solver(scene, target, monkeypatch, fresh_jit):
     """A solver whose own test passes at every point (as BFGS's did with a stale curvature
     estimate, p still 4.5× off): `fit` restarts it while Gauss-Newton predicts a decrease,
-    _MAX_RESTARTS times, then stops and says why; at the optimum it accepts at once."""
+    MAX_RESTARTS times, then stops and says why; at the optimum it accepts at once."""
     import optimistix as optx
 
-    monkeypatch.setattr(fit_mod, "_terminate", lambda *args: (True, optx.RESULTS.successful))
+    monkeypatch.setattr(_convergence, "terminate", lambda *args: (True, optx.RESULTS.successful))
     r = hj.fit(scene, target, init=INIT)
-    assert r.restarts == fit_mod._MAX_RESTARTS and r.steps == fit_mod._MAX_RESTARTS
+    assert r.restarts == _convergence.MAX_RESTARTS and r.steps == _convergence.MAX_RESTARTS
     assert r.termination.startswith("stopped: the solver's tolerance test passed")
     assert r.loss[-1] < r.loss[0]  # the restarts did step
     r = hj.fit(scene, target, init=TRUE)
@@ -439,16 +439,16 @@ def test_a_tolerance_test_passed_too_early_restarts_the_solver(scene, target, mo
 def test_a_stalled_solver_converges_only_where_nothing_is_left(scene, target, monkeypatch, fresh_jit,
                                                                start, termination):
     """A solver that never moves and never says it is done (as LM at the float32 floor,
-    rejecting every step): at the optimum `fit` stops after _STALL_STEPS steps as converged;
+    rejecting every step): at the optimum `fit` stops after STALL_STEPS steps as converged;
     far from it, it runs to max_steps and says so."""
-    monkeypatch.setattr(fit_mod, "_step", lambda opt, fn, z, problem, state: (z, state))
-    monkeypatch.setattr(fit_mod, "_terminate", lambda *args: (False, None))
-    r = hj.fit(scene, target, init=start, max_steps=3 * fit_mod._STALL_STEPS)
+    monkeypatch.setattr(_convergence, "step", lambda opt, fn, z, problem, state: (z, state))
+    monkeypatch.setattr(_convergence, "terminate", lambda *args: (False, None))
+    r = hj.fit(scene, target, init=start, max_steps=3 * _convergence.STALL_STEPS)
     assert r.termination.startswith(termination)
-    if start is TRUE:  # tested every _STALL_STEPS steps, over losses after the start's
-        assert fit_mod._STALL_STEPS <= r.steps <= 2 * fit_mod._STALL_STEPS
+    if start is TRUE:  # tested every STALL_STEPS steps, over losses after the start's
+        assert _convergence.STALL_STEPS <= r.steps <= 2 * _convergence.STALL_STEPS
     else:
-        assert r.steps == 3 * fit_mod._STALL_STEPS
+        assert r.steps == 3 * _convergence.STALL_STEPS
 
 
 @pytest.mark.parametrize("solver", ["gauss-newton", "dogleg"])

@@ -18,13 +18,12 @@ import numpy as np
 
 from .._render import geometry_stage, shading_stage
 from .._scheuermann import ScheuermannParams
+from ._convergence import half_square, solve
 from ._entry import (
     _FLOOR,
     _covariance,
-    _half_square,
     _softplus,
     _softplus_inv,
-    _solve,
 )
 from ._result import FitError, FitResult
 
@@ -140,14 +139,14 @@ def fit_scheuermann(scenes, arrays, names, init, opt, least_squares, scalar, max
         if progress is not None:
             progress(step, loss, time.perf_counter() - start - geometry_s)
 
-    z, steps, termination, restarts, diverged = _solve(
+    z, steps, termination, restarts, diverged = solve(
         opt, fn, _residuals, z, problem, losses, max_steps=max_steps, rtol=rtol, atol=atol,
         report=report)
     fitted = _from_flat(z, init, names, scalar, _TRANSFORMS)
     elapsed = time.perf_counter() - start - geometry_s
     std_error, undetermined = _standard_errors(fitted, problem)
     n_pixels = float(sum(np.count_nonzero(np.asarray(sw)) for _, sw in arrays)) * 3
-    final_loss = float(_half_square(_residuals, z, problem)) if diverged else losses[-1]
+    final_loss = float(half_square(_residuals, z, problem)) if diverged else losses[-1]
     return FitResult(params=fitted, initial=init, fitted=names, loss=losses, steps=steps,
                      time_s=elapsed, geometry_s=geometry_s, termination=termination,
                      std_error=std_error, undetermined=undetermined,
