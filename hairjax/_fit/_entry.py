@@ -33,6 +33,7 @@ from ._convergence import half_square, solve
 from ._nnls import nnls
 from ._result import FitError, FitResult
 from ._solvers import NULL_RATIO, SOLVERS, make_solver
+from ._uncertainty import covariance
 
 __all__ = ["fit", "FITTABLE", "SOLVERS"]
 
@@ -360,25 +361,6 @@ def _jit_loss(z, problem: _Problem):
     return half_square(_residuals, z, problem)
 
 
-def _covariance(jac, r):
-    """From J and r at a fit's point: (σ²·diag (JᵀJ)⁺ over the determined directions, which
-    entries have weight in an undetermined one), σ² = ‖r‖²/(m − n); None where J or r is not
-    finite. A direction is undetermined when its JᵀJ eigenvalue is ≤ NULL_RATIO²·λ_max
-    (numerically singular) or ≤ m·1e-12 (one unit along it moves the m residuals by under
-    1e-6 RMS, below float32 resolution of an image)."""
-    jac, r = np.asarray(jac, dtype=np.float64), np.asarray(r, dtype=np.float64)
-    if not (np.all(np.isfinite(jac)) and np.all(np.isfinite(r))):
-        # Fires at a point where the image or its derivatives overflow: nothing is known.
-        return None
-    m, n = jac.shape
-    evals, evecs = np.linalg.eigh(jac.T @ jac)
-    null = (evals <= NULL_RATIO**2 * max(evals.max(initial=0.0), 1e-300)) | (evals <= m * 1e-12)
-    sigma2 = float(r @ r) / max(m - n, 1)
-    var = sigma2 * np.diag((evecs[:, ~null] / evals[~null]) @ evecs[:, ~null].T)
-    in_null = (np.abs(evecs[:, null]) > 0.1).any(axis=1) if null.any() else np.zeros(n, bool)
-    return var, in_null
-
-
 @eqx.filter_jit
 def _jit_plain_loss(p: ShadingParams, terms):
     return 0.5 * jnp.sum(_plain_residuals(p, terms) ** 2)
@@ -552,7 +534,7 @@ def _error_jacobian(u, fitted: ShadingParams, terms, names, scalar):
 def _standard_errors(terms, fitted: ShadingParams, names, scalar):
     """Standard errors from σ²(JᵀJ)⁻¹, J taken in the gains Kd, Ks and in log p, log κ,
     mapped to the parameters by the transforms' derivatives (delta method). Parameters
-    with weight in a direction the data do not determine (`_covariance`: one unit along it,
+    with weight in a direction the data do not determine (`covariance`: one unit along it,
     an e-fold of shininess or κ or a unit of gain, moves the residuals by under 1e-6 RMS, or
     it is numerically singular) get no error."""
     space = _to_space(fitted, names, scalar, _ERROR_SPACE)
@@ -561,10 +543,10 @@ def _standard_errors(terms, fitted: ShadingParams, names, scalar):
             x = jnp.asarray(getattr(fitted, n))
             space[n] = jnp.mean(x, keepdims=True) if n in scalar else x
     flat = _flatten(space, names)
-    covariance = _covariance(*_error_jacobian(flat, fitted, terms, tuple(names), tuple(scalar)))
-    if covariance is None:
+    cov = covariance(*_error_jacobian(flat, fitted, terms, tuple(names), tuple(scalar)))
+    if cov is None:
         return {name: None for name in names}, tuple(names)
-    var_u, in_null = covariance
+    var_u, in_null = cov
     u = _unflatten(flat, names, scalar)
     std, undetermined, i = {}, [], 0
     for name in names:

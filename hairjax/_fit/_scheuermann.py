@@ -21,11 +21,11 @@ from .._scheuermann import ScheuermannParams
 from ._convergence import half_square, solve
 from ._entry import (
     _FLOOR,
-    _covariance,
     _softplus,
     _softplus_inv,
 )
 from ._result import FitError, FitResult
+from ._uncertainty import covariance
 
 __all__ = ["SCHEUERMANN_FITTABLE", "fit_scheuermann"]
 
@@ -163,13 +163,13 @@ def _error_jacobian(u, fitted, problem: _Problem):
 
 def _standard_errors(fitted: ScheuermannParams, problem: _Problem):
     """σ²(JᵀJ)⁻¹ in the error space, mapped to the parameters (delta method); undetermined
-    directions as `_entry._covariance` decides them."""
+    directions as `_uncertainty.covariance` decides them."""
     names, scalar = problem.names, problem.scalar
     u = _to_flat(fitted, names, scalar, _ERROR_SPACE)
-    covariance = _covariance(*_error_jacobian(u, fitted, problem))
-    if covariance is None:
+    cov = covariance(*_error_jacobian(u, fitted, problem))
+    if cov is None:
         return {n: None for n in names}, names
-    var_u, in_null = covariance
+    var_u, in_null = cov
     std, undetermined, i = {}, [], 0
     u = np.asarray(u)
     for n in names:
