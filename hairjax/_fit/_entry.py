@@ -33,6 +33,7 @@ from ._convergence import half_square, solve
 from ._nnls import nnls
 from ._result import FitError, FitResult
 from ._solvers import NULL_RATIO, SOLVERS, make_solver
+from ._space import LOG, SOFTPLUS, error_space, from_flat, to_flat, unflatten, with_values
 from ._uncertainty import covariance
 
 __all__ = ["fit", "FITTABLE", "SOLVERS"]
@@ -40,25 +41,9 @@ __all__ = ["fit", "FITTABLE", "SOLVERS"]
 FITTABLE = ("kd", "ks", "shininess", "kappa")
 
 
-# Transforms from the optimiser's unconstrained z to the parameter x (docs/fitting.md):
-# log for the scale-free exponent and extinction, softplus for the colour gains.
-def _softplus(z):
-    return jnp.logaddexp(z, 0.0)
-
-
-def _softplus_inv(x):
-    # log(expm1(x)), written to stay accurate for small and large x.
-    return x + jnp.log(-jnp.expm1(-x))
-
-
-_TRANSFORMS = {
-    "kd": (_softplus, _softplus_inv),
-    "ks": (_softplus, _softplus_inv),
-    "shininess": (jnp.exp, jnp.log),
-    "kappa": (jnp.exp, jnp.log),
-}
-# Smallest value a parameter starts from: the inverse transforms need x > 0.
-_FLOOR = 1e-6
+# The solver's space (docs/fitting.md): softplus for the colour gains, log for the
+# scale-free exponent and extinction.
+_TRANSFORMS = {"kd": SOFTPLUS, "ks": SOFTPLUS, "shininess": LOG, "kappa": LOG}
 # Where `fit` looks for a lower loss when it stops with every solved Ks at 0 (p then has no
 # effect): the shininess on a log grid over the range we support, 1.5× apart.
 _SHININESS_SCAN = tuple(float(p) for p in np.geomspace(0.5, 1e4, 25))
@@ -289,24 +274,10 @@ class _Problem(eqx.Module):
     scalar: tuple[str, ...] = eqx.field(static=True)
 
 
-def _flatten(values: dict, names) -> jax.Array:
-    """The solver's flat z: the values in `names` order."""
-    parts = [jnp.ravel(values[n]) for n in names]
-    return jnp.concatenate(parts) if parts else jnp.zeros(0, dtype=jnp.result_type(float))
-
-
-def _unflatten(z: jax.Array, names, scalar) -> dict:
-    out, i = {}, 0
-    for n in names:
-        k = 3 if n in _LINEAR and n not in scalar else 1
-        out[n], i = z[i:i + k], i + k
-    return out
-
-
 def _point(z, problem: _Problem):
     """The parameters at the solver's z (the gains in `problem.linear` solved for) and the
     residuals there, flat."""
-    p = _from_space(_unflatten(z, problem.solved, problem.scalar), problem.init, _TRANSFORMS)
+    p = from_flat(z, problem.init, problem.solved, _LINEAR, problem.scalar, _TRANSFORMS)
     if not problem.linear:
         return p, _plain_residuals(p, problem.terms)
     systems = [_design(t, problem.linear, problem.scalar, p, p.shininess, p.kappa)
@@ -314,7 +285,7 @@ def _point(z, problem: _Problem):
     phi = jnp.concatenate([a for a, _ in systems])
     rhs = jnp.concatenate([b for _, b in systems])
     c = nnls(phi, rhs)
-    return _replace(p, _unpack_linear(c, problem.linear, problem.scalar)), phi @ c - rhs
+    return with_values(p, _unpack_linear(c, problem.linear, problem.scalar), _LINEAR), phi @ c - rhs
 
 
 def _residuals(z, problem: _Problem):
@@ -438,7 +409,7 @@ def fit(
     linear = tuple(n for n in _LINEAR if separable and n in names)
     solved = tuple(n for n in names if n not in linear)
     problem = _Problem(terms, init, solved, linear, tuple(scalar))
-    z = _flatten(_to_space(init, solved, scalar, _TRANSFORMS), solved)
+    z = to_flat(init, solved, scalar, _TRANSFORMS)
     fn = _residual_fn if least_squares else _loss_fn
     # loss[0] is the loss at `init` itself, its gains included (not at the solved gains).
     losses = [float(_jit_plain_loss(init, terms))]
@@ -479,54 +450,19 @@ def _scheuermann_names(scenes, names, scalar) -> tuple[str, ...]:
     return check_names(SCHEUERMANN_FITTABLE if names is FITTABLE else names, scalar)
 
 
-def _to_space(params: ShadingParams, names, scalar, transforms) -> dict:
-    """{name: the value of `params` in the space of `transforms`} for `names` (a grey Kd or
-    Ks as the mean of its channels). Values below _FLOOR are raised to it first."""
-    z = {}
-    for n in names:
-        x = jnp.maximum(jnp.asarray(getattr(params, n)), _FLOOR)
-        if n in scalar:
-            x = jnp.mean(x, keepdims=True)
-        z[n] = transforms[n][1](x)
-    return z
-
-
-def _from_space(z: dict, base: ShadingParams, transforms) -> ShadingParams:
-    """`base` with the values in `z` mapped back through `transforms`."""
-    return _replace(base, {n: transforms[n][0](v) for n, v in z.items()})
-
-
-def _replace(base: ShadingParams, values: dict) -> ShadingParams:
-    """`base` with some of kd, ks (RGB, a single value broadcasts), shininess, κ replaced."""
-    v = {n: getattr(base, n) for n in FITTABLE}
-    for n, x in values.items():
-        v[n] = jnp.broadcast_to(x, (3,)) if n in _LINEAR else jnp.reshape(x, ())
-    return ShadingParams(kd=v["kd"], ks=v["ks"], shininess=v["shininess"], kappa=v["kappa"],
-                         ambient=base.ambient)
-
-
 def _plain_residuals(p: ShadingParams, terms) -> jax.Array:
     """The weighted residuals of all targets at `p`, flat."""
     r = [t.sqrt_weight * (_image(t, p.kd, p.ks, p.shininess, p.kappa) - t.target) for t in terms]
     return jnp.concatenate([x.ravel() for x in r])
 
 
-# Where the standard errors are taken: the gains themselves (0 is a valid value, where the
-# softplus z of the solver is not), log shininess and log κ (as the solver sees them).
-_ERROR_SPACE = {
-    "kd": (lambda x: x, lambda x: x),
-    "ks": (lambda x: x, lambda x: x),
-    "shininess": (jnp.exp, jnp.log),
-    "kappa": (jnp.exp, jnp.log),
-}
-
-
 @eqx.filter_jit
 def _error_jacobian(u, fitted: ShadingParams, terms, names, scalar):
-    """J and r of the residuals in the standard errors' space (`_ERROR_SPACE`) at u."""
+    """J and r of the residuals in the standard errors' space (`error_space`) at u."""
 
     def residuals(u):
-        return _plain_residuals(_from_space(_unflatten(u, names, scalar), fitted, _ERROR_SPACE), terms)
+        return _plain_residuals(from_flat(u, fitted, names, _LINEAR, scalar, error_space(_TRANSFORMS)),
+                                terms)
 
     return jax.jacfwd(residuals)(u), residuals(u)
 
@@ -537,17 +473,13 @@ def _standard_errors(terms, fitted: ShadingParams, names, scalar):
     with weight in a direction the data do not determine (`covariance`: one unit along it,
     an e-fold of shininess or κ or a unit of gain, moves the residuals by under 1e-6 RMS, or
     it is numerically singular) get no error."""
-    space = _to_space(fitted, names, scalar, _ERROR_SPACE)
-    for n in _LINEAR:  # the gains as fitted, a value at 0 included (no floor)
-        if n in space:
-            x = jnp.asarray(getattr(fitted, n))
-            space[n] = jnp.mean(x, keepdims=True) if n in scalar else x
-    flat = _flatten(space, names)
+    space = error_space(_TRANSFORMS)
+    flat = to_flat(fitted, names, scalar, space)
     cov = covariance(*_error_jacobian(flat, fitted, terms, tuple(names), tuple(scalar)))
     if cov is None:
         return {name: None for name in names}, tuple(names)
     var_u, in_null = cov
-    u = _unflatten(flat, names, scalar)
+    u = unflatten(flat, names, _LINEAR, scalar)
     std, undetermined, i = {}, [], 0
     for name in names:
         size = int(np.size(u[name]))
@@ -556,8 +488,7 @@ def _standard_errors(terms, fitted: ShadingParams, names, scalar):
             std[name] = None
             undetermined.append(name)
             continue
-        forward = _ERROR_SPACE[name][0]
-        dxdu = np.asarray(jax.vmap(jax.grad(lambda v: forward(v)))(u[name]))
+        dxdu = np.asarray(jax.vmap(jax.grad(space[name].forward))(u[name]))
         se = np.abs(dxdu) * np.sqrt(np.maximum(var_u[sl], 0.0))
         std[name] = se if size > 1 else float(se[0])
     return std, tuple(undetermined)

@@ -19,12 +19,8 @@ import numpy as np
 from .._render import geometry_stage, shading_stage
 from .._scheuermann import ScheuermannParams
 from ._convergence import half_square, solve
-from ._entry import (
-    _FLOOR,
-    _softplus,
-    _softplus_inv,
-)
 from ._result import FitError, FitResult
+from ._space import IDENTITY, LOG, SOFTPLUS, entries, error_space, from_flat, to_flat
 from ._uncertainty import covariance
 
 __all__ = ["SCHEUERMANN_FITTABLE", "fit_scheuermann"]
@@ -32,22 +28,13 @@ __all__ = ["SCHEUERMANN_FITTABLE", "fit_scheuermann"]
 SCHEUERMANN_FITTABLE = ("kd", "primary_color", "primary_exponent", "primary_shift",
                         "secondary_color", "secondary_exponent", "secondary_shift", "kappa")
 _COLOURS = ("kd", "primary_color", "secondary_color")
-_FIELDS = ("kd", "ambient", "primary_color", "primary_exponent", "primary_shift",
-           "secondary_color", "secondary_exponent", "secondary_shift", "kappa")
 
 
-def _identity(x):
-    return x
-
-
-# (forward, inverse) from the solver's z to the parameter, and the space of the standard
-# errors (the colours themselves, 0 included; log exponent and κ; shifts as they are).
-_TRANSFORMS = {**{n: (_softplus, _softplus_inv) for n in _COLOURS},
-               **{n: (jnp.exp, jnp.log) for n in ("primary_exponent", "secondary_exponent", "kappa")},
-               **{n: (_identity, _identity) for n in ("primary_shift", "secondary_shift")}}
-_ERROR_SPACE = {**{n: (_identity, _identity) for n in _COLOURS},
-                **{n: (jnp.exp, jnp.log) for n in ("primary_exponent", "secondary_exponent", "kappa")},
-                **{n: (_identity, _identity) for n in ("primary_shift", "secondary_shift")}}
+# The solver's space: colours through a softplus (≥ 0), exponents and κ through exp
+# (scale-free, > 0), shifts as they are; the standard errors in `error_space` of it.
+_TRANSFORMS = {**{n: SOFTPLUS for n in _COLOURS},
+               **{n: LOG for n in ("primary_exponent", "secondary_exponent", "kappa")},
+               **{n: IDENTITY for n in ("primary_shift", "secondary_shift")}}
 
 
 def check_names(names, scalar) -> tuple[str, ...]:
@@ -73,32 +60,6 @@ class _Problem(eqx.Module):
     scalar: tuple[str, ...] = eqx.field(static=True)
 
 
-def _size(name, scalar) -> int:
-    return 3 if name in _COLOURS and name not in scalar else 1
-
-
-def _to_flat(params: ScheuermannParams, names, scalar, space) -> jax.Array:
-    parts = []
-    for n in names:
-        x = jnp.asarray(getattr(params, n))
-        if space is _TRANSFORMS and n not in ("primary_shift", "secondary_shift"):
-            x = jnp.maximum(x, _FLOOR)  # the inverse transforms need x > 0
-        if n in scalar:
-            x = jnp.mean(x, keepdims=True)
-        parts.append(jnp.ravel(space[n][1](x)))
-    return jnp.concatenate(parts)
-
-
-def _from_flat(z, base: ScheuermannParams, names, scalar, space) -> ScheuermannParams:
-    values, i = {n: getattr(base, n) for n in _FIELDS}, 0
-    for n in names:
-        k = _size(n, scalar)
-        x = space[n][0](z[i:i + k])
-        values[n] = jnp.broadcast_to(x, (3,)) if n in _COLOURS else jnp.reshape(x, ())
-        i += k
-    return ScheuermannParams(**values)
-
-
 def _residuals_at(p: ScheuermannParams, problem: _Problem) -> jax.Array:
     r = [sw * (shading_stage(g, p)[..., :3].reshape(-1, 3) - t)
          for g, t, sw in zip(problem.geometries, problem.targets, problem.sqrt_weights)]
@@ -106,7 +67,7 @@ def _residuals_at(p: ScheuermannParams, problem: _Problem) -> jax.Array:
 
 
 def _residuals(z, problem: _Problem) -> jax.Array:
-    return _residuals_at(_from_flat(z, problem.init, problem.names, problem.scalar, _TRANSFORMS),
+    return _residuals_at(from_flat(z, problem.init, problem.names, _COLOURS, problem.scalar, _TRANSFORMS),
                          problem)
 
 
@@ -131,7 +92,7 @@ def fit_scheuermann(scenes, arrays, names, init, opt, least_squares, scalar, max
     geometry_s = time.perf_counter() - start
     problem = _Problem(geometries, [jnp.asarray(t) for t, _ in arrays],
                        [jnp.asarray(sw) for _, sw in arrays], init, names, scalar)
-    z = _to_flat(init, names, scalar, _TRANSFORMS)
+    z = to_flat(init, names, scalar, _TRANSFORMS)
     fn = _residual_fn if least_squares else _loss_fn
     losses = [float(0.5 * jnp.sum(_residuals_at(init, problem) ** 2))]
 
@@ -142,7 +103,7 @@ def fit_scheuermann(scenes, arrays, names, init, opt, least_squares, scalar, max
     z, steps, termination, restarts, diverged = solve(
         opt, fn, _residuals, z, problem, losses, max_steps=max_steps, rtol=rtol, atol=atol,
         report=report)
-    fitted = _from_flat(z, init, names, scalar, _TRANSFORMS)
+    fitted = from_flat(z, init, names, _COLOURS, scalar, _TRANSFORMS)
     elapsed = time.perf_counter() - start - geometry_s
     std_error, undetermined = _standard_errors(fitted, problem)
     n_pixels = float(sum(np.count_nonzero(np.asarray(sw)) for _, sw in arrays)) * 3
@@ -156,7 +117,8 @@ def fit_scheuermann(scenes, arrays, names, init, opt, least_squares, scalar, max
 @eqx.filter_jit
 def _error_jacobian(u, fitted, problem: _Problem):
     def residuals(u):
-        return _residuals_at(_from_flat(u, fitted, problem.names, problem.scalar, _ERROR_SPACE), problem)
+        return _residuals_at(from_flat(u, fitted, problem.names, _COLOURS, problem.scalar,
+                                       error_space(_TRANSFORMS)), problem)
 
     return jax.jacfwd(residuals)(u), residuals(u)
 
@@ -165,7 +127,8 @@ def _standard_errors(fitted: ScheuermannParams, problem: _Problem):
     """σ²(JᵀJ)⁻¹ in the error space, mapped to the parameters (delta method); undetermined
     directions as `_uncertainty.covariance` decides them."""
     names, scalar = problem.names, problem.scalar
-    u = _to_flat(fitted, names, scalar, _ERROR_SPACE)
+    space = error_space(_TRANSFORMS)
+    u = to_flat(fitted, names, scalar, space)
     cov = covariance(*_error_jacobian(u, fitted, problem))
     if cov is None:
         return {n: None for n in names}, names
@@ -173,14 +136,14 @@ def _standard_errors(fitted: ScheuermannParams, problem: _Problem):
     std, undetermined, i = {}, [], 0
     u = np.asarray(u)
     for n in names:
-        sl = slice(i, i + _size(n, scalar))
+        sl = slice(i, i + entries(n, _COLOURS, scalar))
         i = sl.stop
         if in_null[sl].any():
             std[n] = None
             undetermined.append(n)
             continue
         # dx/du: 1 for colours and shifts, x for the log-space exponents and κ.
-        dxdu = np.exp(u[sl]) if _ERROR_SPACE[n][0] is jnp.exp else np.ones(sl.stop - sl.start)
+        dxdu = np.exp(u[sl]) if space[n].forward is jnp.exp else np.ones(sl.stop - sl.start)
         value = dxdu * np.sqrt(np.maximum(var_u[sl], 0.0))
         std[n] = np.broadcast_to(value, (3,)).copy() if n in _COLOURS else np.asarray(value[0])
     return std, tuple(undetermined)
