@@ -8,7 +8,7 @@ from helpers import small_furball_scene
 
 import hairjax as hj
 import hairjax._fit._entry as fit_mod
-from hairjax._fit import _convergence, _nnls, _solvers
+from hairjax._fit import _convergence, _kajiya_kay, _nnls, _problem, _solvers
 
 TRUE = hj.ShadingParams(kd=(0.3, 0.5, 0.2), ks=0.4, shininess=25.0, kappa=2.5, ambient=0.05)
 INIT = hj.ShadingParams(kd=0.5, ks=0.2, shininess=10.0, kappa=1.0, ambient=0.05)
@@ -111,8 +111,8 @@ def test_subset_and_scalar(scene, target):
 
 def test_fitting_kappa_alone_reuses_the_shading_terms(scene, target, monkeypatch):
     calls = []
-    original = fit_mod.kajiya_kay_terms
-    monkeypatch.setattr(fit_mod, "kajiya_kay_terms", lambda *a: calls.append(1) or original(*a))
+    original = _kajiya_kay.kajiya_kay_terms
+    monkeypatch.setattr(_kajiya_kay, "kajiya_kay_terms", lambda *a: calls.append(1) or original(*a))
     start = hj.ShadingParams(kd=TRUE.kd, ks=TRUE.ks, shininess=TRUE.shininess, kappa=0.5,
                              ambient=TRUE.ambient)
     r = hj.fit(scene, target, fit=("kappa",), init=start)
@@ -279,14 +279,14 @@ def test_custom_jvp_matches_autodiff(scene, target, names):
     """The one-pass Jacobian rule equals forward-mode autodiff of the plain formula."""
     import jax
 
-    terms = fit_mod._prepare_terms(scene, INIT, names, target[..., :3].reshape(-1, 3),
-                                   np.ones((48 * 48, 1)))
+    terms = _kajiya_kay.prepare_terms(scene, INIT, names, target[..., :3].reshape(-1, 3),
+                                      np.ones((48 * 48, 1)))
     args = (jnp.asarray([0.3, 0.5, 0.2]), jnp.asarray([0.4, 0.4, 0.4]), jnp.asarray(25.0),
             jnp.asarray(2.5))
     tangent = (jnp.asarray([0.1, -0.2, 0.3]), jnp.asarray([0.5, 0.1, -0.1]), jnp.asarray(3.0),
                jnp.asarray(-0.7))
-    f = lambda *a: fit_mod._image(terms, *a)  # noqa: E731
-    g = lambda *a: fit_mod._image(terms, *a, images=fit_mod._kd_ks_images_plain)  # noqa: E731
+    f = lambda *a: _kajiya_kay.image(terms, *a)  # noqa: E731
+    g = lambda *a: _kajiya_kay.image(terms, *a, images=_kajiya_kay.kd_ks_images_plain)  # noqa: E731
     out_f, jvp_f = jax.jvp(f, args, tangent)
     out_g, jvp_g = jax.jvp(g, args, tangent)
     np.testing.assert_allclose(out_f, out_g, rtol=1e-12, atol=1e-15)
@@ -304,9 +304,9 @@ def test_pruned_fit_image_within_the_stated_bound():
     dense = small_furball_scene(strands=2000, size=48, alpha=0.9)
     names = ("kd", "ks", "shininess", "kappa")
     exact = np.asarray(hj.render(dense, TRUE))[..., :3].reshape(-1, 3)
-    terms = fit_mod._prepare_terms(dense, TRUE, names, exact, np.ones((48 * 48, 1)))
+    terms = _kajiya_kay.prepare_terms(dense, TRUE, names, exact, np.ones((48 * 48, 1)))
     assert terms.geometry.frag_weight.shape[0] < hj.geometry_stage(dense).frag_weight.shape[0]
-    image = np.asarray(fit_mod._image(terms, TRUE.kd, TRUE.ks, TRUE.shininess, TRUE.kappa))
+    image = np.asarray(_kajiya_kay.image(terms, TRUE.kd, TRUE.ks, TRUE.shininess, TRUE.kappa))
     brightest = float(np.max(np.asarray(point_colors(hj.geometry_stage(dense), TRUE))))
     assert np.abs(image - exact).max() <= FIT_TRANSMITTANCE_CUTOFF * brightest
 
@@ -337,14 +337,14 @@ def test_a_second_fit_reuses_the_compiled_steps(scene, target, monkeypatch, fres
 
 
 def _overflow_beyond_kappa_5(monkeypatch, scene):
-    """_image overflows for κ > 5 (as an undamped step into exp(z) can); a fit of κ alone
+    """image overflows for κ > 5 (as an undamped step into exp(z) can); a fit of κ alone
     from 4 towards a target rendered at κ = 40: (target, start)."""
-    original = fit_mod._image
+    original = fit_mod.image
 
     def overflowing(terms, kd, ks, shininess, kappa):
         return jnp.where(kappa > 5.0, jnp.inf, original(terms, kd, ks, shininess, kappa))
 
-    monkeypatch.setattr(fit_mod, "_image", overflowing)
+    monkeypatch.setattr(fit_mod, "image", overflowing)
     start = hj.ShadingParams(kd=TRUE.kd, ks=TRUE.ks, shininess=TRUE.shininess, kappa=4.0,
                              ambient=TRUE.ambient)
     far = np.asarray(hj.render(scene, hj.ShadingParams(kd=TRUE.kd, ks=TRUE.ks,
@@ -403,8 +403,8 @@ def test_predicted_decrease_is_the_gauss_newton_step_of_the_residuals(scene, tar
     """`stationarity` against ½‖J Δ‖², Δ = numpy's least-squares step, and the column
     norms of J, with J from central differences of the residuals in float64 (truncation
     O(h²) ~ 1e-10 relative)."""
-    terms = [fit_mod._prepare_terms(scene, INIT, ("kd", "ks", "shininess", "kappa"),
-                                    *fit_mod._target_arrays(scene, target, None, None))]
+    terms = [_kajiya_kay.prepare_terms(scene, INIT, ("kd", "ks", "shininess", "kappa"),
+                                       *_problem.target_arrays(scene, target, None, None))]
     problem = fit_mod._Problem(terms, INIT, ("shininess", "kappa"), ("kd", "ks"), ())
     z = jnp.array([np.log(12.0), np.log(1.7)])
     r = np.asarray(fit_mod._point(z, problem)[1])

@@ -24,13 +24,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._constants import FIT_TRANSMITTANCE_CUTOFF
-from .._lookup import LOOKUP_MODELS, lookup_coordinates, lookup_terms
-from .._render import composite, geometry_stage, occluder_colors
 from .._scene import Scene
-from .._shading import ShadingParams, kajiya_kay_terms, specular_power
+from .._shading import ShadingParams
 from ._convergence import half_square, solve
+from ._kajiya_kay import TargetTerms, fixed_image, image, kd_ks_images, prepare_terms
 from ._nnls import nnls
+from ._problem import target_arrays
 from ._result import FitError, FitResult
 from ._solvers import NULL_RATIO, SOLVERS, make_solver
 from ._space import LOG, SOFTPLUS, error_space, from_flat, to_flat, unflatten, with_values
@@ -49,27 +48,6 @@ _TRANSFORMS = {"kd": SOFTPLUS, "ks": SOFTPLUS, "shininess": LOG, "kappa": LOG}
 _SHININESS_SCAN = tuple(float(p) for p in np.geomspace(0.5, 1e4, 25))
 
 
-class _Terms(eqx.Module):
-    """Per target, everything a step needs that no fitted parameter reaches."""
-
-    geometry: object
-    sin_tl: jax.Array
-    gap: jax.Array  # 1 − b per point (Kajiya-Kay, docs/model.md §8)
-    lit_color: jax.Array  # light · c per point
-    light: jax.Array
-    omega: jax.Array | None
-    constant: jax.Array  # ambient⊙A + T·backdrop, [HW, 3]
-    ambient: jax.Array  # the held ambient, for the occluder's colour (§13)
-    kd_image: jax.Array | None  # K_d when κ is fixed
-    ks_image: jax.Array | None  # K_s when κ and p are fixed
-    target: jax.Array
-    sqrt_weight: jax.Array
-    # Lookup models (§14): per point (u, v) and where the terms are lit; `gap` is then unused.
-    lookup: tuple | None = None
-    lookup_size: int = eqx.field(static=True, default=0)
-    model: str = eqx.field(static=True, default="kajiya-kay")
-
-
 def _check_names(fit_names, scalar) -> tuple[str, ...]:
     names = tuple(fit_names)
     for n in (*names, *scalar):
@@ -83,169 +61,26 @@ def _check_names(fit_names, scalar) -> tuple[str, ...]:
     return names
 
 
-def _target_arrays(scene: Scene, target, mask, weight):
-    h, w = scene.camera.height, scene.camera.width
-    image = np.asarray(target, dtype=np.float64)
-    if image.ndim != 3 or image.shape[2] < 3:
-        raise FitError(f"target for {scene.name!r} must be [H, W, 3 or 4], got {image.shape}")
-    if image.shape[:2] != (h, w):
-        raise FitError(f"target is {image.shape[1]}x{image.shape[0]} but scene {scene.name!r} "
-                       f"renders {w}x{h}")
-    if not np.all(np.isfinite(image[..., :3])):
-        raise FitError(f"target for {scene.name!r} has NaN or infinite pixels")
-    wt = np.ones((h, w)) if weight is None else np.broadcast_to(np.asarray(weight, float), (h, w))
-    if mask is not None:
-        wt = wt * (np.broadcast_to(np.asarray(mask), (h, w)) > 0)
-    if not np.all(np.isfinite(wt)) or np.any(wt < 0):
-        raise FitError("weights must be finite and non-negative")
-    return image[..., :3].reshape(-1, 3), np.sqrt(wt).reshape(-1, 1)
-
-
-def _visible_fragments(geom):
-    """The geometry without fragments behind transmittance < FIT_TRANSMITTANCE_CUTOFF
-    (their total weight per pixel is below the cutoff: see hairjax/_constants.py)."""
-    weight = np.asarray(geom.frag_weight)
-    # T_k = w_k / α_k; a fragment with w = 0 (behind an opaque one, or α·T underflowing)
-    # carries nothing and is dropped as well.
-    alpha = np.asarray(geom.frag_alpha)
-    keep = np.flatnonzero(weight >= FIT_TRANSMITTANCE_CUTOFF * alpha)
-    return eqx.tree_at(lambda g: (g.frag_pixel, g.frag_i0, g.frag_t, g.frag_weight, g.frag_alpha),
-                       geom, tuple(jnp.asarray(np.asarray(x)[keep]) for x in (
-                           geom.frag_pixel, geom.frag_i0, geom.frag_t, geom.frag_weight,
-                           geom.frag_alpha)))
-
-
-def _prepare_terms(scene: Scene, params: ShadingParams, names, target, sqrt_weight) -> _Terms:
-    full = geometry_stage(scene)
-    geom = _visible_fragments(full)
-    lookup = None
-    if geom.model in LOOKUP_MODELS:  # §14: the same terms, read from the table
-        lookup = lookup_coordinates(geom.tangent, geom.to_light, geom.to_eye)
-        sin_tl, _ = lookup_terms(params.shininess, *lookup, geom.lookup_size, geom.model)
-        gap = jnp.zeros_like(sin_tl)
-    else:
-        sin_tl, gap = jax.vmap(kajiya_kay_terms, in_axes=(0, 0, 0, None))(
-            geom.tangent, geom.to_light, geom.to_eye, geom.model)
-    # §16: the streak factor scales a point's whole colour, so it rides on the light (and
-    # the ambient term): [P, 3] instead of [1, 3] with streaks.
-    streak = 1.0 if geom.streak is None else geom.streak[:, None]
-    light = geom.light_rgb[None, :] * streak
-    lit_color = light * geom.base_color
-    omega = geom.omega
-    tau = None if omega is None else jnp.exp(-params.kappa * omega)
-    # The fixed part of the image is computed once, with every fragment.
-    # (The backdrop is 0 where the occluder covers the pixel: `_fixed` adds its colour.)
-    constant = (composite(full, params.ambient[None, :] * full.base_color * streak)
-                + full.transmittance[:, None] * full.backdrop)
-    kd_image = ks_image = None
-    if "kappa" not in names or omega is None:
-        scale = 1.0 if tau is None else tau[:, None]
-        kd_image = composite(geom, scale * sin_tl[:, None] * lit_color)
-        if "shininess" not in names:
-            ks_image = composite(geom, scale * _specular_of(gap, lookup, geom, params.shininess)[:, None]
-                                 * light)
-    return _Terms(geom, sin_tl, gap, lit_color, light, omega, constant, params.ambient, kd_image,
-                  ks_image, jnp.asarray(target), jnp.asarray(sqrt_weight), lookup, geom.lookup_size,
-                  geom.model)
-
-
-def _specular_of(gap, lookup, where, shininess):
-    """max(b, 0)^p per point: the guarded power of the gap (§8), or the lookup table read
-    at the points' (u, v) (§14); `where` carries the model and table size."""
-    if lookup is None:
-        return specular_power(gap, shininess)
-    return lookup_terms(shininess, *lookup, where.lookup_size, where.model)[1]
-
-
-def _fixed(terms: _Terms, kappa):
-    """ambient⊙A + T·backdrop + T·(the occluder's colour at κ, `occluder_colors`): the image
-    without the K_d and K_s terms."""
-    g = terms.geometry
-    if g.occluder_pixel is None:
-        return terms.constant
-    occluder = occluder_colors(g, ShadingParams(ambient=terms.ambient, kappa=kappa))
-    return terms.constant.at[g.occluder_pixel].add(g.transmittance[g.occluder_pixel][:, None] * occluder)
-
-
-def _point_terms(terms: _Terms, shininess, kappa):
-    """Per point: the Kd and Ks colours before compositing, and their derivatives in κ and p:
-    τ·sin·light·c, τ·b^p·light, ∂/∂κ of both (−Ω times them), ∂/∂p of the second."""
-    tau = jnp.ones_like(terms.sin_tl) if terms.omega is None else jnp.exp(-kappa * terms.omega)
-    omega = jnp.zeros_like(terms.sin_tl) if terms.omega is None else terms.omega
-    if terms.lookup is None:
-        spec = specular_power(terms.gap, shininess)
-        # d(b^p)/dp through the same guarded power: 0 where b ≤ SPECULAR_BASE_EPS, never NaN.
-        dspec = jax.vmap(jax.grad(specular_power, argnums=1), in_axes=(0, None))(terms.gap, shininess)
-    else:  # §14: the table entries' derivative in p, interpolated like the entries
-        spec, dspec = jax.jvp(lambda p: _specular_of(None, terms.lookup, terms, p), (shininess,),
-                              (jnp.ones_like(shininess),))
-    kd_col = (tau * terms.sin_tl)[:, None] * terms.lit_color
-    ks_col = (tau * spec)[:, None] * terms.light
-    dks_dp = (tau * dspec)[:, None] * terms.light
-    return kd_col, ks_col, -omega[:, None] * kd_col, -omega[:, None] * ks_col, dks_dp
-
-
-def _kd_ks_images_plain(terms: _Terms, shininess, kappa):
-    """(K_d, K_s) images `[HW, 3]` for this κ and shininess (precomputed ones pass through)."""
-    kd_col, ks_col, *_ = _point_terms(terms, shininess, kappa)
-    kd_image = terms.kd_image if terms.kd_image is not None else composite(terms.geometry, kd_col)
-    ks_image = terms.ks_image if terms.ks_image is not None else composite(terms.geometry, ks_col)
-    return kd_image, ks_image
-
-
-# The same function with the one-pass derivative rule below.
-_kd_ks_images = jax.custom_jvp(_kd_ks_images_plain)
-
-
-@_kd_ks_images.defjvp
-def _kd_ks_images_jvp(primals, tangents):
-    """The images and their derivatives from one composite pass over all the channels.
-
-    Everything here depends on the primal (κ, p) only; the tangent output is a per-pixel
-    linear combination, so a Jacobian (vmap over tangent directions) batches only that,
-    not the composites. `terms` is data: its tangent is ignored.
-    """
-    terms, shininess, kappa = primals
-    _, d_shininess, d_kappa = tangents
-    cols = _point_terms(terms, shininess, kappa)
-    images = composite(terms.geometry, jnp.concatenate(cols, axis=1))
-    kd_image, ks_image, dkd_dk, dks_dk, dks_dp = jnp.split(images, 5, axis=1)
-    if terms.kd_image is not None:  # κ is not fitted: K_d is fixed
-        kd_image, dkd_dk = terms.kd_image, jnp.zeros_like(dkd_dk)
-    if terms.ks_image is not None:
-        ks_image, dks_dk, dks_dp = terms.ks_image, jnp.zeros_like(dks_dk), jnp.zeros_like(dks_dp)
-    d_kd = dkd_dk * d_kappa
-    d_ks = dks_dk * d_kappa + dks_dp * d_shininess
-    return (kd_image, ks_image), (d_kd, d_ks)
-
-
-def _image(terms: _Terms, kd, ks, shininess, kappa, images=_kd_ks_images):
-    """The RGB image [HW, 3] of one target for the given parameter values.
-    (`images=_kd_ks_images_plain` gives plain autodiff, which the tests compare against.)"""
-    kd_image, ks_image = images(terms, shininess, kappa)
-    return _fixed(terms, kappa) + kd[None, :] * kd_image + ks[None, :] * ks_image
-
-
 # Kd and Ks enter the image linearly (module docstring): with `separable`, `fit` solves
 # whichever of them are fitted by non-negative linear least squares at every step
 # (variable projection, Golub & Pereyra 1973) and the solver iterates on p and κ only.
 _LINEAR = ("kd", "ks")
 
 
-def _design(terms: _Terms, linear, scalar, params: ShadingParams, shininess, kappa):
+def _design(terms: TargetTerms, linear, scalar, params: ShadingParams, shininess, kappa):
     """One target's least-squares problem in the linear unknowns: Φ `[HW·3, n]` (a column
     per fitted Kd/Ks channel, or one for a grey value) and the right-hand side `[HW·3]`,
     both weighted, so that the residuals are Φc − rhs."""
-    kd_image, ks_image = _kd_ks_images(terms, shininess, kappa)
-    fixed = _fixed(terms, kappa)
+    kd_image, ks_image = kd_ks_images(terms, shininess, kappa)
+    fixed = fixed_image(terms, kappa)
     columns = []
-    for name, image in (("kd", kd_image), ("ks", ks_image)):
+    for name, gain_image in (("kd", kd_image), ("ks", ks_image)):
         if name not in linear:
-            fixed = fixed + getattr(params, name)[None, :] * image
+            fixed = fixed + getattr(params, name)[None, :] * gain_image
         elif name in scalar:
-            columns.append(image)
+            columns.append(gain_image)
         else:
-            columns.extend(image * jnp.eye(3, dtype=image.dtype)[None, c] for c in range(3))
+            columns.extend(gain_image * jnp.eye(3, dtype=gain_image.dtype)[None, c] for c in range(3))
     sw = terms.sqrt_weight
     phi = jnp.stack([(sw * c).ravel() for c in columns], axis=1)
     return phi, (sw * (terms.target - fixed)).ravel()
@@ -393,7 +228,7 @@ def fit(
     atol = (1e-10 if double else 1e-7) if atol is None else atol
     opt, least_squares = make_solver(solver, rtol, atol)
     init = scenes[0].params if init is None else init
-    arrays = [_target_arrays(s, t, m, w) for s, t, m, w in zip(scenes, target_list, mask_list, weight_list)]
+    arrays = [target_arrays(s, t, m, w) for s, t, m, w in zip(scenes, target_list, mask_list, weight_list)]
     if scheuermann:
         from ._scheuermann import fit_scheuermann
 
@@ -401,7 +236,7 @@ def fit(
                                rtol, atol, progress)
 
     start = time.perf_counter()
-    terms = [_prepare_terms(s, init, names, t, sw) for s, (t, sw) in zip(scenes, arrays)]
+    terms = [prepare_terms(s, init, names, t, sw) for s, (t, sw) in zip(scenes, arrays)]
     jax.block_until_ready(terms)
     geometry_s = time.perf_counter() - start
 
@@ -452,7 +287,7 @@ def _scheuermann_names(scenes, names, scalar) -> tuple[str, ...]:
 
 def _plain_residuals(p: ShadingParams, terms) -> jax.Array:
     """The weighted residuals of all targets at `p`, flat."""
-    r = [t.sqrt_weight * (_image(t, p.kd, p.ks, p.shininess, p.kappa) - t.target) for t in terms]
+    r = [t.sqrt_weight * (image(t, p.kd, p.ks, p.shininess, p.kappa) - t.target) for t in terms]
     return jnp.concatenate([x.ravel() for x in r])
 
 
