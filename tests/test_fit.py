@@ -7,8 +7,7 @@ import pytest
 from helpers import small_furball_scene
 
 import hairjax as hj
-import hairjax._fit._entry as fit_mod
-from hairjax._fit import _convergence, _kajiya_kay, _nnls, _problem, _solvers
+from hairjax._fit import _convergence, _entry, _kajiya_kay, _nnls, _problem, _solvers, _varpro
 
 TRUE = hj.ShadingParams(kd=(0.3, 0.5, 0.2), ks=0.4, shininess=25.0, kappa=2.5, ambient=0.05)
 INIT = hj.ShadingParams(kd=0.5, ks=0.2, shininess=10.0, kappa=1.0, ambient=0.05)
@@ -329,8 +328,8 @@ def test_a_second_fit_reuses_the_compiled_steps(scene, target, monkeypatch, fres
     nothing: counted by a wrapper around nnls, which every step's trace calls."""
     hj.fit(scene, target, init=INIT, solver=solver, max_steps=3)
     calls = []
-    original = fit_mod.nnls
-    monkeypatch.setattr(fit_mod, "nnls", lambda *a: calls.append(1) or original(*a))
+    original = _varpro.nnls
+    monkeypatch.setattr(_varpro, "nnls", lambda *a: calls.append(1) or original(*a))
     other = hj.ShadingParams(kd=0.2, ks=0.5, shininess=30.0, kappa=1.5, ambient=0.05)
     r = hj.fit(scene, 0.9 * target, init=other, solver=solver, max_steps=3)
     assert r.steps >= 1 and calls == []
@@ -339,12 +338,12 @@ def test_a_second_fit_reuses_the_compiled_steps(scene, target, monkeypatch, fres
 def _overflow_beyond_kappa_5(monkeypatch, scene):
     """image overflows for κ > 5 (as an undamped step into exp(z) can); a fit of κ alone
     from 4 towards a target rendered at κ = 40: (target, start)."""
-    original = fit_mod.image
+    original = _kajiya_kay.image
 
     def overflowing(terms, kd, ks, shininess, kappa):
         return jnp.where(kappa > 5.0, jnp.inf, original(terms, kd, ks, shininess, kappa))
 
-    monkeypatch.setattr(fit_mod, "image", overflowing)
+    monkeypatch.setattr(_kajiya_kay, "image", overflowing)
     start = hj.ShadingParams(kd=TRUE.kd, ks=TRUE.ks, shininess=TRUE.shininess, kappa=4.0,
                              ambient=TRUE.ambient)
     far = np.asarray(hj.render(scene, hj.ShadingParams(kd=TRUE.kd, ks=TRUE.ks,
@@ -358,7 +357,7 @@ def test_divergence_ends_cleanly(scene, monkeypatch, fresh_jit):
     import optimistix as optx
 
     far, start = _overflow_beyond_kappa_5(monkeypatch, scene)
-    monkeypatch.setattr(fit_mod, "make_solver", lambda name, rtol, atol: (
+    monkeypatch.setattr(_entry, "make_solver", lambda name, rtol, atol: (
         optx.GaussNewton(rtol=rtol, atol=atol), True))
     r = hj.fit(scene, far, fit=("kappa",), init=start, solver="gauss-newton")
     assert r.termination.startswith("stopped: diverged")
@@ -405,17 +404,17 @@ def test_predicted_decrease_is_the_gauss_newton_step_of_the_residuals(scene, tar
     O(h²) ~ 1e-10 relative)."""
     terms = [_kajiya_kay.prepare_terms(scene, INIT, ("kd", "ks", "shininess", "kappa"),
                                        *_problem.target_arrays(scene, target, None, None))]
-    problem = fit_mod._Problem(terms, INIT, ("shininess", "kappa"), ("kd", "ks"), ())
+    problem = _problem.Problem(terms, INIT, _kajiya_kay.MODEL, ("shininess", "kappa"), ("kd", "ks"), ())
     z = jnp.array([np.log(12.0), np.log(1.7)])
-    r = np.asarray(fit_mod._point(z, problem)[1])
+    r = np.asarray(_problem.point(z, problem)[1])
     h = 1e-5
-    cols = [(np.asarray(fit_mod._point(z + h * e, problem)[1])
-             - np.asarray(fit_mod._point(z - h * e, problem)[1])) / (2 * h) for e in jnp.eye(2)]
+    cols = [(np.asarray(_problem.point(z + h * e, problem)[1])
+             - np.asarray(_problem.point(z - h * e, problem)[1])) / (2 * h) for e in jnp.eye(2)]
     jac = np.stack(cols, axis=1)
     step = np.linalg.lstsq(jac, -r, rcond=None)[0]
     expected = 0.5 * np.sum((jac @ step) ** 2)
     assert expected > 1e-6 * 0.5 * np.sum(r**2)  # far from the optimum: a real decrease
-    decrease, effect = _convergence.stationarity(fit_mod._residuals, z, problem)
+    decrease, effect = _convergence.stationarity(_problem.residuals, z, problem)
     assert float(decrease) == pytest.approx(expected, rel=1e-6)
     np.testing.assert_allclose(effect, np.linalg.norm(jac, axis=0), rtol=1e-6)
 
@@ -459,4 +458,4 @@ def test_a_fit_leaves_the_plateau_where_ks_is_zero(scene, target, solver):
     start = hj.ShadingParams(kd=0.5, ks=0.2, shininess=1e8, kappa=1.0, ambient=0.05)
     r = hj.fit(scene, target, init=start, solver=solver)
     assert r.termination == "converged" and r.restarts >= 1
-    assert all(rel(getattr(r.params, n), getattr(TRUE, n)) < 1e-3 for n in fit_mod.FITTABLE)
+    assert all(rel(getattr(r.params, n), getattr(TRUE, n)) < 1e-3 for n in _kajiya_kay.FITTABLE)

@@ -12,9 +12,10 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._solvers import NULL_RATIO
+from ._space import entries
 
-__all__ = ["MAX_RESTARTS", "STALL_STEPS", "stationarity", "half_square", "solve", "init", "step",
-           "terminate"]
+__all__ = ["MAX_RESTARTS", "STALL_STEPS", "stationarity", "half_square", "plateau_exit", "solve",
+           "init", "step", "terminate"]
 
 # How often `fit` starts a solver afresh when its tolerance test passed but the convergence
 # test (`stationarity`) did not; and after how many steps without a lower loss it
@@ -43,6 +44,27 @@ def stationarity(residuals: Callable, z, problem):
 def half_square(residuals: Callable, z, problem):
     """½‖r‖² at z for the residual function `residuals(z, problem)`."""
     return 0.5 * jnp.sum(residuals(z, problem) ** 2)
+
+
+def plateau_exit(residuals: Callable, z, problem, effect, loss: float, rtol: float, atol: float):
+    """From a stationary z on the model's plateau (`FitModel.plateau`: its exponent, e.g.
+    the shininess, without effect, ‖∂r/∂z_i‖ below NULL_RATIO of the largest column of J:
+    every solved gain is 0, e.g. Ks, or the highlight is a needle nowhere near a strand) —
+    so every exponent is stationary and the solver can never leave — the z with the
+    exponent of the plateau's scan whose loss is lowest, if it beats `loss` beyond the
+    tolerances; else None (also for a model without a plateau, when the gain is not solved
+    for, or the exponent not fitted). `problem`: a `_problem.Problem`."""
+    plateau = problem.model.plateau
+    if plateau is None or plateau.gain not in problem.linear or plateau.exponent not in problem.solved:
+        return None
+    before = problem.solved[:problem.solved.index(plateau.exponent)]
+    i = sum(entries(n, problem.model.colours, problem.scalar) for n in before)
+    if not effect[i] <= NULL_RATIO * effect.max():
+        return None
+    candidates = [z.at[i].set(v) for v in plateau.scan]
+    losses = [float(half_square(residuals, c, problem)) for c in candidates]
+    best = int(np.nanargmin(losses))
+    return candidates[best] if losses[best] < loss - (rtol * loss + atol) else None
 
 
 # The solver's init, step and terminate, compiled once per solver, fn and shapes. (Within

@@ -1,5 +1,5 @@
 """The Kajiya-Kay fit's model-specific part (docs/model.md §6, §8; docs/fitting.md): the
-per-target terms and the image.
+per-target terms and the image as `FitModel` asks for them.
 
 The image is linear in Kd, Ks and the ambient term:
 
@@ -12,7 +12,7 @@ runs once per target; Kajiya-Kay's geometric terms once per target; K_d is recom
 step only when κ is fitted, K_s only when κ or the shininess is, and otherwise a step is a
 handful of per-pixel multiply-adds. Being
 linear, the fitted gains are by default solved for (non-negative least squares) at every
-step, and the solver iterates on the shininess and κ only (variable projection).
+step, and the solver iterates on the shininess and κ only (variable projection, `_varpro.py`).
 """
 
 from __future__ import annotations
@@ -20,15 +20,26 @@ from __future__ import annotations
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from .._lookup import LOOKUP_MODELS, lookup_coordinates, lookup_terms
 from .._render import composite, geometry_stage, occluder_colors
 from .._scene import Scene
 from .._shading import ShadingParams, kajiya_kay_terms, specular_power
+from ._model import FitModel, Plateau
 from ._problem import visible_fragments
+from ._space import LOG, SOFTPLUS
 
-__all__ = ["TargetTerms", "prepare_terms", "fixed_image", "point_terms", "kd_ks_images_plain",
-           "kd_ks_images", "image"]
+__all__ = ["FITTABLE", "MODEL", "TargetTerms", "prepare_terms", "fixed_image", "point_terms",
+           "kd_ks_images_plain", "kd_ks_images", "image", "gain_images", "target_image"]
+
+FITTABLE = ("kd", "ks", "shininess", "kappa")
+# The solver's space (docs/fitting.md): softplus for the colour gains, log for the
+# scale-free exponent and extinction.
+TRANSFORMS = {"kd": SOFTPLUS, "ks": SOFTPLUS, "shininess": LOG, "kappa": LOG}
+# Where `fit` looks for a lower loss when it stops with every solved Ks at 0 (p then has no
+# effect): the shininess on a log grid over the range we support, 1.5× apart.
+SHININESS_SCAN = tuple(float(p) for p in np.geomspace(0.5, 1e4, 25))
 
 
 class TargetTerms(eqx.Module):
@@ -166,3 +177,26 @@ def image(terms: TargetTerms, kd, ks, shininess, kappa, images=kd_ks_images):
     (`images=kd_ks_images_plain` gives plain autodiff, which the tests compare against.)"""
     kd_image, ks_image = images(terms, shininess, kappa)
     return fixed_image(terms, kappa) + kd[None, :] * kd_image + ks[None, :] * ks_image
+
+
+def target_image(terms: TargetTerms, params: ShadingParams):
+    """`image` at `params`: `FitModel.image`."""
+    return image(terms, params.kd, params.ks, params.shininess, params.kappa)
+
+
+def gain_images(terms: TargetTerms, params: ShadingParams):
+    """(the fixed image, ((gain, its image), ...)): `FitModel.gain_images`, image =
+    fixed + Σ gain⊙(its image)."""
+    kd_image, ks_image = kd_ks_images(terms, params.shininess, params.kappa)
+    return fixed_image(terms, params.kappa), (("kd", kd_image), ("ks", ks_image))
+
+
+MODEL = FitModel(
+    label="Kajiya-Kay", shading_models=("kajiya-kay", "kajiya-kay-mirror", *LOOKUP_MODELS),
+    params_type=ShadingParams, fittable=FITTABLE, colours=("kd", "ks"), transforms=TRANSFORMS,
+    prepare=prepare_terms, image=target_image,
+    # Kd and Ks enter the image linearly (module docstring): with `separable`, `fit` solves
+    # whichever of them are fitted and the solver iterates on p and κ only.
+    linear=("kd", "ks"), gain_images=gain_images,
+    plateau=Plateau(gain="ks", exponent="shininess", scan=tuple(np.log(p) for p in SHININESS_SCAN)),
+)

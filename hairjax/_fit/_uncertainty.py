@@ -3,11 +3,16 @@ parameters"): σ²(JᵀJ)⁻¹ at the fit's point, and which parameters the data
 
 from __future__ import annotations
 
+import equinox as eqx
+import jax
 import numpy as np
 
+from ._model import FitModel
+from ._problem import residuals_at
 from ._solvers import NULL_RATIO
+from ._space import error_space, from_flat, to_flat, unflatten
 
-__all__ = ["covariance"]
+__all__ = ["covariance", "error_jacobian", "standard_errors"]
 
 
 def covariance(jac, r):
@@ -29,3 +34,43 @@ def covariance(jac, r):
     var = sigma2 * np.diag((evecs[:, ~null] / evals[~null]) @ evecs[:, ~null].T)
     in_null = (np.abs(evecs[:, null]) > 0.1).any(axis=1) if null.any() else np.zeros(n, bool)
     return var, in_null
+
+
+@eqx.filter_jit
+def error_jacobian(u, fitted, model: FitModel, data, names, scalar):
+    """J and r of the residuals in the standard errors' space (`error_space`) at u."""
+    space = error_space(model.transforms)
+
+    def residuals(u):
+        return residuals_at(model, from_flat(u, fitted, names, model.colours, scalar, space), data)
+
+    return jax.jacfwd(residuals)(u), residuals(u)
+
+
+def standard_errors(model: FitModel, data, fitted, names, scalar):
+    """(name → standard error, the names without one) from σ²(JᵀJ)⁻¹, J taken in the
+    gains themselves and in the solver's space for the rest (log exponents and κ, shifts as
+    they are), mapped to the parameters by the transforms' derivatives (delta method).
+    Parameters with weight in a direction the data do not determine (`covariance`: one unit
+    along it, an e-fold of an exponent or κ or a unit of gain, moves the residuals by under
+    1e-6 RMS, or it is numerically singular) get no error. An RGB parameter's error is an
+    array of 3, a grey value's or a scalar's a float."""
+    space = error_space(model.transforms)
+    flat = to_flat(fitted, names, scalar, space)
+    cov = covariance(*error_jacobian(flat, fitted, model, data, tuple(names), tuple(scalar)))
+    if cov is None:
+        return {name: None for name in names}, tuple(names)
+    var_u, in_null = cov
+    u = unflatten(flat, names, model.colours, scalar)
+    std, undetermined, i = {}, [], 0
+    for name in names:
+        size = int(np.size(u[name]))
+        sl, i = slice(i, i + size), i + size
+        if in_null[sl].any():
+            std[name] = None
+            undetermined.append(name)
+            continue
+        dxdu = np.asarray(jax.vmap(jax.grad(space[name].forward))(u[name]))
+        se = np.abs(dxdu) * np.sqrt(np.maximum(var_u[sl], 0.0))
+        std[name] = se if size > 1 else float(se[0])
+    return std, tuple(undetermined)
