@@ -1,4 +1,4 @@
-"""hairjax.fit (issue 4): recovery, subsets, staging, degenerate cases, input errors."""
+"""hairjax.fit (docs/fitting.md): recovery, subsets, staging, degenerate cases, input errors."""
 
 import jax
 import jax.numpy as jnp
@@ -312,8 +312,8 @@ def test_pruned_fit_image_within_the_stated_bound():
 
 @pytest.fixture
 def fresh_jit():
-    """The fit's steps are compiled once and reused across fits (hairjax/_fit.py); a test
-    that monkeypatches what they trace clears the caches before and after itself."""
+    """The fit's steps are compiled once and reused across fits (hairjax/_fit/_convergence.py);
+    a test that monkeypatches what they trace clears the caches before and after itself."""
     import jax
 
     jax.clear_caches()

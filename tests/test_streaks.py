@@ -100,8 +100,8 @@ def test_gl_streaks_match_jax(gl):
 
 
 def test_fit_terms_carry_the_streaks():
-    """The fit's own image (Kd and Ks images, hairjax/_fit.py) equals the renderer's for a
-    scene with streaks (the fit leaves out fragments behind T < 1e-5, so to 1e-5 × the
+    """The fit's own image (Kd and Ks images, hairjax/_fit/_kajiya_kay.py) equals the
+    renderer's for a scene with streaks (the fit leaves out fragments behind T < 1e-5, so to 1e-5 × the
     brightest colour, as tests/test_fit.py states)."""
     from hairjax._fit import _kajiya_kay
 
