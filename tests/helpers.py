@@ -38,6 +38,25 @@ def small_furball_scene(strands=40, size=48, shadows="opacity-maps", maps=8, res
     )
 
 
+def fit_terms(scene, params, names, target):
+    """The fit's per-target terms (hairjax/_fit/_shading_fit.py) for `target` (an image)."""
+    from hairjax._fit import _shading_fit
+
+    h, w = scene.camera.height, scene.camera.width
+    model = _shading_fit.fit_model(type(scene.shading))
+    return model.prepare(scene, params, tuple(names), np.asarray(target)[..., :3].reshape(-1, 3),
+                         np.ones((h * w, 1)))
+
+
+def fit_image(terms, kd, ks, shininess, kappa, ambient, plain=False):
+    """The fit's own Kajiya-Kay image `[HW, 3]` of `terms` at these values (with `plain`,
+    through plain autodiff instead of the fit's one-pass derivative rule)."""
+    from hairjax._fit import _shading_fit
+
+    params = hj.ShadingParams(kd=kd, ks=ks, shininess=shininess, kappa=kappa, ambient=ambient)
+    return _shading_fit.target_image(terms, params, plain=plain)
+
+
 def cone(model: str):
     """The Kajiya-Kay cone (`seed_cone`, `mirror_cone`) of the registered model `model`."""
     return hj.shading_model_class(model).cone

@@ -1,13 +1,13 @@
-"""hairjax.fit (issue 4): recovery, subsets, staging, degenerate cases, input errors."""
+"""hairjax.fit (docs/fitting.md): recovery, subsets, staging, degenerate cases, input errors."""
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from helpers import small_furball_scene
+from helpers import fit_image, fit_terms, small_furball_scene
 
 import hairjax as hj
-import hairjax._fit as fit_mod
+from hairjax._fit import _convergence, _entry, _nnls, _problem, _shading_fit, _solvers, _varpro
 
 TRUE = hj.ShadingParams(kd=(0.3, 0.5, 0.2), ks=0.4, shininess=25.0, kappa=2.5, ambient=0.05)
 INIT = hj.ShadingParams(kd=0.5, ks=0.2, shininess=10.0, kappa=1.0, ambient=0.05)
@@ -70,13 +70,13 @@ def test_zero_specular_fitted_comes_back_zero(scene, solver):
 
 
 def test_nnls_matches_scipy():
-    """_nnls against scipy.optimize.nnls (an active-set solver, independent code) on random
+    """nnls against scipy.optimize.nnls (an active-set solver, independent code) on random
     problems with 1-6 columns, many with negative unconstrained solutions, a zero column and
     two exactly collinear columns."""
     import jax
     from scipy.optimize import nnls
 
-    nnls_jit = jax.jit(fit_mod._nnls)  # one compile per column count
+    nnls_jit = jax.jit(_nnls.nnls)  # one compile per column count
     rng = np.random.default_rng(0)
     for trial in range(60):
         n = 1 + trial % 6
@@ -110,14 +110,17 @@ def test_subset_and_scalar(scene, target):
 
 def test_fitting_kappa_alone_reuses_the_shading_terms(scene, target, monkeypatch):
     calls = []
-    original = fit_mod.kajiya_kay_terms
-    monkeypatch.setattr(fit_mod, "kajiya_kay_terms", lambda *a: calls.append(1) or original(*a))
+    import hairjax._shading._kajiya_kay as kk
+
+    original = kk.kajiya_kay_terms
+    monkeypatch.setattr(kk, "kajiya_kay_terms", lambda *a: calls.append(1) or original(*a))
     start = hj.ShadingParams(kd=TRUE.kd, ks=TRUE.ks, shininess=TRUE.shininess, kappa=0.5,
                              ambient=TRUE.ambient)
     r = hj.fit(scene, target, fit=("kappa",), init=start)
     assert rel(r.params.kappa, TRUE.kappa) < 1e-6
-    # Traced once (vmap over points) when the terms were prepared, never per step.
-    assert len(calls) == 1 and r.steps >= 2
+    # Traced when the terms were prepared (once to find what κ reaches, once for the
+    # per-point terms), never per step: only τ changes with κ.
+    assert len(calls) <= 2 and r.steps >= 2
 
 
 def test_several_targets_at_once(scene):
@@ -225,7 +228,7 @@ def test_bfgs_first_step_has_unit_length():
     """The first step is −∇f/‖∇f‖ whatever the loss's scale (a 1e6-times steeper bowl)."""
     import jax
 
-    opt = fit_mod._bfgs(rtol=1e-8, atol=1e-10)
+    opt = _solvers.bfgs(rtol=1e-8, atol=1e-10)
     fn = lambda z, args: (1e6 * jnp.sum((z - 3.0) ** 2), None)  # noqa: E731
     z0 = jnp.zeros(4)
     f_struct, aux_struct = jax.eval_shape(lambda: fn(z0, None))
@@ -238,7 +241,7 @@ def test_bfgs_update_satisfies_the_secant_equation_at_small_scale():
     """After the first pair, H s = y even when sᵀy ≈ 1e-12 (optimistix skips below ε)."""
     import optimistix as optx
 
-    opt = fit_mod._bfgs(rtol=1e-8, atol=1e-10)
+    opt = _solvers.bfgs(rtol=1e-8, atol=1e-10)
     z = jnp.zeros(3)
     info, count = opt.init_hessian(z, jnp.asarray(0.0), z)
     g0 = jnp.asarray([1e-6, -2e-6, 5e-7])
@@ -275,21 +278,24 @@ def test_bad_targets(scene, target):
 
 @pytest.mark.parametrize("names", [("kd", "ks", "shininess", "kappa"), ("kappa",), ("shininess",)])
 def test_custom_jvp_matches_autodiff(scene, target, names):
-    """The one-pass Jacobian rule equals forward-mode autodiff of the plain formula."""
+    """The one-pass Jacobian rule equals forward-mode autodiff of the plain formula, in
+    every direction a fit moves: the fitted parameters (the rule leaves the held ones'
+    derivatives out, as no fit asks for them)."""
     import jax
 
-    terms = fit_mod._prepare_terms(scene, INIT, names, target[..., :3].reshape(-1, 3),
-                                   np.ones((48 * 48, 1)))
+    terms = fit_terms(scene, INIT, names, target)
     args = (jnp.asarray([0.3, 0.5, 0.2]), jnp.asarray([0.4, 0.4, 0.4]), jnp.asarray(25.0),
             jnp.asarray(2.5))
     tangent = (jnp.asarray([0.1, -0.2, 0.3]), jnp.asarray([0.5, 0.1, -0.1]), jnp.asarray(3.0),
                jnp.asarray(-0.7))
-    f = lambda *a: fit_mod._image(terms, *a)  # noqa: E731
-    g = lambda *a: fit_mod._image(terms, *a, images=fit_mod._kd_ks_images_plain)  # noqa: E731
+    tangent = tuple(t if n in names or n in ("kd", "ks") else jnp.zeros_like(t)
+                    for n, t in zip(("kd", "ks", "shininess", "kappa"), tangent))
+    f = lambda *a: fit_image(terms, *a, ambient=0.05)  # noqa: E731
+    g = lambda *a: fit_image(terms, *a, ambient=0.05, plain=True)  # noqa: E731
     out_f, jvp_f = jax.jvp(f, args, tangent)
     out_g, jvp_g = jax.jvp(g, args, tangent)
     np.testing.assert_allclose(out_f, out_g, rtol=1e-12, atol=1e-15)
-    # Same maths summed in a different order (one composite of 15 channels vs several).
+    # Same maths summed in a different order (one composite of all channels vs several).
     np.testing.assert_allclose(jvp_f, jvp_g, rtol=1e-10, atol=1e-13)
     assert np.abs(np.asarray(jvp_g)).max() > 0
 
@@ -303,17 +309,17 @@ def test_pruned_fit_image_within_the_stated_bound():
     dense = small_furball_scene(strands=2000, size=48, alpha=0.9)
     names = ("kd", "ks", "shininess", "kappa")
     exact = np.asarray(hj.render(dense, TRUE))[..., :3].reshape(-1, 3)
-    terms = fit_mod._prepare_terms(dense, TRUE, names, exact, np.ones((48 * 48, 1)))
+    terms = fit_terms(dense, TRUE, names, exact.reshape(48, 48, 3))
     assert terms.geometry.frag_weight.shape[0] < hj.geometry_stage(dense).frag_weight.shape[0]
-    image = np.asarray(fit_mod._image(terms, TRUE.kd, TRUE.ks, TRUE.shininess, TRUE.kappa))
+    image = np.asarray(fit_image(terms, TRUE.kd, TRUE.ks, TRUE.shininess, TRUE.kappa, TRUE.ambient))
     brightest = float(np.max(np.asarray(point_colors(hj.geometry_stage(dense), TRUE))))
     assert np.abs(image - exact).max() <= FIT_TRANSMITTANCE_CUTOFF * brightest
 
 
 @pytest.fixture
 def fresh_jit():
-    """The fit's steps are compiled once and reused across fits (hairjax/_fit.py); a test
-    that monkeypatches what they trace clears the caches before and after itself."""
+    """The fit's steps are compiled once and reused across fits (hairjax/_fit/_convergence.py);
+    a test that monkeypatches what they trace clears the caches before and after itself."""
     import jax
 
     jax.clear_caches()
@@ -325,25 +331,25 @@ def fresh_jit():
 @pytest.mark.parametrize("solver", ["gauss-newton", "bfgs"])
 def test_a_second_fit_reuses_the_compiled_steps(scene, target, monkeypatch, fresh_jit, solver):
     """A second fit of the same shapes and names (other values, another start) traces
-    nothing: counted by a wrapper around _nnls, which every step's trace calls."""
+    nothing: counted by a wrapper around nnls, which every step's trace calls."""
     hj.fit(scene, target, init=INIT, solver=solver, max_steps=3)
     calls = []
-    original = fit_mod._nnls
-    monkeypatch.setattr(fit_mod, "_nnls", lambda *a: calls.append(1) or original(*a))
+    original = _varpro.nnls
+    monkeypatch.setattr(_varpro, "nnls", lambda *a: calls.append(1) or original(*a))
     other = hj.ShadingParams(kd=0.2, ks=0.5, shininess=30.0, kappa=1.5, ambient=0.05)
     r = hj.fit(scene, 0.9 * target, init=other, solver=solver, max_steps=3)
     assert r.steps >= 1 and calls == []
 
 
 def _overflow_beyond_kappa_5(monkeypatch, scene):
-    """_image overflows for κ > 5 (as an undamped step into exp(z) can); a fit of κ alone
+    """image overflows for κ > 5 (as an undamped step into exp(z) can); a fit of κ alone
     from 4 towards a target rendered at κ = 40: (target, start)."""
-    original = fit_mod._image
+    original = _shading_fit.fixed_image
 
-    def overflowing(terms, kd, ks, shininess, kappa):
-        return jnp.where(kappa > 5.0, jnp.inf, original(terms, kd, ks, shininess, kappa))
+    def overflowing(terms, params):
+        return jnp.where(params.kappa > 5.0, jnp.inf, original(terms, params))
 
-    monkeypatch.setattr(fit_mod, "_image", overflowing)
+    monkeypatch.setattr(_shading_fit, "fixed_image", overflowing)
     start = hj.ShadingParams(kd=TRUE.kd, ks=TRUE.ks, shininess=TRUE.shininess, kappa=4.0,
                              ambient=TRUE.ambient)
     far = np.asarray(hj.render(scene, hj.ShadingParams(kd=TRUE.kd, ks=TRUE.ks,
@@ -357,7 +363,7 @@ def test_divergence_ends_cleanly(scene, monkeypatch, fresh_jit):
     import optimistix as optx
 
     far, start = _overflow_beyond_kappa_5(monkeypatch, scene)
-    monkeypatch.setattr(fit_mod, "_solver", lambda name, rtol, atol: (
+    monkeypatch.setattr(_entry, "make_solver", lambda name, rtol, atol: (
         optx.GaussNewton(rtol=rtol, atol=atol), True))
     r = hj.fit(scene, far, fit=("kappa",), init=start, solver="gauss-newton")
     assert r.termination.startswith("stopped: diverged")
@@ -383,7 +389,7 @@ def test_a_weak_direction_is_not_dropped_from_the_step(solver):
     """Linear least squares in float32 with 100k residuals and a column 1000 times weaker
     than the other (a faint highlight's shininess beside κ). lineax's default SVD cutoff,
     2·eps·max(m, n) = 2.4 % of the largest singular value, dropped the weak direction: the
-    solver never moved it and "converged". With the cutoff at _NULL_RATIO both solvers
+    solver never moved it and "converged". With the cutoff at NULL_RATIO both solvers
     solve it; its rounding floor is eps / 1e-3 ≈ 1e-4 relative."""
     import optimistix as optx
 
@@ -393,28 +399,29 @@ def test_a_weak_direction_is_not_dropped_from_the_step(solver):
     with jax.enable_x64(False):
         b = jnp.asarray(a @ truth)
         a = jnp.asarray(a)
-        opt, _ = fit_mod._solver(solver, 1e-6, 1e-8)
+        opt, _ = _solvers.make_solver(solver, 1e-6, 1e-8)
         z = optx.least_squares(lambda z, _: a @ z - b, opt, jnp.zeros(2, jnp.float32), max_steps=20).value
     assert rel(z, truth) < 1e-3, z
 
 
 def test_predicted_decrease_is_the_gauss_newton_step_of_the_residuals(scene, target):
-    """`_stationarity` against ½‖J Δ‖², Δ = numpy's least-squares step, and the column
+    """`stationarity` against ½‖J Δ‖², Δ = numpy's least-squares step, and the column
     norms of J, with J from central differences of the residuals in float64 (truncation
     O(h²) ~ 1e-10 relative)."""
-    terms = [fit_mod._prepare_terms(scene, INIT, ("kd", "ks", "shininess", "kappa"),
-                                    *fit_mod._target_arrays(scene, target, None, None))]
-    problem = fit_mod._Problem(terms, INIT, ("shininess", "kappa"), ("kd", "ks"), ())
+    model = _shading_fit.fit_model(hj.KajiyaKay)
+    terms = [model.prepare(scene, INIT, ("kd", "ks", "shininess", "kappa"),
+                           *_problem.target_arrays(scene, target, None, None))]
+    problem = _problem.Problem(terms, INIT, model, ("shininess", "kappa"), ("kd", "ks"), ())
     z = jnp.array([np.log(12.0), np.log(1.7)])
-    r = np.asarray(fit_mod._point(z, problem)[1])
+    r = np.asarray(_problem.point(z, problem)[1])
     h = 1e-5
-    cols = [(np.asarray(fit_mod._point(z + h * e, problem)[1])
-             - np.asarray(fit_mod._point(z - h * e, problem)[1])) / (2 * h) for e in jnp.eye(2)]
+    cols = [(np.asarray(_problem.point(z + h * e, problem)[1])
+             - np.asarray(_problem.point(z - h * e, problem)[1])) / (2 * h) for e in jnp.eye(2)]
     jac = np.stack(cols, axis=1)
     step = np.linalg.lstsq(jac, -r, rcond=None)[0]
     expected = 0.5 * np.sum((jac @ step) ** 2)
     assert expected > 1e-6 * 0.5 * np.sum(r**2)  # far from the optimum: a real decrease
-    decrease, effect = fit_mod._stationarity(fit_mod._residuals, z, problem)
+    decrease, effect = _convergence.stationarity(_problem.residuals, z, problem)
     assert float(decrease) == pytest.approx(expected, rel=1e-6)
     np.testing.assert_allclose(effect, np.linalg.norm(jac, axis=0), rtol=1e-6)
 
@@ -422,12 +429,12 @@ def test_predicted_decrease_is_the_gauss_newton_step_of_the_residuals(scene, tar
 def test_a_tolerance_test_passed_too_early_restarts_the_solver(scene, target, monkeypatch, fresh_jit):
     """A solver whose own test passes at every point (as BFGS's did with a stale curvature
     estimate, p still 4.5× off): `fit` restarts it while Gauss-Newton predicts a decrease,
-    _MAX_RESTARTS times, then stops and says why; at the optimum it accepts at once."""
+    MAX_RESTARTS times, then stops and says why; at the optimum it accepts at once."""
     import optimistix as optx
 
-    monkeypatch.setattr(fit_mod, "_terminate", lambda *args: (True, optx.RESULTS.successful))
+    monkeypatch.setattr(_convergence, "terminate", lambda *args: (True, optx.RESULTS.successful))
     r = hj.fit(scene, target, init=INIT)
-    assert r.restarts == fit_mod._MAX_RESTARTS and r.steps == fit_mod._MAX_RESTARTS
+    assert r.restarts == _convergence.MAX_RESTARTS and r.steps == _convergence.MAX_RESTARTS
     assert r.termination.startswith("stopped: the solver's tolerance test passed")
     assert r.loss[-1] < r.loss[0]  # the restarts did step
     r = hj.fit(scene, target, init=TRUE)
@@ -438,16 +445,16 @@ def test_a_tolerance_test_passed_too_early_restarts_the_solver(scene, target, mo
 def test_a_stalled_solver_converges_only_where_nothing_is_left(scene, target, monkeypatch, fresh_jit,
                                                                start, termination):
     """A solver that never moves and never says it is done (as LM at the float32 floor,
-    rejecting every step): at the optimum `fit` stops after _STALL_STEPS steps as converged;
+    rejecting every step): at the optimum `fit` stops after STALL_STEPS steps as converged;
     far from it, it runs to max_steps and says so."""
-    monkeypatch.setattr(fit_mod, "_step", lambda opt, fn, z, problem, state: (z, state))
-    monkeypatch.setattr(fit_mod, "_terminate", lambda *args: (False, None))
-    r = hj.fit(scene, target, init=start, max_steps=3 * fit_mod._STALL_STEPS)
+    monkeypatch.setattr(_convergence, "step", lambda opt, fn, z, problem, state: (z, state))
+    monkeypatch.setattr(_convergence, "terminate", lambda *args: (False, None))
+    r = hj.fit(scene, target, init=start, max_steps=3 * _convergence.STALL_STEPS)
     assert r.termination.startswith(termination)
-    if start is TRUE:  # tested every _STALL_STEPS steps, over losses after the start's
-        assert fit_mod._STALL_STEPS <= r.steps <= 2 * fit_mod._STALL_STEPS
+    if start is TRUE:  # tested every STALL_STEPS steps, over losses after the start's
+        assert _convergence.STALL_STEPS <= r.steps <= 2 * _convergence.STALL_STEPS
     else:
-        assert r.steps == 3 * fit_mod._STALL_STEPS
+        assert r.steps == 3 * _convergence.STALL_STEPS
 
 
 @pytest.mark.parametrize("solver", ["gauss-newton", "dogleg"])
@@ -458,4 +465,4 @@ def test_a_fit_leaves_the_plateau_where_ks_is_zero(scene, target, solver):
     start = hj.ShadingParams(kd=0.5, ks=0.2, shininess=1e8, kappa=1.0, ambient=0.05)
     r = hj.fit(scene, target, init=start, solver=solver)
     assert r.termination == "converged" and r.restarts >= 1
-    assert all(rel(getattr(r.params, n), getattr(TRUE, n)) < 1e-3 for n in fit_mod.FITTABLE)
+    assert all(rel(getattr(r.params, n), getattr(TRUE, n)) < 1e-3 for n in hj.KajiyaKay.fittable)

@@ -237,13 +237,13 @@ def test_fit_terms_and_derivatives_for_the_lookup_model():
     fit's stated 1e-5 × brightest colour, tests/test_fit.py), and its one-pass derivative
     rule equals forward-mode autodiff of the plain images (as tests/test_fit.py checks for
     the formula; rtol 1e-10: the same maths summed in another order)."""
-    from hairjax import _fit
+    from helpers import fit_image, fit_terms
 
     scene = lookup_scene(size=32, lookup_size=16)
     exact = np.asarray(hj.render(scene, TRUE))[..., :3].reshape(-1, 3)
     names = ("kd", "ks", "shininess", "kappa")
-    terms = _fit._prepare_terms(scene, TRUE, names, exact, np.ones((32 * 32, 1)))
-    image = np.asarray(_fit._image(terms, TRUE.kd, TRUE.ks, TRUE.shininess, TRUE.kappa))
+    terms = fit_terms(scene, TRUE, names, exact.reshape(32, 32, 3))
+    image = np.asarray(fit_image(terms, TRUE.kd, TRUE.ks, TRUE.shininess, TRUE.kappa, TRUE.ambient))
     assert np.abs(image - exact).max() <= 1e-5 * exact.max()
     analytic = np.asarray(hj.render(scene.replace(shading=hj.KajiyaKay(scene.params)), TRUE))
     assert np.abs(analytic[..., :3].reshape(-1, 3) - exact).max() > 1e-3  # the table shows
@@ -252,9 +252,8 @@ def test_fit_terms_and_derivatives_for_the_lookup_model():
             jnp.asarray(2.5))
     tangent = (jnp.asarray([0.1, -0.2, 0.3]), jnp.asarray([0.5, 0.1, -0.1]), jnp.asarray(3.0),
                jnp.asarray(-0.7))
-    _, jvp_f = jax.jvp(lambda *a: _fit._image(terms, *a), args, tangent)
-    _, jvp_g = jax.jvp(lambda *a: _fit._image(terms, *a, images=_fit._kd_ks_images_plain),
-                       args, tangent)
+    _, jvp_f = jax.jvp(lambda *a: fit_image(terms, *a, ambient=TRUE.ambient), args, tangent)
+    _, jvp_g = jax.jvp(lambda *a: fit_image(terms, *a, ambient=TRUE.ambient, plain=True), args, tangent)
     np.testing.assert_allclose(jvp_f, jvp_g, rtol=1e-10, atol=1e-13)
     assert np.abs(np.asarray(jvp_g)).max() > 0
 

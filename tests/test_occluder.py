@@ -327,8 +327,8 @@ def test_guard_degenerate_triangles_and_a_mesh_behind_the_eye(gl):
 
 
 def test_fit_sees_the_occluder_receive_the_shadow():
-    """hj.fit's image (hairjax/_fit.py) includes the occluder's κ-dependent colour: on the
-    slab scene the camera sees only the quad (k·ambient + e^{−κΩ}k; the hair is behind it),
+    """hj.fit's image (hairjax/_fit/_kajiya_kay.py) includes the occluder's κ-dependent
+    colour: on the slab scene the camera sees only the quad (k·ambient + e^{−κΩ}k; the hair is behind it),
     so κ is known from the occluder alone. A κ-only fit from 0.3 recovers 0.7 to 1e-6
     (the float64 solver's rtol is 1e-8) with RMSE < 1e-9."""
     scene = slab_scene("opacity-maps", kappa=0.7)

@@ -623,7 +623,7 @@ def test_fit_recovers_every_parameter():
 def test_fit_refuses_what_it_cannot_do():
     scene = small_scene(size=8, strands=3, shadows="none")
     target = np.zeros((8, 8, 3))
-    with pytest.raises(hj.FitError, match="unknown parameter 'ks' for a Scheuermann scene"):
+    with pytest.raises(hj.FitError, match="unknown parameter 'ks' for a scheuermann scene"):
         hj.fit(scene, target, fit=("kd", "ks"))
     with pytest.raises(hj.FitError, match="grey value"):
         hj.fit(scene, target, fit=("kd",), scalar=("primary_shift",))

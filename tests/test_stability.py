@@ -108,7 +108,7 @@ inputs that make it fire and the guarded result checked against the model's valu
 | gl/_renderer: empty buffers, ortho near         | exact_shadows_without_fragments             |
 | gl/_renderer: depth_far (fixed)                 | test_gl_depth_test_keeps_its_resolution_…   |
 
-Not audited: hairjax/_fit.py (outside this issue's brief; its guards are tested in
+Not audited: hairjax/_fit/ (outside this issue's brief; its guards are tested in
 tests/test_fit.py).
 """
 

@@ -100,17 +100,16 @@ def test_gl_streaks_match_jax(gl):
 
 
 def test_fit_terms_carry_the_streaks():
-    """The fit's own image (Kd and Ks images, hairjax/_fit.py) equals the renderer's for a
-    scene with streaks (the fit leaves out fragments behind T < 1e-5, so to 1e-5 × the
+    """The fit's own image (its gain images, hairjax/_fit/_shading_fit.py) equals the
+    renderer's for a scene with streaks (the fit leaves out fragments behind T < 1e-5, so to 1e-5 × the
     brightest colour, as tests/test_fit.py states)."""
-    from hairjax import _fit
+    from helpers import fit_image, fit_terms
 
     scene = small_furball_scene(strands=60, size=32, streaks=Streaks(contrast=0.8, seed=2))
     p = scene.params
     exact = np.asarray(hj.render(scene))[..., :3].reshape(-1, 3)
-    terms = _fit._prepare_terms(scene, p, ("kd", "ks", "shininess", "kappa"), exact,
-                                np.ones((32 * 32, 1)))
-    image = np.asarray(_fit._image(terms, p.kd, p.ks, p.shininess, p.kappa))
+    terms = fit_terms(scene, p, ("kd", "ks", "shininess", "kappa"), exact.reshape(32, 32, 3))
+    image = np.asarray(fit_image(terms, p.kd, p.ks, p.shininess, p.kappa, p.ambient))
     assert np.abs(image - exact).max() <= 1e-5 * exact.max()
     plain = np.asarray(hj.render(scene.replace(streaks=None)))[..., :3].reshape(-1, 3)
     assert np.abs(plain - exact).max() > 0.01  # the streaks do change this image

@@ -155,6 +155,7 @@ class KajiyaKay(AbstractShadingModel):
     table_keys: ClassVar[tuple[str, ...]] = ("kd", "ks", "shininess", "kappa", "ambient")
     fittable: ClassVar[tuple[str, ...]] = ("kd", "ks", "shininess", "kappa")
     searched: ClassVar[Mapping] = {"shininess": LOG, "kappa": LOG}
+    plateau: ClassVar[tuple[str, str] | None] = ("ks", "shininess")
     gl_id: ClassVar[int | None] = 0
     # The cone, as a class attribute (a function, not a field): the mirror model swaps it.
     cone: ClassVar[Cone] = staticmethod(seed_cone)

@@ -121,6 +121,9 @@ class AbstractShadingModel(eqx.Module):
     # the solver searches it through. `ambient` is a gain that is held unless named.
     fittable: ClassVar[tuple[str, ...]]
     searched: ClassVar[Mapping[str, Transform]]
+    # (gain, exponent): with the gain solved to 0 the exponent has no effect, a plateau the
+    # fit leaves by scanning the exponent (docs/fitting.md); None for none.
+    plateau: ClassVar[tuple[str, str] | None] = None
     # The camera shader's branch for this model (hairjax/gl/shaders/strand.vert), or None
     # where the model has no GL side (the GL renderer then refuses the scene).
     gl_id: ClassVar[int | None] = None

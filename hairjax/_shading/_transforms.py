@@ -1,32 +1,45 @@
-"""The transforms a fit searches a model's non-linear parameters through (docs/fitting.md).
-
-Each is `(forward, inverse)` from the solver's unconstrained z to the parameter x: the
-models name them in `AbstractShadingModel.searched`, and `hairjax/_fit/` applies them.
+"""The transforms a fit searches a model's parameters through (docs/fitting.md,
+"Parametrisation"): `(forward, inverse, floored)` from the solver's unconstrained z to the
+parameter x. The shading models name one per searched parameter
+(`AbstractShadingModel.searched`); `hairjax/_fit/` applies them, and SOFTPLUS to a gain the
+solver searches itself (`separable=False`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import NamedTuple
+
 import jax.numpy as jnp
 
-__all__ = ["LOG", "SOFTPLUS", "IDENTITY", "softplus", "softplus_inverse"]
+__all__ = ["Transform", "LOG", "SOFTPLUS", "IDENTITY", "softplus", "softplus_inv", "identity"]
 
 
 def softplus(z):
     return jnp.logaddexp(z, 0.0)
 
 
-def softplus_inverse(x):
+def softplus_inv(x):
     # log(expm1(x)), written to stay accurate for small and large x.
     return x + jnp.log(-jnp.expm1(-x))
 
 
-def _identity(x):
+def identity(x):
     return x
 
 
+class Transform(NamedTuple):
+    """z → x (`forward`) and x → z (`inverse`); `floored`: the inverse needs x > 0, and
+    values below the fit's START_FLOOR are raised to it before it is applied."""
+
+    forward: Callable
+    inverse: Callable
+    floored: bool
+
+
 # Scale-free positive parameters (an exponent, an extinction): x = exp(z).
-LOG = (jnp.exp, jnp.log)
+LOG = Transform(jnp.exp, jnp.log, floored=True)
 # Non-negative gains searched by the solver itself (not solved for): x = softplus(z).
-SOFTPLUS = (softplus, softplus_inverse)
+SOFTPLUS = Transform(softplus, softplus_inv, floored=True)
 # Signed parameters (a tangent shift): x = z.
-IDENTITY = (_identity, _identity)
+IDENTITY = Transform(identity, identity, floored=False)

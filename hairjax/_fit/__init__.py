@@ -1,0 +1,14 @@
+"""`hairjax.fit`: shading parameters fitted to target images with optimistix (docs/fitting.md).
+
+One concept per module: `_entry` (`fit`), `_result` (FitResult, FitError), `_space` (the
+solver's parameter space), `_problem` (targets, weights, the residuals), `_varpro` and
+`_nnls` (the gains solved for), `_solvers`, `_convergence` (the solve loop),
+`_uncertainty` (standard errors), `_model` (what the fit asks of a shading model) and
+`_shading_fit` (that, for any registered shading model, from the model's own terms), with
+`_dependence` (which images a fitted parameter reaches).
+"""
+
+from ._entry import fit as fit
+from ._result import FitError as FitError
+from ._result import FitResult as FitResult
+from ._solvers import SOLVERS as SOLVERS

@@ -1,0 +1,163 @@
+"""The solve loop (docs/fitting.md, "When a fit has converged"): the optimistix solver is
+stepped until Gauss-Newton's predicted decrease confirms a stationary point; a solver whose
+own test passes too early is restarted, one that stalls is tested, a plateau is left."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ._solvers import NULL_RATIO
+from ._space import entries
+
+__all__ = ["MAX_RESTARTS", "STALL_STEPS", "stationarity", "half_square", "plateau_exit", "solve",
+           "init", "step", "terminate"]
+
+# How often `fit` starts a solver afresh when its tolerance test passed but the convergence
+# test (`stationarity`) did not; and after how many steps without a lower loss it
+# applies the convergence test itself (a trust region at the float32 floor rejects every step).
+MAX_RESTARTS = 3
+STALL_STEPS = 10
+
+
+@eqx.filter_jit
+def stationarity(residuals: Callable, z, problem):
+    """(decrease, effect) at z for the residual function `residuals(z, problem)`.
+    `decrease`: the loss a Gauss-Newton step from z would remove were the residuals linear,
+    ½‖U_kᵀ r‖², U_k the left singular vectors of J = ∂r/∂z above NULL_RATIO (JΔ = −U_k U_kᵀ r
+    for the least-squares step Δ). It is 0 exactly at a stationary point, whatever the
+    solver's state; the solvers' own tests look at the last step's size instead, which a
+    poor curvature estimate (BFGS) or a shrunken trust region makes small far from one.
+    `effect`: ‖∂r/∂z_i‖ per entry of z."""
+    r, jvp = jax.linearize(lambda z: residuals(z, problem), z)
+    jac = jax.vmap(jvp, out_axes=1)(jnp.eye(z.size, dtype=z.dtype))
+    u, sv, _ = jnp.linalg.svd(jac, full_matrices=False)
+    keep = sv > NULL_RATIO * sv[0]
+    return 0.5 * jnp.sum(jnp.where(keep, u.T @ r, 0.0) ** 2), jnp.linalg.norm(jac, axis=0)
+
+
+@eqx.filter_jit
+def half_square(residuals: Callable, z, problem):
+    """½‖r‖² at z for the residual function `residuals(z, problem)`."""
+    return 0.5 * jnp.sum(residuals(z, problem) ** 2)
+
+
+def plateau_exit(residuals: Callable, z, problem, effect, loss: float, rtol: float, atol: float):
+    """From a stationary z on the model's plateau (`FitModel.plateau`: its exponent, e.g.
+    the shininess, without effect, ‖∂r/∂z_i‖ below NULL_RATIO of the largest column of J:
+    every solved gain is 0, e.g. Ks, or the highlight is a needle nowhere near a strand) —
+    so every exponent is stationary and the solver can never leave — the z with the
+    exponent of the plateau's scan whose loss is lowest, if it beats `loss` beyond the
+    tolerances; else None (also for a model without a plateau, when the gain is not solved
+    for, or the exponent not fitted). `problem`: a `_problem.Problem`."""
+    plateau = problem.model.plateau
+    if plateau is None or plateau.gain not in problem.linear or plateau.exponent not in problem.solved:
+        return None
+    before = problem.solved[:problem.solved.index(plateau.exponent)]
+    i = sum(entries(n, problem.model.colours, problem.scalar) for n in before)
+    if not effect[i] <= NULL_RATIO * effect.max():
+        return None
+    candidates = [z.at[i].set(v) for v in plateau.scan]
+    losses = [float(half_square(residuals, c, problem)) for c in candidates]
+    best = int(np.nanargmin(losses))
+    return candidates[best] if losses[best] < loss - (rtol * loss + atol) else None
+
+
+# The solver's init, step and terminate, compiled once per solver, fn and shapes. (Within
+# `init`, optimistix builds the state's static parts, e.g. a Jacobian's jaxpr compared by
+# identity; compiled, they come back from the cache, so later fits hit it too.)
+@eqx.filter_jit
+def init(opt, fn, z, problem):
+    f_struct, aux_struct = jax.eval_shape(lambda: fn(z, problem))
+    return opt.init(fn, z, problem, {}, f_struct, aux_struct, frozenset())
+
+
+@eqx.filter_jit
+def step(opt, fn, z, problem, state):
+    z, state, _ = opt.step(fn, z, problem, {}, state, frozenset())
+    return z, state
+
+
+@eqx.filter_jit
+def terminate(opt, fn, z, problem, state):
+    return opt.terminate(fn, z, problem, {}, state, frozenset())
+
+
+def solve(opt, fn, residuals: Callable, z, problem, losses: list, *, max_steps: int, rtol: float,
+          atol: float, report: Callable[[int, float], None], plateau: Callable | None = None):
+    """Step the optimistix solver `opt` (on `fn`, whose residuals are `residuals(z,
+    problem)`) from z until the convergence test confirms a stationary point, or it stops
+    for a stated reason. Appends each step's loss to `losses` and calls `report(step,
+    loss)`. `plateau(z, effect, loss)`: a z to restart from where a parameter has no effect
+    at a stationary point (or None). Returns (z, steps, termination, restarts, diverged).
+
+    The convergence test (docs/fitting.md, "When a fit has converged"): Gauss-Newton's
+    predicted decrease (`stationarity`) within rtol·loss + atol. It is applied when the
+    solver's own test passes (if it fails, the solver restarts from its point, at most
+    MAX_RESTARTS times) and when no step has lowered the loss for STALL_STEPS steps."""
+    import optimistix as optx
+
+    steps, restarts = 0, 0
+    state = init(opt, fn, z, problem)
+    done, result = terminate(opt, fn, z, problem, state)
+    last_finite, confirmed, unconfirmed, stalled, diverged = z, False, False, False, False
+    while True:
+        if bool(done) and result != optx.RESULTS.successful:
+            break
+        restart = False
+        if bool(done) or stalled:
+            decrease, effect = stationarity(residuals, z, problem)
+            loss = float(half_square(residuals, z, problem))
+            if float(decrease) <= rtol * loss + atol:
+                # A stationary point, unless a parameter has no effect there (`plateau`).
+                lower = None if restarts == MAX_RESTARTS or plateau is None else plateau(
+                    z, np.asarray(effect), loss)
+                if lower is None:
+                    confirmed = True
+                    break
+                z, restart = lower, True
+            elif bool(done):
+                # The solver's test passed away from a stationary point (seen: BFGS with p
+                # still 4.5× off, its curvature estimate stale): start it afresh here.
+                if restarts == MAX_RESTARTS:
+                    unconfirmed = True
+                    break
+                restart = True
+            # (Stalled short of a stationary point: keep stepping.)
+        if restart:
+            restarts += 1
+            state = init(opt, fn, z, problem)
+        if steps >= max_steps:
+            break
+        z, state = step(opt, fn, z, problem, state)
+        steps += 1
+        losses.append(float(half_square(residuals, z, problem)))
+        report(steps, losses[-1])
+        if not np.isfinite(losses[-1]):
+            # Fires for a solver that accepts every step (none of ours: trust regions and
+            # Armijo reject a non-finite loss): stop, return the last finite point.
+            z, diverged = last_finite, True
+            break
+        last_finite = z
+        done, result = terminate(opt, fn, z, problem, state)
+        # No lower loss in STALL_STEPS steps (a trust region at the float32 floor rejects
+        # every step): converged if the test above finds nothing left to gain.
+        recent = losses[-STALL_STEPS - 1:]
+        stalled = (steps % STALL_STEPS == 0 and len(recent) > STALL_STEPS
+                   and min(recent[1:]) >= recent[0])
+    if diverged:
+        termination = "stopped: diverged (the loss became non-finite); kept the last finite point"
+    elif confirmed:
+        termination = "converged"
+    elif unconfirmed:
+        termination = (f"stopped: the solver's tolerance test passed {restarts + 1} times where "
+                       "Gauss-Newton still predicts a decrease beyond the tolerances")
+    elif bool(done):
+        termination = f"stopped: {optx.RESULTS[result]}"
+    else:
+        termination = f"stopped: reached max_steps = {max_steps}"
+    return z, steps, termination, restarts, diverged

@@ -1,0 +1,152 @@
+"""`hairjax.fit`: shading parameters fitted to target images with optimistix (docs/fitting.md).
+
+The entry checks the input, sets up each target through the scenes' shading model (its
+`FitModel`, `_shading_fit.fit_model`), steps the solver (`_convergence.py`) on
+the residuals of `_problem.py` (the gains solved for by `_varpro.py` where the model's
+image is linear in them) and builds the `FitResult`, standard errors included
+(`_uncertainty.py`). Nothing here depends on which model is fitted.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .._scene._scene import Scene
+from ._convergence import half_square, plateau_exit, solve
+from ._model import FitModel
+from ._problem import (
+    Problem,
+    check_names,
+    jit_point,
+    loss_fn,
+    params_loss,
+    residual_fn,
+    residuals,
+    target_arrays,
+)
+from ._result import FitError, FitResult
+from ._shading_fit import fit_model
+from ._solvers import make_solver
+from ._space import to_flat
+from ._uncertainty import standard_errors
+
+__all__ = ["fit"]
+
+
+def fit(
+    scene: Scene | Sequence[Scene],
+    targets,
+    fit: Sequence[str] | None = None,
+    init=None,
+    solver: str = "levenberg-marquardt",
+    *,
+    masks=None,
+    weights=None,
+    scalar: Sequence[str] = (),
+    max_steps: int = 100,
+    separable: bool = True,
+    rtol: float | None = None,
+    atol: float | None = None,
+    progress: Callable[[int, float, float], None] | None = None,
+) -> FitResult:
+    """Least-squares fit of shading parameters to one or more target images.
+
+    **Arguments:**
+    - `scene`: a Scene, or one per target (the same hair under several views or lights).
+    - `targets`: an `[H, W, 3|4]` linear image, or a list of them (alpha is ignored).
+    - `fit`: the parameters to fit, among the shading model's `fittable` (default: all of
+      them): kd, ks, shininess, kappa for Kajiya-Kay; kd, primary_color, primary_exponent,
+      primary_shift, secondary_color, secondary_exponent, secondary_shift, kappa for
+      Scheuermann (docs/model.md §17); the rest stay at `init`.
+    - `init`: starting (and fixed) parameters, the model's parameter type; default the
+      first scene's.
+    - `solver`: levenberg-marquardt (lm), gauss-newton, dogleg, or bfgs (on ½‖r‖²).
+    - `masks`, `weights`: optional per-target `[H, W]` pixel masks and weights.
+    - `scalar`: among the fitted gains (kd, ks; Scheuermann's colours), those fitted as one
+      grey value instead of RGB.
+    - `separable`: solve the fitted gains by non-negative linear least squares at every
+      step (variable projection; the image is linear in them) so that the solver iterates
+      on the model's searched parameters (shininess, κ, …) only; a fit of gains alone is
+      then one solve. False: the solver iterates on every fitted parameter (docs/fitting.md).
+    - `rtol`, `atol`: the solver's tolerances; default 1e-8 and 1e-10 in float64, 1e-5 and
+      1e-7 in float32 (tighter than float32 resolves only adds steps that change nothing).
+    - `progress(step, loss, elapsed_s)`: called after every step.
+
+    **Returns:** a `FitResult`.
+    """
+    scenes = [scene] if isinstance(scene, Scene) else list(scene)
+    target_list = [targets] if np.ndim(targets) == 3 else list(targets)
+    if len(scenes) == 1 and len(target_list) > 1:
+        scenes = scenes * len(target_list)
+    if len(scenes) != len(target_list):
+        raise FitError(f"{len(scenes)} scenes for {len(target_list)} targets")
+    mask_list = [None] * len(scenes) if masks is None else list(masks)
+    weight_list = [None] * len(scenes) if weights is None else list(weights)
+    if any(s.patches is not None for s in scenes):  # docs/model.md §18: not wired into the fit
+        raise FitError("fit does not support hair-patch scenes (hair.geometry = 'patches')")
+    model = _model_of(scenes)
+    names = check_names(model.fittable if fit is None else fit, scalar, model)
+    scalar = tuple(scalar)
+    double = jnp.result_type(float) == jnp.float64
+    rtol = (1e-8 if double else 1e-5) if rtol is None else rtol
+    atol = (1e-10 if double else 1e-7) if atol is None else atol
+    opt, least_squares = make_solver(solver, rtol, atol)
+    init = scenes[0].params if init is None else init
+    arrays = [target_arrays(s, t, m, w) for s, t, m, w in zip(scenes, target_list, mask_list, weight_list)]
+    if not isinstance(init, model.params_type):
+        raise FitError(f"a {model.label} scene is fitted from {model.params_type.__name__}, "
+                       f"got {type(init).__name__}")
+
+    start = time.perf_counter()
+    data = [model.prepare(s, init, names, t, sw) for s, (t, sw) in zip(scenes, arrays)]
+    jax.block_until_ready(data)
+    geometry_s = time.perf_counter() - start
+
+    # The solver iterates on z over `solved`; the fitted gains in `linear` are solved for.
+    linear = tuple(n for n in model.linear if separable and n in names)
+    solved = tuple(n for n in names if n not in linear)
+    problem = Problem(data, init, model, solved, linear, scalar)
+    z = to_flat(init, solved, scalar, model.transforms)
+    fn = residual_fn if least_squares else loss_fn
+    # loss[0] is the loss at `init` itself, its gains included (not at the solved gains).
+    losses = [float(params_loss(init, model, data))]
+
+    def report(step, loss):
+        if progress is not None:
+            progress(step, loss, time.perf_counter() - start - geometry_s)
+
+    if not solved:
+        # Only gains are fitted: one linear least-squares solve is the whole fit.
+        steps, termination, restarts, diverged = 1, "converged", 0, False
+        losses.append(float(half_square(residuals, z, problem)))
+        report(steps, losses[-1])
+    else:
+        z, steps, termination, restarts, diverged = solve(
+            opt, fn, residuals, z, problem, losses, max_steps=max_steps, rtol=rtol, atol=atol,
+            report=report, plateau=lambda z, effect, loss: plateau_exit(
+                residuals, z, problem, effect, loss, rtol, atol))
+    fitted = jit_point(z, problem)[0]
+    elapsed = time.perf_counter() - start - geometry_s
+
+    std_error, undetermined = standard_errors(model, data, fitted, names, scalar)
+    n_pixels = float(sum(np.count_nonzero(np.asarray(d.sqrt_weight)) for d in data)) * 3
+    # At the returned point (a diverged fit's last loss is not).
+    final_loss = float(half_square(residuals, z, problem)) if diverged else losses[-1]
+    rmse = float(np.sqrt(2 * final_loss / max(n_pixels, 1.0)))
+    return FitResult(params=fitted, initial=init, fitted=names, loss=losses, steps=steps,
+                     time_s=elapsed, geometry_s=geometry_s, termination=termination,
+                     std_error=std_error, undetermined=undetermined, rmse=rmse, restarts=restarts)
+
+
+def _model_of(scenes) -> FitModel:
+    """The fit of the scenes' shading model (`fit_model`); FitError where they differ."""
+    classes = list(dict.fromkeys(type(s.shading) for s in scenes))
+    if len(classes) > 1:
+        raise FitError("scenes of one fit share a shading model; got "
+                       + " and ".join(c.name for c in classes))
+    return fit_model(classes[0])

@@ -1,0 +1,240 @@
+"""A fit of any shading model, from the model's own terms (docs/fitting.md, docs/model.md
+§6, §8, §13): the `FitModel` of a registered `AbstractShadingModel`.
+
+The model splits its colour by gain (`reflectance`: ambient and lit terms, each linear in
+one RGB gain), so a target's image is
+
+    image = Σ_g g ⊙ K_g + T·backdrop + T·O(κ),
+    K_g = composite(streak · A_g)               (ambient terms)
+    K_g = composite(streak · light · τ · V · L_g)  (lit terms, τ = exp(−κΩ), §7, §13)
+
+with O(κ) the occluder's colour (§13, `occluder_colors`). The gains are solved for by
+variable projection (`_varpro.py`) and the solver iterates on the model's `searched`
+parameters. The geometry stage runs once per target; a gain image that no fitted
+parameter reaches (`_dependence.py` reads that off the model's jaxpr) is composited once;
+the others, and their derivatives in the fitted parameters, in one composite pass per step.
+Nothing here is specific to one model: the model is never transcribed a second time.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .._composite import composite
+from .._geometry._stage import geometry_stage
+from .._shading import AbstractShadingModel, occluder_colors, transmittance
+from .._shading._stage import shading_points
+from ._dependence import dependence
+from ._model import FitModel, Plateau
+from ._problem import visible_fragments
+from ._space import SOFTPLUS, with_values
+
+__all__ = ["fit_model", "TargetTerms", "prepare_terms", "gain_images", "gain_images_plain",
+           "target_image", "fixed_image", "SHININESS_SCAN"]
+
+# Where `fit` looks for a lower loss when it stops on a model's plateau (a gain solved to 0,
+# its exponent without effect): the exponent on a log grid over the range we support,
+# 1.5× apart.
+SHININESS_SCAN = tuple(float(p) for p in np.geomspace(0.5, 1e4, 25))
+
+
+class TargetTerms(eqx.Module):
+    """Per target, everything a step needs that no fitted parameter reaches (`prepare_terms`).
+
+    `geometry`: the geometry stage with the visible fragments only (`visible_fragments`);
+    `ambient_scale`, `light`: what the ambient and the lit terms are multiplied by besides
+    τ (the streak factor, §16; and the light's colour); `fixed`: the gain images no fitted
+    parameter reaches, at the start's values; `bases`: the per-point terms (A_g or L_g) of
+    varying gains that only κ reaches, computed once; `constant`: T·backdrop; `varying`
+    (static): the gains whose image is recomputed per step; `searched` (static): the
+    fitted searched parameters the custom derivative rule differentiates in."""
+
+    geometry: Any
+    ambient_scale: jax.Array
+    light: jax.Array
+    fixed: dict
+    bases: dict
+    constant: jax.Array
+    target: jax.Array
+    sqrt_weight: jax.Array
+    varying: tuple[str, ...] = eqx.field(static=True)
+    searched: tuple[str, ...] = eqx.field(static=True)
+    lit: tuple[str, ...] = eqx.field(static=True, default=())  # the gains of lit terms
+
+
+def _columns(terms: TargetTerms, params, gains, reflectance=None) -> jax.Array:
+    """The per-point colours of `gains`' images before compositing, `[P, 3·len(gains)]`:
+    streak·A_g for an ambient term, streak·light·τ·V·L_g for a lit one. `reflectance`:
+    the model's terms at `params`, if known."""
+    g = terms.geometry
+    if reflectance is None and all(n in terms.bases for n in gains):
+        # Only κ moves them: the terms are known.
+        lit = {n: b for n, b in terms.bases.items() if n in terms.lit}
+        ambient = {n: b for n, b in terms.bases.items() if n not in lit}
+    else:
+        if reflectance is None:
+            reflectance = g.shading.reflectance(shading_points(g), params)
+        ambient, lit = reflectance.ambient, reflectance.lit
+    lit_scale = terms.light
+    if g.omega is not None:
+        lit_scale = lit_scale * transmittance(params.kappa, g.omega)[:, None]
+    if g.light_visibility is not None:
+        lit_scale = lit_scale * g.light_visibility[:, None]
+    columns = [ambient[n] * terms.ambient_scale if n in ambient else lit[n] * lit_scale
+               for n in gains]
+    return jnp.concatenate(columns, axis=1)
+
+
+def gain_images_plain(terms: TargetTerms, params, reflectance=None) -> dict:
+    """{gain: its image K_g `[HW, 3]`} at `params` (the fixed ones pass through)."""
+    images = dict(terms.fixed)
+    if terms.varying:
+        stacked = composite(terms.geometry, _columns(terms, params, terms.varying, reflectance))
+        images.update(zip(terms.varying, jnp.split(stacked, len(terms.varying), axis=1)))
+    return images
+
+
+def _searched_values(terms: TargetTerms, params) -> jax.Array:
+    return jnp.stack([jnp.reshape(getattr(params, n), ()) for n in terms.searched]) \
+        if terms.searched else jnp.zeros(0, dtype=jnp.result_type(float))
+
+
+@jax.custom_jvp
+def _gain_images(terms: TargetTerms, params, values) -> dict:
+    return gain_images_plain(terms, with_values(params, dict(zip(terms.searched, values)), ()))
+
+
+@_gain_images.defjvp
+def _gain_images_jvp(primals, tangents):
+    """The images and their derivatives in the fitted searched parameters from one
+    composite pass over all the channels. The per-point derivatives come from forward-mode
+    autodiff of the model's own terms; the tangent output is a per-pixel linear combination,
+    so a Jacobian (vmap over tangent directions) batches only that, not the composites.
+    `terms` and `params` are data (the gains do not enter an image): their tangents are
+    ignored; the searched parameters enter through `values`."""
+    terms, params, values = primals
+    _, _, d_values = tangents
+    images = dict(terms.fixed)
+    d_images = {n: jnp.zeros_like(v) for n, v in terms.fixed.items()}
+    if terms.varying:
+        def columns(v):
+            return _columns(terms, with_values(params, dict(zip(terms.searched, v)), ()), terms.varying)
+
+        parts = [columns(values)]
+        if terms.searched:  # ∂(columns)/∂(each fitted searched parameter), per point
+            jac = jax.jacfwd(columns)(values)
+            parts += [jac[..., i] for i in range(len(terms.searched))]
+        blocks = jnp.split(composite(terms.geometry, jnp.concatenate(parts, axis=1)), len(parts), axis=1)
+        derivative = jnp.zeros_like(blocks[0])
+        for i, block in enumerate(blocks[1:]):
+            derivative = derivative + block * d_values[i]
+        k = len(terms.varying)
+        images.update(zip(terms.varying, jnp.split(blocks[0], k, axis=1)))
+        d_images.update(zip(terms.varying, jnp.split(derivative, k, axis=1)))
+    return images, d_images
+
+
+def gain_images(terms: TargetTerms, params) -> dict:
+    """`gain_images_plain` with the one-pass derivative rule (what a fit step calls)."""
+    return _gain_images(terms, params, _searched_values(terms, params))
+
+
+def fixed_image(terms: TargetTerms, params) -> jax.Array:
+    """T·backdrop + T·(the occluder's colour at the held ambient and κ, `occluder_colors`):
+    the image without the gains' terms."""
+    g = terms.geometry
+    if g.occluder_pixel is None:
+        return terms.constant
+    occluder = occluder_colors(g, params)
+    return terms.constant.at[g.occluder_pixel].add(g.transmittance[g.occluder_pixel][:, None] * occluder)
+
+
+def _image_of(model_gains, terms: TargetTerms, params, images) -> jax.Array:
+    out = fixed_image(terms, params)
+    for n in model_gains:
+        out = out + getattr(params, n)[None, :] * images[n]
+    return out
+
+
+def prepare_terms(gains: tuple[str, ...], scene, params, names, target, sqrt_weight) -> TargetTerms:
+    """One target's terms: the geometry stage, its visible fragments, and the images of the
+    gains no fitted parameter reaches, at `params` — composited with every fragment, as
+    the rest of the fixed image; `target` `[HW, 3]` and `sqrt_weight` `[HW, 1]` as
+    `target_arrays` gives them."""
+    full = geometry_stage(scene)
+    geom = visible_fragments(full)
+    model: AbstractShadingModel = geom.shading
+    searched = tuple(n for n in model.searched if n in names)
+    # §16: the streak factor scales a point's whole colour: it rides on both scales.
+    streak = jnp.ones((geom.tangent.shape[0], 1), geom.tangent.dtype) if geom.streak is None \
+        else geom.streak[:, None]
+    light = geom.light_rgb[None, :] * streak
+    points = shading_points(geom)
+    by_searched, lit = _reaches(model, points, params, searched)
+    shadowed = "kappa" in searched and geom.omega is not None  # τ moves every lit term
+    varying = tuple(n for n in gains if by_searched[n] or (shadowed and n in lit))
+    fixed_terms = TargetTerms(full, streak, light, {}, {}, jnp.zeros(()), jnp.asarray(target),
+                              jnp.asarray(sqrt_weight), tuple(n for n in gains if n not in varying), (),
+                              lit)
+    reflectance = model.reflectance(points, params)  # at the start: the fixed terms' values
+    fixed = gain_images_plain(fixed_terms, params, reflectance) if fixed_terms.varying else {}
+    bases = {}
+    if varying and not any(by_searched[n] for n in varying):
+        bases = {n: {**reflectance.ambient, **reflectance.lit}[n] for n in varying}
+    constant = full.transmittance[:, None] * full.backdrop
+    return TargetTerms(geom, streak, light, fixed, bases, constant, jnp.asarray(target),
+                       jnp.asarray(sqrt_weight), varying, searched, lit)
+
+
+def _reaches(model: AbstractShadingModel, points, params, searched):
+    """({gain: whether a fitted searched parameter other than κ reaches its term}, the lit
+    gains), by `dependence` on the model's `reflectance` (κ enters through τ alone)."""
+    names = [n for n in searched if n != "kappa"]
+
+    def terms_of(*values):
+        r = model.reflectance(points, with_values(params, dict(zip(names, values)), ()))
+        return r.ambient, r.lit
+
+    values = [jnp.reshape(getattr(params, n), ()) for n in names]
+    ambient, lit = dependence(terms_of, *values)
+    by_searched = {n: bool(d) for n, d in {**ambient, **lit}.items()}
+    return by_searched, tuple(lit)
+
+
+@functools.cache
+def fit_model(cls: type[AbstractShadingModel]) -> FitModel:
+    """The fit of shading model class `cls` (one per class: a static part of the compiled
+    steps). Its gains are solved for (`linear`), its `searched` parameters iterated on."""
+    gains = tuple(n for n in cls.fittable if n not in cls.searched)
+    all_gains = gains + (() if "ambient" in gains else ("ambient",))
+    transforms = {**{n: SOFTPLUS for n in gains}, **dict(cls.searched)}
+    plateau = None
+    if cls.plateau is not None:
+        gain, exponent = cls.plateau
+        plateau = Plateau(gain=gain, exponent=exponent, scan=tuple(np.log(p) for p in SHININESS_SCAN))
+
+    def image(terms, params):
+        return _image_of(all_gains, terms, params, gain_images(terms, params))
+
+    def images(terms, params):
+        found = gain_images(terms, params)
+        return fixed_image(terms, params), tuple((n, found[n]) for n in all_gains)
+
+    return FitModel(label=cls.name, model_class=cls, params_type=cls.params_type,
+                    fittable=cls.fittable, colours=all_gains, transforms=transforms,
+                    prepare=functools.partial(prepare_terms, all_gains), image=image,
+                    linear=gains, gain_images=images, plateau=plateau)
+
+
+def target_image(terms: TargetTerms, params, plain: bool = False) -> jax.Array:
+    """The target's RGB image `[HW, 3]` at `params` (with `plain`, through plain autodiff
+    instead of the one-pass derivative rule; the tests compare the two)."""
+    images = gain_images_plain(terms, params) if plain else gain_images(terms, params)
+    names = tuple(images)
+    return _image_of(names, terms, params, images)
