@@ -5,7 +5,7 @@ loop, frame k of N at t = k/N, so the loop closes), offset by `hair.translate`. 
 are grown every frame with wenzel-2002's joint rule, d ← normalise(d + gravity + inertia),
 where the inertia vector comes from the second derivative of the motion: in the ball's
 accelerating frame a hair feels −m·p'', so inertia = −k·p''(t) and hairs bend away from
-the acceleration (the seed says only "the 2nd derivative"; the sign is d'Alembert's).
+the acceleration (wenzel-2002 says only "the 2nd derivative"; the sign is d'Alembert's).
 The ball translates without turning, so every hair end has the ball's acceleration.
 """
 

@@ -40,7 +40,7 @@ FIT_TRANSMITTANCE_CUTOFF = 1e-5
 OCCLUDER_SHADOW_BIAS = 3.0
 
 # Scheuermann (scheuermann-2004 slide 12, docs/model.md §17): the diffuse term is
-# saturate(lerp(SCHEUERMANN_DIFFUSE_FLOOR, 1, N·L)): the seed's 0.25 shifts the terminator
+# saturate(lerp(SCHEUERMANN_DIFFUSE_FLOOR, 1, N·L)): scheuermann-2004's 0.25 shifts the terminator
 # past N·L = 0 "for a softer look" (light reaches N·L > −1/3).
 SCHEUERMANN_DIFFUSE_FLOOR = 0.25
 

@@ -1,4 +1,4 @@
-"""Kajiya-Kay hair shading, the seed's cone (kim-2003 §5 and its Cg listing, Fig. 19;
+"""Kajiya-Kay hair shading with kim-2003's cone (kim-2003 §5 and its Cg listing, Fig. 19;
 docs/model.md §8).
 
 Pure functions written for one point; batch them with `jax.vmap` (the model does). The
@@ -120,7 +120,7 @@ def kajiya_kay(
     """Unshadowed Kajiya-Kay terms at one point.
 
     **Arguments:** unit `tangent` T, unit `to_light` L and `to_eye` V (from the point),
-    `params`, `cone` (`seed_cone`: the seed's retro-reflection cone; `mirror_cone`: the
+    `params`, `cone` (`seed_cone`: kim-2003's retro-reflection cone; `mirror_cone`: the
     mirror cone, hairjax/_shading/_mirror.py).
 
     **Returns:** `(diffuse, specular)`, each RGB: Kd·sin(T, L) and Ks·max(b, 0)^p with

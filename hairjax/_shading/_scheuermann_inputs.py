@@ -62,7 +62,7 @@ class ScheuermannMaps:
       centre of the roots' bounding box).
     - `texture_seed`: the seed of the shift texture and the noise mask.
     - `shift_noise`: the shift texture's amplitude a: σ = a·(U − ½) per strand, U ~ U[0, 1)
-      (a = 1 is the seed's tex − 0.5 for a texture spanning [0, 1]).
+      (a = 1 is scheuermann-2004's tex − 0.5 for a texture spanning [0, 1]).
     - `mask_noise`: the noise mask's depth b: m = 1 − b·U per point (0: no mask).
     - `base_texture`, `alpha_texture`, `occlusion`: 1-D textures over the position
       u ∈ [0, 1] along the strand (root 0, tip 1), equally spaced samples, linearly

@@ -1,13 +1,13 @@
 """Streaks along the hair: wenzel-2002's 1-D noise texture (docs/model.md §16).
 
 Each hair i has a texture coordinate u_i; across its ribbon the coordinate runs from u_i
-to u_i + Δ (the seed's "arbitrary value which is constant for all hairs": the bigger Δ,
+to u_i + Δ (wenzel-2002's "arbitrary value which is constant for all hairs": the bigger Δ,
 the thinner the streaks) and it is constant along the hair, so the streaks run along it.
 A ribbon here is about a pixel wide and a pixel's box filter covers its whole width (§5),
 so a hair's streak factor is the texture's mean over [u_i, u_i + Δ], computed exactly
-from the texture's running integral. It multiplies the point's whole colour (the seed's
+from the texture's running integral. It multiplies the point's whole colour (wenzel-2002's
 "diffuse colour = diffuse intensity · diffuse hair colour · streak colour", and the same
-for the specular and, where the seed folds it into the intensities, the ambient term).
+for the specular and, where wenzel-2002 folds it into the intensities, the ambient term).
 """
 
 from __future__ import annotations

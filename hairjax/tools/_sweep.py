@@ -149,6 +149,8 @@ def _errors(image: np.ndarray, omega, reference: dict, kappa: float) -> dict:
     out = {"rmse": stats["rmse"], "max_abs": stats["max_abs"],
            "rel_rmse": stats["rmse"] / reference["peak"], "tau_rmse": None, "tau_max": None}
     if omega is not None and reference["omega"] is not None:
+        # τ = exp(−κΩ) (`transmittance`, §7) in float64 NumPy: the error measure stays
+        # outside JAX's working precision.
         dtau = np.exp(-kappa * np.asarray(omega, np.float64)) - np.exp(-kappa * reference["omega"])
         out["tau_rmse"] = float(np.sqrt(np.mean(dtau**2)))
         out["tau_max"] = float(np.abs(dtau).max())

@@ -16,7 +16,7 @@ def segment_depth(depth: np.ndarray, segments: np.ndarray) -> np.ndarray:
 def bin_index(depth: np.ndarray, bins: int) -> np.ndarray:
     """kim-2003 §3: i = ⌊N (D − Dmin) / (Dmax − Dmin + ε)⌋ with ε = (Dmax − Dmin) / (2N).
 
-    ε < (Dmax − Dmin)/N as the seed requires, and large enough that D = Dmax lands in bin
+    ε < (Dmax − Dmin)/N as kim-2003 requires, and large enough that D = Dmax lands in bin
     N − 1 (N·range/(range(1 + 1/2N)) < N). Returns `int64` in [0, N).
     """
     depth = np.asarray(depth, dtype=np.float64)
