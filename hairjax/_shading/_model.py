@@ -23,7 +23,7 @@ line (docs/architecture.md shows a toy model).
 from __future__ import annotations
 
 import abc
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import equinox as eqx
@@ -32,6 +32,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from .._errors import SceneError
+from ._transforms import Transform
 
 if TYPE_CHECKING:  # types only: the scene reader imports the registry, not the reverse
     from .._scene._file import Table
@@ -81,8 +82,6 @@ class Reflectance(eqx.Module):
     lit: dict[str, Float[Array, "P 3"]]
 
 
-# (forward, inverse): from the fit's unconstrained search variable z to the parameter.
-Transform = tuple[Callable, Callable]
 
 
 def check_params(params: eqx.Module, *, colors: tuple[str, ...] = (),

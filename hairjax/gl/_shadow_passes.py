@@ -1,5 +1,5 @@
 """The GL side of the shadow methods: each method's pass, registered under the method's
-name (`AbstractShadowMethod.method`, hairjax/_shadows/), so that a new method is one GL
+name (`AbstractShadowMethod.method`, hairjax/_geometry/_shadows/), so that a new method is one GL
 module with `@register_gl_shadow_pass(name)` beside its JAX module.
 
 A pass is `fn(ctx, progs, scene, strands, frame, points, *, clip_slices) -> Ω` with Ω per
