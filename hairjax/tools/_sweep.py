@@ -61,10 +61,11 @@ class SweepError(ValueError):
 
 def knob_scene(scene: Scene, knob: str, value) -> tuple[Scene, int]:
     """The scene with one knob set, and the supersampling factor to render it with."""
-    if knob == "maps":
-        return scene.replace(shadows=dataclasses.replace(scene.shadows, maps=int(value))), 1
-    if knob == "map_resolution":
-        return scene.replace(shadows=dataclasses.replace(scene.shadows, resolution=int(value))), 1
+    if knob in ("maps", "map_resolution"):
+        # Through the registry: a method without the option is a SceneError naming it.
+        key = "resolution" if knob == "map_resolution" else knob
+        options = {**dataclasses.asdict(scene.shadows), key: int(value)}
+        return scene.replace(shadows=Shadows(scene.shadows.method, **options)), 1
     if knob == "bins":
         ordering = Ordering("exact") if value == "exact" else Ordering("bins", bins=int(value))
         return scene.replace(ordering=ordering), 1
@@ -122,7 +123,7 @@ def _renderer(path: str) -> Callable[[Scene], tuple[np.ndarray, np.ndarray | Non
 def _measure(run, scene: Scene, s: int, repeats: int):
     """(image, Ω, median seconds, all seconds): one untimed warm-up (compilation, shader
     builds), then `repeats` timed renders (none: the median is NaN)."""
-    omega = {}
+    omega: dict[str, np.ndarray | None] = {}
 
     def image_of(sc):
         image, om = run(sc)
