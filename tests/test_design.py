@@ -646,7 +646,6 @@ def test_no_issue_numbers():
     assert not offenders, _message("issue numbers cited in hairjax/", offenders)
 
 
-@pytest.mark.xfail(strict=True, reason="tooling is being wired")
 def test_tooling_wired():
     offenders = tooling(REPO)
     assert not offenders, _message("tooling not wired", offenders)
