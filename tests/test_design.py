@@ -60,8 +60,6 @@ import tomllib
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
-import pytest
-
 REPO = Path(__file__).resolve().parents[1]
 PACKAGE = "hairjax"
 
