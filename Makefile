@@ -38,7 +38,12 @@ $(STAMP): pyproject.toml | $(BIN)/python system-packages
 run: $(STAMP)
 	$(BIN)/hairjax render -o out/default.exr --png out/default.png --profile
 
+# Each tool on its own line, so a failure names it; all before the (long) test run.
+# Notebooks too: ruff reads their code cells.
 test: $(STAMP)
+	$(BIN)/python -m ruff check hairjax tests experiments notebooks
+	$(BIN)/python -m ruff format --check hairjax tests experiments notebooks
+	$(BIN)/python -m mypy
 	$(BIN)/python -m pytest -q
 
 bench: $(STAMP)

@@ -31,7 +31,7 @@ def _vec3(name: str, value) -> tuple[float, float, float]:
     arr = np.asarray(value, dtype=np.float64)
     if arr.shape != (3,) or not np.all(np.isfinite(arr)):
         raise SceneError(f"{name} must be 3 finite numbers, got {value!r}")
-    return tuple(float(x) for x in arr)
+    return float(arr[0]), float(arr[1]), float(arr[2])
 
 
 @dataclasses.dataclass(frozen=True)

@@ -31,8 +31,8 @@ def render(scene: Scene, params=None,
            alpha: Float[Array, " S"] | None = None, *, order=None) -> Float[Array, "H W 4"]:
     """Render `scene` to linear RGBA `[H, W, 4]`.
 
-    Differentiable in `params` (the shading model's parameters, default `scene.params`) and in the per-strand `alpha`
-    (default the scene's); jit-able with the scene closed over:
+    Differentiable in `params` (the shading model's parameters, default `scene.params`) and
+    in the per-strand `alpha` (default the scene's); jit-able with the scene closed over:
     `jax.jit(lambda p: render(scene, p))` (the geometry then enters the compiled function
     as constants; for repeated calls, `shading_stage(geometry_stage(scene), p)` passes it
     as arguments instead). With the default `alpha`, both earlier stages are cached per

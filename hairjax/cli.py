@@ -35,7 +35,7 @@ def _render(args) -> int:
         for key in timings:
             print(f"{key:<{width}}  {timings[key]:8.3f} s  {warm[key]:8.3f} s")
     else:
-        image = render(scene)
+        image = np.asarray(render(scene))
     image = np.asarray(image)
     if not np.all(np.isfinite(image)):
         print("hairjax: warning: the image has non-finite pixels", file=sys.stderr)
@@ -256,7 +256,7 @@ def _enable_compilation_cache() -> None:
     import jax
 
     folder = os.environ.get("HAIRJAX_CACHE_DIR", str(Path.home() / ".cache" / "hairjax" / "xla"))
-    if not folder or jax.config.jax_compilation_cache_dir:
+    if not folder or jax.config.jax_compilation_cache_dir:  # type: ignore[attr-defined]  # options are set at run time
         return  # off, or the user configured a cache already
     jax.config.update("jax_compilation_cache_dir", folder)
     jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.2)

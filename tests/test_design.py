@@ -60,8 +60,6 @@ import tomllib
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
-import pytest
-
 REPO = Path(__file__).resolve().parents[1]
 PACKAGE = "hairjax"
 
@@ -646,7 +644,6 @@ def test_no_issue_numbers():
     assert not offenders, _message("issue numbers cited in hairjax/", offenders)
 
 
-@pytest.mark.xfail(strict=True, reason="tooling is being wired")
 def test_tooling_wired():
     offenders = tooling(REPO)
     assert not offenders, _message("tooling not wired", offenders)

@@ -16,8 +16,8 @@ def exact_terms(shadows, frame, frags, near_end, opacity, r):
     # point light were measured 5 ulps off (point_light.toml, exact, 128²).
     dz = 16 * float(np.spacing(np.float32(np.abs(z[frame.seen]).max(initial=0.0))))
     # One key per (texel, depth): the texel plus the depth mapped into [0, ½].
-    key = lambda texel, depth: texel + 0.5 * np.clip(  # noqa: E731
-        (depth - frame.zmin + 2 * dz) / (frame.span + 4 * dz), 0.0, 1.0)
+    def key(texel, depth):
+        return texel + 0.5 * np.clip((depth - frame.zmin + 2 * dz) / (frame.span + 4 * dz), 0.0, 1.0)
     ends = WindowSums(key, frags.pixel[near_end], frags.depth[near_end], opacity[near_end], r)
     every = WindowSums(key, frags.pixel, frags.depth, opacity, r)
 

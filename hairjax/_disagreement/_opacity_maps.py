@@ -18,7 +18,8 @@ def opacity_map_terms(shadows, frame, frags, near_end, opacity, r):
     u_point = frame.slice_coordinate(z, n)
     plane = np.clip(np.floor(u_point), 0, n - 1)  # the point's slice i, f its weight
     f = np.clip(u_point - plane, 0.0, 1.0)
-    key = lambda texel, level: texel * (n + 2) + level  # noqa: E731  (levels 0 … N + 1)
+    def key(texel, level):  # levels 0 … N + 1
+        return texel * (n + 2) + level
     # A fragment in slice j adds to planes j + 1 … N: to a point in slice i fully for
     # j < i, with weight f for j = i. Near an end: slice j, or j − 1 if also near a plane.
     ends = WindowSums(key, frags.pixel[near_end], np.clip(np.floor(u[near_end] - SLICE_DELTA), 0, n),

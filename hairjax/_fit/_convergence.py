@@ -157,7 +157,7 @@ def solve(opt, fn, residuals: Callable, z, problem, losses: list, *, max_steps: 
         termination = (f"stopped: the solver's tolerance test passed {restarts + 1} times where "
                        "Gauss-Newton still predicts a decrease beyond the tolerances")
     elif bool(done):
-        termination = f"stopped: {optx.RESULTS[result]}"
+        termination = f"stopped: {optx.RESULTS[result]}"  # type: ignore[misc]  # equinox's enumeration: indexable at run time
     else:
         termination = f"stopped: reached max_steps = {max_steps}"
     return z, steps, termination, restarts, diverged

@@ -17,6 +17,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._scene._scene import Scene
+from .._shading import AbstractShadingModel
 from ._convergence import half_square, plateau_exit, solve
 from ._model import FitModel
 from ._problem import (
@@ -145,8 +146,8 @@ def fit(
 
 def _model_of(scenes) -> FitModel:
     """The fit of the scenes' shading model (`fit_model`); FitError where they differ."""
-    classes = list(dict.fromkeys(type(s.shading) for s in scenes))
+    classes: list[type[AbstractShadingModel]] = list(dict.fromkeys(type(s.shading) for s in scenes))
     if len(classes) > 1:
         raise FitError("scenes of one fit share a shading model; got "
                        + " and ".join(c.name for c in classes))
-    return fit_model(classes[0])
+    return fit_model(classes[0])  # a class: hashable, cached by identity

@@ -3,12 +3,10 @@
 from __future__ import annotations
 
 import dataclasses
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from .._shading import ScheuermannParams, ShadingParams
 
 __all__ = ["FitResult", "FitError"]
 
@@ -31,8 +29,8 @@ class FitResult:
     `rmse` over the fitted pixels; `geometry_s`: time of the geometry stages.
     """
 
-    params: ShadingParams | ScheuermannParams
-    initial: ShadingParams | ScheuermannParams
+    params: Any  # the shading model's parameters (its `params_type`)
+    initial: Any
     fitted: tuple[str, ...]
     loss: list
     steps: int

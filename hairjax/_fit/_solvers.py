@@ -62,7 +62,7 @@ def damped_gauss_newton(rtol: float, atol: float, linear_solver):
     class _GaussNewton(optx.AbstractGaussNewton):
         rtol: float
         atol: float
-        descent: optx.AbstractDescent
+        descent: optx.AbstractDescent = optx.NewtonDescent()  # replaced: the SVD solve below
         norm: Callable = optx.max_norm
         search: optx.AbstractSearch = optx.BacktrackingArmijo()
         verbose: Callable = _quiet

@@ -62,7 +62,9 @@ def standard_errors(model: FitModel, data, fitted, names, scalar):
         return {name: None for name in names}, tuple(names)
     var_u, in_null = cov
     u = unflatten(flat, names, model.colours, scalar)
-    std, undetermined, i = {}, [], 0
+    std: dict[str, np.ndarray | float | None] = {}
+    undetermined: list[str] = []
+    i = 0
     for name in names:
         size = int(np.size(u[name]))
         sl, i = slice(i, i + size), i + size

@@ -108,21 +108,21 @@ def light_view(light, points: np.ndarray, resolution: int, margin: int) -> View:
         forward /= np.linalg.norm(forward)
         right, up = _basis(forward, np.array([0.0, 1.0, 0.0]))
         rel = points - centre
-        extent = 2 * max(np.abs(rel @ right).max(), np.abs(rel @ up).max())
+        extent = 2 * max(float(np.abs(rel @ right).max()), float(np.abs(rel @ up).max()))
         # Fires when all points coincide seen from the light: any scale frames one point.
         focal = usable / extent if extent > 0 else 1.0
         return View(centre, forward, right, up, resolution, resolution, float(focal),
                     resolution / 2, resolution / 2, False, -np.inf)
     origin = np.asarray(light.position, dtype=np.float64)
     axis = centre - origin
-    scale = np.linalg.norm(hi - lo) + np.linalg.norm(axis)
+    scale = float(np.linalg.norm(hi - lo) + np.linalg.norm(axis))
     if np.linalg.norm(axis) <= 1e-9 * max(scale, 1e-300):
         # Fires when the light sits at the centre of the hair: look down −y by convention.
         axis = np.array([0.0, -1.0, 0.0])
     forward = axis / np.linalg.norm(axis)
     right, up = _basis(forward, np.array([0.0, 1.0, 0.0]))
     # The max fires with the light at the hair's centre (the fallback above): near ≈ 1e-303.
-    near = NEAR_FRACTION * max(np.linalg.norm(centre - origin), 1e-300)
+    near = NEAR_FRACTION * max(float(np.linalg.norm(centre - origin)), 1e-300)
     rel = points - origin
     depth = rel @ forward
     front = depth > near

@@ -75,6 +75,10 @@ def hair_info(strands: Strands) -> dict:
     `optional`: sorted names of the optional arrays present ("color" and the attributes).
     """
     points = strands.points
+    bbox_min: list[float] | None
+    bbox_max: list[float] | None
+    seg_min: float | None
+    seg_max: float | None
     if len(points):
         bbox_min = [float(v) for v in points.min(axis=0)]
         bbox_max = [float(v) for v in points.max(axis=0)]

@@ -50,7 +50,7 @@ def parse_obj(text: str, path) -> tuple[np.ndarray, np.ndarray]:
                 raise MeshFormatError(path, number, f"'v' needs 3 coordinates (and an optional w), "
                                       f"got {len(words) - 1}: {raw.strip()!r}")
             try:
-                xyz = tuple(float(w) for w in words[1:4])
+                xyz = (float(words[1]), float(words[2]), float(words[3]))
             except ValueError:
                 raise MeshFormatError(path, number, f"'v' coordinates must be numbers: "
                                       f"{raw.strip()!r}") from None

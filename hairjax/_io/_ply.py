@@ -90,7 +90,7 @@ def _parse_header(data: bytes, fail):
         fail("the header contains non-ASCII bytes")
 
     fmt = None
-    elements = []
+    elements: list[tuple[str, int, list[tuple[str, np.dtype]]]] = []
     for number, line in enumerate(lines, start=2):
         words = line.split()
         if not words or words[0] in ("comment", "obj_info"):

@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
 
 import numpy as np
 
 from .._constants import NEAR_FRACTION
 from .._errors import SceneError
-from ._light import vec3
+from ._light import Vec3Like, vec3
 
 __all__ = ["Camera"]
 
@@ -25,14 +26,16 @@ class Camera:
     images rendered with a grid of such offsets (`hairjax.supersample`).
     """
 
-    eye: tuple[float, float, float] = (0.0, 0.0, 4.0)
-    target: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    up: tuple[float, float, float] = (0.0, 1.0, 0.0)
-    fov: float = 40.0
+    # Stored as tuples of floats, a float and ints; taken as any sequences or arrays of
+    # ints or floats (`Vec3Like`), checked here (SceneError).
+    eye: Vec3Like = (0.0, 0.0, 4.0)
+    target: Vec3Like = (0.0, 0.0, 0.0)
+    up: Vec3Like = (0.0, 1.0, 0.0)
+    fov: float | int = 40.0
     width: int = 512
     height: int = 512
-    near: float | None = None
-    offset: tuple[float, float] = (0.0, 0.0)
+    near: float | int | None = None
+    offset: Sequence[float | int] | np.ndarray = (0.0, 0.0)
 
     def __post_init__(self):
         eye = vec3("camera.eye", self.eye)

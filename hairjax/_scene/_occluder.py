@@ -9,7 +9,8 @@ from typing import Literal
 import numpy as np
 
 from .._errors import SceneError
-from ._light import rgb, vec3
+from ._light import RGBInput, Vec3Like, rgb, vec3
+from ._strands import ArrayInput
 
 __all__ = ["Occluder", "OCCLUDER_KINDS"]
 
@@ -28,12 +29,14 @@ class Occluder:
     """
 
     kind: Literal["sphere", "mesh"] = "sphere"
-    center: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    radius: float = 1.0
-    color: tuple[float, float, float] = (0.5, 0.5, 0.5)
+    # Stored as tuples of 3 floats, a float and (a mesh) read-only float64 and int32 arrays;
+    # taken as any `Vec3Like`, number and array-likes, checked here (SceneError).
+    center: Vec3Like = (0.0, 0.0, 0.0)
+    radius: float | int = 1.0
+    color: RGBInput = (0.5, 0.5, 0.5)
     path: str | None = None
-    vertices: np.ndarray | None = dataclasses.field(default=None, compare=False, repr=False)
-    triangles: np.ndarray | None = dataclasses.field(default=None, compare=False, repr=False)
+    vertices: ArrayInput | None = dataclasses.field(default=None, compare=False, repr=False)
+    triangles: ArrayInput | None = dataclasses.field(default=None, compare=False, repr=False)
 
     def __post_init__(self):
         if self.kind not in OCCLUDER_KINDS:

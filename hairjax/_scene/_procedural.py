@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Protocol, runtime_checkable
+
 import numpy as np
 
 from ._strands import Strands
@@ -9,7 +11,15 @@ from ._strands import Strands
 __all__ = ["furball", "scalp"]
 
 
-def _unit_vectors(rng: np.random.Generator, n: int) -> np.ndarray:
+@runtime_checkable
+class _NormalSource(Protocol):
+    """What `_unit_vectors` draws from: a `np.random.Generator`, or any object with its
+    `normal(size=...)` (the tests' stub)."""
+
+    def normal(self, *, size: tuple[int, int]) -> np.ndarray: ...
+
+
+def _unit_vectors(rng: _NormalSource, n: int) -> np.ndarray:
     v = rng.normal(size=(n, 3))
     norm = np.linalg.norm(v, axis=1, keepdims=True)
     # Fires with probability ~0 (a normal draw of exactly 0); such a hair points along +y.

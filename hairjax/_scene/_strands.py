@@ -7,11 +7,18 @@ The renderer casts to its working dtype; JAX sees only what the geometry stage d
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
+from jaxtyping import ArrayLike
 
-__all__ = ["Strands", "WIDTH_UNITS", "tangents", "unit_rows"]
+__all__ = ["Strands", "WIDTH_UNITS", "tangents", "unit_rows", "ArrayInput"]
+
+# What `np.asarray` reads: an array (NumPy or JAX), a number, or a (nested) list or tuple.
+# (numpy.typing.ArrayLike means the same, but beartype, the tests' run-time checker, takes
+# neither an int nor a float for the `complex` in it.)
+ArrayInput = ArrayLike | Sequence[Any]
 
 WIDTH_UNITS = ("pixels", "world")
 
@@ -42,11 +49,15 @@ class Strands:
     attributes: Mapping[str, np.ndarray] = dataclasses.field(default_factory=dict)
     width_units: str = "pixels"
 
-    def __post_init__(self):
-        if self.width_units not in WIDTH_UNITS:
-            raise ValueError(f"width_units must be one of {WIDTH_UNITS}, got {self.width_units!r}")
-        points = np.asarray(self.points, dtype=np.float64)
-        offsets = np.asarray(self.offsets, dtype=np.int64)
+    def __init__(self, points: ArrayInput, offsets: ArrayInput, alpha: ArrayInput,
+                 width: ArrayInput, color: ArrayInput | None = None,
+                 attributes: Mapping[str, np.ndarray] | None = None, width_units: str = "pixels"):
+        # Written out (not the dataclass's): it takes array-likes (a number broadcasts to
+        # every strand) and stores the float64/int64 arrays the fields name.
+        if width_units not in WIDTH_UNITS:
+            raise ValueError(f"width_units must be one of {WIDTH_UNITS}, got {width_units!r}")
+        points = np.asarray(points, dtype=np.float64)
+        offsets = np.asarray(offsets, dtype=np.int64)
         if points.ndim != 2 or points.shape[1] != 3:
             raise ValueError(f"points must have shape [P, 3], got {points.shape}")
         if not np.all(np.isfinite(points)):
@@ -56,13 +67,12 @@ class Strands:
         if np.any(np.diff(offsets) < 1):
             raise ValueError("every strand needs at least one point")
         n = offsets.size - 1
-        alpha = np.broadcast_to(np.asarray(self.alpha, dtype=np.float64), (n,)).copy()
-        width = np.broadcast_to(np.asarray(self.width, dtype=np.float64), (n,)).copy()
+        alpha = np.broadcast_to(np.asarray(alpha, dtype=np.float64), (n,)).copy()
+        width = np.broadcast_to(np.asarray(width, dtype=np.float64), (n,)).copy()
         if not np.all((alpha > 0) & (alpha <= 1)):
             raise ValueError("alpha must lie in (0, 1]")
         if not np.all((width > 0) & np.isfinite(width)):
             raise ValueError("width must be positive and finite")
-        color = self.color
         if color is not None:
             color = np.broadcast_to(np.asarray(color, dtype=np.float64), points.shape).copy()
             if not np.all(np.isfinite(color)):
@@ -72,7 +82,8 @@ class Strands:
             if value is not None:
                 value.setflags(write=False)
             object.__setattr__(self, name, value)
-        object.__setattr__(self, "attributes", dict(self.attributes))
+        object.__setattr__(self, "attributes", dict(attributes or {}))
+        object.__setattr__(self, "width_units", width_units)
 
     @classmethod
     def from_list(cls, strands, alpha=1.0, width=1.0, color=None) -> Strands:

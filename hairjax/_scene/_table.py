@@ -10,7 +10,7 @@ models, shadow methods and orderings read their own keys with it (`from_table`).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 from .._errors import SceneError
@@ -47,7 +47,7 @@ class Table:
         return SceneError(f"{self.where}: {self.name}.{key} must be {requirement}, "
                           f"got {describe(value)}")
 
-    def number(self, key: str, *, lo: float | None = None, hi: float | None = None,
+    def number(self, key: str, *, lo: float | int | None = None, hi: float | int | None = None,
                lo_open: bool = False, hi_open: bool = False) -> float | None:
         """A finite number (TOML integer or float, not boolean), optionally in a range."""
         if key not in self.data:
@@ -97,7 +97,8 @@ class Table:
         if not (isinstance(value, list) and len(value) == 3
                 and all(is_number(x) and math.isfinite(x) for x in value)):
             raise self.error(key, "an array of 3 finite numbers", value)
-        return tuple(float(x) for x in value)
+        x, y, z = (float(v) for v in value)
+        return x, y, z
 
     def rgb(self, key: str, *, scalar: bool = False) -> Any:
         """A colour: an array of 3 numbers >= 0 (or, with `scalar`, also one number >= 0,
@@ -126,9 +127,8 @@ class Table:
         value = self.data.get(key)
         if value is None:
             return None
-        rows = value if isinstance(value, list) else None
-        items = [x for row in rows for x in (row if isinstance(row, list) else [None])] \
-            if rgb and rows is not None else rows
+        rows = value if isinstance(value, list) else []
+        items = [x for row in rows for x in (row if isinstance(row, list) else [None])] if rgb else rows
         if not rows or not all(is_number(x) for x in items) \
                 or (rgb and not all(len(row) == 3 for row in rows)):
             raise self.error(key, "a non-empty array of [r, g, b] arrays" if rgb
@@ -144,8 +144,9 @@ class Table:
         for f in dataclasses.fields(cls):
             if f.name in skip or f.name not in self.data:
                 continue
-            reader = {bool: self.boolean, int: self.integer, float: self.number,
-                      str: self.string}.get(type(f.default), self.number)
+            readers: dict[type, Callable[[str], Any]] = {bool: self.boolean, int: self.integer,
+                                                         float: self.number, str: self.string}
+            reader = readers.get(type(f.default), self.number)
             out[f.name] = reader(f.name)
         return out
 
@@ -186,7 +187,7 @@ def is_number(value: Any) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool)
 
 
-def in_range(value: float, lo, hi, lo_open: bool, hi_open: bool) -> bool:
+def in_range(value: float | int, lo, hi, lo_open: bool, hi_open: bool) -> bool:
     if lo is not None and (value <= lo if lo_open else value < lo):
         return False
     if hi is not None and (value >= hi if hi_open else value > hi):

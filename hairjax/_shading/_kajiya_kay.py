@@ -19,7 +19,14 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .._constants import SPECULAR_BASE_EPS
 from .._vectors import safe_norm
-from ._model import AbstractShadingModel, Reflectance, ShadingPoints, check_params, register_shading_model
+from ._model import (
+    AbstractShadingModel,
+    Reflectance,
+    RGBLike,
+    ShadingPoints,
+    check_params,
+    register_shading_model,
+)
 from ._transforms import LOG
 
 __all__ = ["ShadingParams", "KajiyaKay", "Cone", "seed_cone", "kajiya_kay", "kajiya_kay_terms",
@@ -46,8 +53,8 @@ class ShadingParams(eqx.Module):
     kappa: Float[Array, ""]
     ambient: Float[Array, 3]
 
-    def __init__(self, kd: ArrayLike = 0.6, ks: ArrayLike = 0.3, shininess: ArrayLike = 40.0,
-                 kappa: ArrayLike = 1.0, ambient: ArrayLike = 0.0):
+    def __init__(self, kd: RGBLike = 0.6, ks: RGBLike = 0.3, shininess: ArrayLike = 40.0,
+                 kappa: ArrayLike = 1.0, ambient: RGBLike = 0.0):
         self.kd = _rgb(kd)
         self.ks = _rgb(ks)
         self.shininess = jnp.asarray(shininess, dtype=jnp.result_type(float))
@@ -59,12 +66,13 @@ class ShadingParams(eqx.Module):
                      non_negative=("kappa",))
 
 
-def specular_power(gap: Float[Array, ""], p: Float[Array, ""]) -> Float[Array, ""]:
-    """max(b, 0)^p for the base b = 1 − `gap`, with `gap` = 1 − b as `kajiya_kay_terms`
+def specular_power(gap: Float[ArrayLike, "*shape"], p: Float[ArrayLike, ""]) -> Float[Array, "*shape"]:
+    """max(b, 0)^p, elementwise, for the base b = 1 − `gap`, with `gap` = 1 − b as `kajiya_kay_terms`
     returns it: exp(p·log1p(−gap)), exactly 0 where b ≤ SPECULAR_BASE_EPS. Value and
     gradients (in `gap` and p) are finite for every gap and p > 0 (docs/model.md §8)."""
     # Double-where: fires where b = 1 − gap ≤ SPECULAR_BASE_EPS (the highlight cone's far
     # side and its edge); there the power is exactly 0 and log1p(−gap ≤ −1) is never evaluated.
+    gap = jnp.asarray(gap)
     positive = 1 - gap > SPECULAR_BASE_EPS
     safe = jnp.where(positive, gap, 0.0)
     return jnp.where(positive, jnp.exp(p * jnp.log1p(-safe)), 0.0)

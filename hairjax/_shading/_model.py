@@ -23,13 +23,13 @@ line (docs/architecture.md shows a toy model).
 from __future__ import annotations
 
 import abc
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import equinox as eqx
 import jax
 import numpy as np
-from jaxtyping import Array, Float
+from jaxtyping import Array, ArrayLike, Float
 
 from .._errors import SceneError
 from ._transforms import Transform
@@ -39,7 +39,11 @@ if TYPE_CHECKING:  # types only: the scene reader imports the registry, not the 
 
 __all__ = ["AbstractShadingModel", "PointInputs", "ShadingPoints", "Reflectance", "Transform",
            "register_shading_model", "shading_model_class", "shading_model_names",
-           "check_params"]
+           "check_params", "RGBLike"]
+
+# What a parameter class takes for an RGB gain: an array or one number (it broadcasts), or
+# a tuple or list of 3 numbers (`ShadingParams(kd=(0.3, 0.5, 0.2))`); it stores `[3]`.
+RGBLike = ArrayLike | Sequence[ArrayLike]
 
 
 class PointInputs(eqx.Module):
@@ -113,7 +117,7 @@ class AbstractShadingModel(eqx.Module):
     # The name in scene files (`[shading] model = …`) and the registry.
     name: ClassVar[str]
     # The type of `params`, and the [shading] keys this model reads besides `model`.
-    params_type: ClassVar[type]
+    params_type: ClassVar[type[Any]]
     table_keys: ClassVar[tuple[str, ...]]
     # The parameters `fit` fits by default, and those among them that are RGB gains the
     # colour is linear in; `searched` maps each other fittable parameter to the transform

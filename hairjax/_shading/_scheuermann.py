@@ -7,7 +7,7 @@ Its per-point inputs (normals, textures) are made in `_scheuermann_inputs.py`.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import equinox as eqx
 import jax
@@ -22,6 +22,7 @@ from ._model import (
     AbstractShadingModel,
     PointInputs,
     Reflectance,
+    RGBLike,
     ShadingPoints,
     check_params,
     register_shading_model,
@@ -62,9 +63,9 @@ class ScheuermannParams(eqx.Module):
     secondary_shift: Float[Array, ""]
     kappa: Float[Array, ""]
 
-    def __init__(self, kd: ArrayLike = 0.6, ambient: ArrayLike = 0.0,
-                 primary_color: ArrayLike = 0.3, primary_exponent: ArrayLike = 80.0,
-                 primary_shift: ArrayLike = 0.1, secondary_color: ArrayLike = 0.2,
+    def __init__(self, kd: RGBLike = 0.6, ambient: RGBLike = 0.0,
+                 primary_color: RGBLike = 0.3, primary_exponent: ArrayLike = 80.0,
+                 primary_shift: ArrayLike = 0.1, secondary_color: RGBLike = 0.2,
                  secondary_exponent: ArrayLike = 20.0, secondary_shift: ArrayLike = -0.1,
                  kappa: ArrayLike = 1.0):
         self.kd = _rgb(kd)
@@ -96,7 +97,7 @@ def scheuermann_diffuse(normal: Float[Array, 3], to_light: Float[Array, 3]) -> F
 
 
 def shift_tangent(tangent: Float[Array, 3], normal: Float[Array, 3],
-                  shift: Float[Array, ""]) -> Float[Array, 3]:
+                  shift: Float[ArrayLike, ""]) -> Float[Array, 3]:
     """normalize(T + shift·N) (slide 10). N ⟂ T and both unit (or both 0) by construction
     (`strand_normals`), so |T + shift·N| = √(1 + shift²) and no guard is needed: a point
     without tangent keeps T' = 0."""
@@ -112,7 +113,7 @@ def smoothstep_attenuation(x: Float[Array, ""]) -> Float[Array, ""]:
 
 
 def strand_specular(tangent: Float[Array, 3], half: Float[Array, 3],
-                    exponent: Float[Array, ""]) -> Float[Array, ""]:
+                    exponent: Float[ArrayLike, ""]) -> Float[Array, ""]:
     """smoothstep(−1, 0, T·H) · sin(T, H)^p (slide 11) for unit T and H; 0 when either is
     the zero vector.
 
@@ -135,8 +136,8 @@ def scheuermann_terms(
     normal: Float[Array, 3],
     to_light: Float[Array, 3],
     to_eye: Float[Array, 3],
-    shift: Float[Array, ""],
-    mask: Float[Array, ""],
+    shift: Float[ArrayLike, ""],
+    mask: Float[ArrayLike, ""],
     params: ScheuermannParams,
 ) -> tuple[Float[Array, ""], Float[Array, ""], Float[Array, ""]]:
     """The Scheuermann terms at one point before their colours (slide 12): the diffuse
@@ -148,7 +149,7 @@ def scheuermann_terms(
     t1 = shift_tangent(tangent, normal, params.primary_shift + shift)
     t2 = shift_tangent(tangent, normal, params.secondary_shift + shift)
     return (scheuermann_diffuse(normal, to_light), strand_specular(t1, half, params.primary_exponent),
-            mask * strand_specular(t2, half, params.secondary_exponent))
+            jnp.asarray(mask) * strand_specular(t2, half, params.secondary_exponent))
 
 
 def scheuermann(
@@ -156,8 +157,8 @@ def scheuermann(
     normal: Float[Array, 3],
     to_light: Float[Array, 3],
     to_eye: Float[Array, 3],
-    shift: Float[Array, ""],
-    mask: Float[Array, ""],
+    shift: Float[ArrayLike, ""],
+    mask: Float[ArrayLike, ""],
     params: ScheuermannParams,
 ) -> tuple[Float[Array, 3], Float[Array, 3]]:
     """Unshadowed Scheuermann terms at one point (slide 12).
@@ -205,16 +206,17 @@ class Scheuermann(AbstractShadingModel):
         return PointInputs(extra=pts, color_factor=factor, segment_alpha=seg_alpha)
 
     def reflectance(self, points: ShadingPoints, params: ScheuermannParams) -> Reflectance:
-        pts: ScheuermannPoints = points.extra
+        pts: ScheuermannPoints = points.extra  # as JAX arrays here (the geometry stage's)
+        normal, shift, mask = jnp.asarray(pts.normal), jnp.asarray(pts.shift), jnp.asarray(pts.mask)
         diffuse, s1, s2 = jax.vmap(scheuermann_terms, in_axes=(0, 0, 0, 0, 0, 0, None))(
-            points.tangent, pts.normal, points.to_light, points.to_eye, pts.shift, pts.mask, params)
+            points.tangent, normal, points.to_light, points.to_eye, shift, mask, params)
         c = points.base_color
         return Reflectance(ambient={"ambient": c},
                            lit={"kd": diffuse[:, None] * c, "primary_color": s1[:, None] * c,
                                 "secondary_color": s2[:, None] * c})
 
     def gl_uniforms(self, params: ScheuermannParams) -> dict:
-        uniforms = {f"scheuermann.{n}": _vec(getattr(params, n))
+        uniforms: dict[str, Any] = {f"scheuermann.{n}": _vec(getattr(params, n))
                     for n in ("kd", "ambient", "primary_color", "secondary_color")}
         for n in ("primary_exponent", "secondary_exponent", "primary_shift", "secondary_shift"):
             uniforms[f"scheuermann.{n}"] = float(getattr(params, n))

@@ -7,15 +7,17 @@ ambient occlusion. Computed only for scenes that use the model.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
+from typing import Any
 
 import equinox as eqx
 import numpy as np
-from jaxtyping import Array, Float
+from jaxtyping import ArrayLike, Float
 
 from .._errors import SceneError
 from .._geometry._ordering import hair_centre
 from .._geometry._shadows import ExactShadows
-from .._scene._light import Light
+from .._scene._light import Light, Vec3Like
 
 __all__ = ["ScheuermannMaps", "ScheuermannPoints", "strand_normals", "strand_position",
            "scheuermann_inputs", "segment_alpha", "hair_occlusion", "sphere_directions",
@@ -35,9 +37,9 @@ class ScheuermannPoints(eqx.Module):
     NumPy arrays from `scheuermann_inputs`): unit strand normal N ⟂ T (0 where T = 0),
     the shift texture's value σ and the noise mask m."""
 
-    normal: Float[Array, "P 3"]
-    shift: Float[Array, " P"]
-    mask: Float[Array, " P"]
+    normal: Float[ArrayLike, "P 3"]
+    shift: Float[ArrayLike, " P"]
+    mask: Float[ArrayLike, " P"]
 
 
 def _table(name: str, value, width: int | None) -> tuple:
@@ -73,13 +75,14 @@ class ScheuermannMaps:
       0: none (no work).
     """
 
-    normal_center: tuple[float, float, float] | None = None
+    normal_center: Vec3Like | None = None  # stored as a tuple of 3 floats
     texture_seed: int = 0
     shift_noise: float = 1.0
     mask_noise: float = 1.0
-    base_texture: tuple = ((1.0, 1.0, 1.0),)
-    alpha_texture: tuple = (1.0,)
-    occlusion: tuple = (1.0,)
+    # Each a list or tuple (a scene file gives lists), stored as a tuple once checked.
+    base_texture: Sequence[Any] = ((1.0, 1.0, 1.0),)
+    alpha_texture: Sequence[Any] = (1.0,)
+    occlusion: Sequence[Any] = (1.0,)
     hair_occlusion: float = 0.0
 
     def __post_init__(self):
@@ -140,7 +143,7 @@ def strand_normals(points: np.ndarray, tangent: np.ndarray, center) -> np.ndarra
     return np.where(has_tangent, n / np.where(has_tangent, norm, 1.0), 0.0)
 
 
-def _sample(table: tuple, u: np.ndarray) -> np.ndarray:
+def _sample(table: Sequence[Any], u: np.ndarray) -> np.ndarray:
     values = np.asarray(table, dtype=np.float64)
     grid = np.linspace(0.0, 1.0, len(values))
     if values.ndim == 1:
@@ -157,9 +160,7 @@ def scheuermann_inputs(strands, tangent: np.ndarray, maps: ScheuermannMaps):
     texture is 1 everywhere, so the opacity is left untouched).
     """
     points, offsets = strands.points, strands.offsets
-    centre = maps.normal_center
-    if centre is None:
-        centre = hair_centre(points, offsets)
+    centre = maps.normal_center if maps.normal_center is not None else hair_centre(points, offsets)
     normal = strand_normals(points, tangent, centre)
     rng = np.random.default_rng(maps.texture_seed)
     shift = maps.shift_noise * (rng.random(strands.num_strands) - 0.5)

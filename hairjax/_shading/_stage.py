@@ -69,12 +69,14 @@ def point_colors(geometry: Geometry, params) -> Float[Array, "P 3"]:
 def occluder_colors(geometry: Geometry, params) -> Float[Array, "Q 3"]:
     """The occluder's colour at the pixels it covers (docs/model.md §13):
     k·ambient + τ·k·light·max(N·L, 0)·V, τ = exp(−κΩ) at its surface point."""
-    direct = geometry.occluder_direct
+    direct, color = geometry.occluder_direct, geometry.occluder_color
+    if direct is None or color is None:
+        raise ValueError("occluder_colors: the geometry has no occluder")
     if geometry.occluder_omega is not None:
         direct = direct * transmittance(params.kappa, geometry.occluder_omega)[:, None]
     if geometry.occluder_visibility is not None:
         direct = direct * geometry.occluder_visibility[:, None]
-    return params.ambient[None, :] * geometry.occluder_color[None, :] + direct
+    return params.ambient[None, :] * color[None, :] + direct
 
 
 @eqx.filter_jit

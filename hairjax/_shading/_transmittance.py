@@ -10,6 +10,6 @@ from jaxtyping import Array, ArrayLike, Float
 __all__ = ["transmittance"]
 
 
-def transmittance(kappa: ArrayLike, omega: Float[Array, "*shape"]) -> Float[Array, "*shape"]:
+def transmittance(kappa: ArrayLike, omega: Float[ArrayLike, "*shape"]) -> Float[Array, "*shape"]:
     """exp(−κΩ) elementwise (κ ≥ 0, Ω ≥ 0: in (0, 1], no guard needed)."""
-    return jnp.exp(-kappa * omega)
+    return jnp.exp(-(kappa * jnp.asarray(omega)))

@@ -27,10 +27,11 @@ def camera_depth_far(scene: Scene, view: View, depth: np.ndarray) -> float:
     if occ is not None and occ.kind == "sphere":
         c = np.asarray(occ.center) - view.origin
         far = max(far, 2.0 * (float(c @ view.forward) + occ.radius))
-    elif occ is not None:
-        drawn = occ.triangles[drawable_triangles(view, occ.vertices, occ.triangles)]
+    elif occ is not None and occ.vertices is not None and occ.triangles is not None:  # a mesh
+        vertices, triangles = np.asarray(occ.vertices), np.asarray(occ.triangles)  # arrays already
+        drawn = triangles[drawable_triangles(view, vertices, triangles)]
         if drawn.size:  # fires unless every triangle reaches the near plane
-            far = max(far, 2.0 * float(np.max((occ.vertices[drawn] - view.origin) @ view.forward)))
+            far = max(far, 2.0 * float(np.max((vertices[drawn] - view.origin) @ view.forward)))
     return far
 
 
@@ -51,7 +52,7 @@ def camera_pass(ctx, progs, scene: Scene, params, strands: Strands, view: View, 
     depth_tex = own_depth if surface is None else surface.depth
     fbo = ctx.framebuffer(color_attachments=[color], depth_attachment=depth_tex)
     ibo = strands.index_buffer(order)
-    extra = []
+    extra: list = []
     table = lookup_texture(ctx, scene, params)
     streak = streak_texture(ctx, scene)
     try:

@@ -149,6 +149,8 @@ def draw_occluder_color(ctx, progs, scene: Scene, params, surface: OccluderSurfa
     go to `owned`, for the caller to release with its pass (also when this raises)."""
     import moderngl
 
+    if scene.occluder is None:
+        raise ValueError("draw_occluder_color: the scene has no occluder")
     w, h = scene.camera.width, scene.camera.height
     if occluder is None:
         omega_img = np.zeros((h, w), "f4")

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._geometry._shadows import LightFrame, point_planes
+from .._geometry._shadows import LightFrame, OpacityMaps, point_planes
 from .._scene._scene import Scene
 from ._buffers import Points, Strands
 from ._context import check, release
@@ -24,7 +24,10 @@ def opacity_maps(ctx, progs, scene: Scene, strands: Strands, frame: LightFrame, 
     points of slice i are evaluated between B_prev = Ω(D_i) and B_current = Ω(D_{i+1})."""
     import moderngl
 
-    n, r = scene.shadows.maps, scene.shadows.resolution
+    shadows = scene.shadows
+    if not isinstance(shadows, OpacityMaps):  # the pass registered for it: never fires
+        raise TypeError(f"the opacity-maps pass got shadows.method = {shadows.method!r}")
+    n, r = shadows.maps, shadows.resolution
     segs = strands.segments[frame.drawable]
     ids = frame.drawable
     # Which slices each drawable segment's fragments can fall in (depth is monotone
@@ -83,7 +86,7 @@ def opacity_maps(ctx, progs, scene: Scene, strands: Strands, frame: LightFrame, 
                 drawn_since_copy = False
             fbo.use()
             set_uniforms(prog, slice=i)
-            if clip_slices:
+            if starts is not None:  # clip_slices
                 count = starts[i + 1] - starts[i]
                 if count:
                     vao.render(moderngl.LINES, vertices=2 * int(count), first=2 * int(starts[i]))

@@ -66,7 +66,7 @@ def render_gl(scene: Scene, params=None, *,
         return _render_patches(scene, params, omega, order, occluder)
     ctx = get_context()
     progs = programs(ctx)
-    timings = {}
+    timings: dict[str, float] = {}
     clock = time.perf_counter()
 
     def lap(name):
@@ -103,13 +103,13 @@ def render_gl(scene: Scene, params=None, *,
                 omega = omega_all[:strands.count].copy()
                 strands.omega.write(omega.tobytes())
                 lap("shadows")
-                if lighting:
+                if lighting and surface is not None:  # lighting: the scene has an occluder
                     occluder = occluder_shadow(ctx, progs, scene, strands, points, surface,
                                                omega_all[strands.count:])
                     lap("occluder shadow")
             finally:
                 points.release()
-        if lighting:
+        if lighting and occluder is not None:  # lighting: given with omega, or made above
             strands.visibility.write(np.asarray(occluder.visibility, "f4").tobytes())
         image = camera_pass(ctx, progs, scene, params, strands, view, order, depth_far, surface,
                              occluder if lighting else None)

@@ -82,7 +82,7 @@ def use_shading_textures(prog, scene: Scene, table, streak) -> None:
         table.use(0)
         set_uniforms(prog, kajiya_kay_table=0)
     set_uniforms(prog, streaks=streak is not None)
-    if streak is not None:
+    if streak is not None and scene.streaks is not None:  # the texture is made from scene.streaks
         streak.use(1)
         set_uniforms(prog, streak_texture=1, streak_texels=scene.streaks.texels,
                      streak_width=float(scene.streaks.width))

@@ -118,7 +118,7 @@ def bench_main(args) -> int:
         raise ValueError(f"--repeats must be at least 1, got {repeats}")
     if quick:
         repeats = min(repeats, QUICK_REPEATS)
-    x64 = bool(jax.config.jax_enable_x64)
+    x64 = bool(jax.config.jax_enable_x64)  # type: ignore[attr-defined]  # jax declares its options at run time
 
     configs = configurations(quick)
     results = []

@@ -25,6 +25,7 @@ import statistics
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 from ._bench_cases import KIM_2003_SEGMENTS_PER_S, ORDERING_BINS, bench_scene
 from ._bench_report import write_json_strict
@@ -213,7 +214,7 @@ def child_main(argv) -> int:
     def progress(msg):
         print(f"  {cfg['name']}: {msg}", file=sys.stderr, flush=True)
 
-    result = {"status": "ok", "error": None}
+    result: dict[str, Any] = {"status": "ok", "error": None}
     start = time.perf_counter()
     try:
         result.update(_measure(cfg, cfg["repeats"], progress))
@@ -230,6 +231,6 @@ def child_main(argv) -> int:
     result["peak_rss_kib"] = _peak_rss_kib()
     result["jax_backend"] = jax.default_backend()
     result["jax_devices"] = [str(d) for d in jax.devices()]
-    result["x64"] = bool(jax.config.jax_enable_x64)
+    result["x64"] = bool(jax.config.jax_enable_x64)  # type: ignore[attr-defined]  # jax declares its options at run time
     write_json_strict(Path(out_path), result)
     return 0

@@ -68,9 +68,15 @@ def _with_width(scene: Scene, factor: float) -> Scene:
 
 # Each knob: (scene, value) → (scene, supersampling factor). A `bins` value is a bin
 # count, or the name of a registered ordering (e.g. "exact") to draw with instead.
+def _with_shadow_option(scene: Scene, key: str, value: int) -> Scene:
+    """Through the registry: a shadow method without the option is a SceneError naming it."""
+    options = {**dataclasses.asdict(scene.shadows), key: int(value)}
+    return scene.replace(shadows=Shadows(scene.shadows.method, **options))
+
+
 _KNOB_SETTERS: dict[str, Callable] = {
-    "maps": lambda s, v: (s.replace(shadows=dataclasses.replace(s.shadows, maps=int(v))), 1),
-    "map_resolution": lambda s, v: (s.replace(shadows=dataclasses.replace(s.shadows, resolution=int(v))), 1),
+    "maps": lambda s, v: (_with_shadow_option(s, "maps", v), 1),
+    "map_resolution": lambda s, v: (_with_shadow_option(s, "resolution", v), 1),
     "bins": lambda s, v: (s.replace(ordering=Ordering(v) if isinstance(v, str) else Ordering("bins", int(v))), 1),
     "width": lambda s, v: (_with_width(s, float(v)), 1),
     "supersampling": lambda s, v: (s, int(v)),
@@ -128,7 +134,7 @@ def _renderer(path: str) -> Callable[[Scene], tuple[np.ndarray, np.ndarray | Non
 def _measure(run, scene: Scene, s: int, repeats: int):
     """(image, Ω, median seconds, all seconds): one untimed warm-up (compilation, shader
     builds), then `repeats` timed renders (none: the median is NaN)."""
-    omega = {}
+    omega: dict[str, np.ndarray | None] = {}
 
     def image_of(sc):
         image, om = run(sc)

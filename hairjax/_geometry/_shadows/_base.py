@@ -43,6 +43,13 @@ class AbstractShadowMethod(abc.ABC):
     def omega(self, setup, alpha: Float[Array, " S"]) -> Float[Array, " PQ"]:
         """Ω at every point of `setup` for per-strand opacity `alpha` (JAX)."""
 
+    @property
+    def resolution(self) -> int:
+        """The light's raster, `resolution` × `resolution` texels, that a method which
+        casts shadows plans Ω in (and the occluder's light view uses, §13): such a method
+        has it as a field; one with `casts = False` has none."""
+        raise AttributeError(f"shadows.method = {self.method!r} casts no shadows: it has no resolution")
+
 
 _REGISTRY: dict[str, type[AbstractShadowMethod]] = {}
 

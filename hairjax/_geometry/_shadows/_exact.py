@@ -14,6 +14,7 @@ from jaxtyping import Array, Float, Int
 
 from ..._composite import segmented_scan
 from ..._constants import SHADOW_FILTER_RADIUS
+from .._projection import View
 from ._base import AbstractShadowMethod, check_resolution, register_shadow_method
 from ._frame import light_fragments
 
@@ -27,7 +28,7 @@ class ExactSetup:
     marking each texel's first, and per point `index[P, 9]`, `weight[P, 9]` into the
     per-texel prefix sums."""
 
-    view: object
+    view: View
     frag_strand: np.ndarray
     frag_coverage: np.ndarray
     frag_first: np.ndarray
@@ -63,7 +64,7 @@ class ExactShadows(AbstractShadowMethod):
         frag_key = key(frags.pixel.astype(np.float64), frags.depth)
         order = np.argsort(frag_key)
         frag_key = frag_key[order]
-        first = np.ones(frags.size, bool)
+        first = np.ones(frags.size, np.bool_)
         first[1:] = frags.pixel[order][1:] != frags.pixel[order][:-1]
         r = SHADOW_FILTER_RADIUS
         offs = np.arange(-r, r + 1)

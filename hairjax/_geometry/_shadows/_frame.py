@@ -11,7 +11,7 @@ import numpy as np
 
 from ..._constants import PIXEL_HALF_EXTENT, SHADOW_FILTER_RADIUS
 from .._projection import View, light_view
-from .._raster import rasterize, ribbon_widths
+from .._raster import Fragments, rasterize, ribbon_widths
 
 __all__ = ["LightFrame", "light_frame", "with_receivers", "map_margin", "LightFragments",
            "light_fragments"]
@@ -113,7 +113,7 @@ class LightFragments:
     and `inside` (seen and on the map)."""
 
     frame: LightFrame
-    frags: object
+    frags: Fragments
     frag_strand: np.ndarray
     frag_coverage: np.ndarray
     tx: np.ndarray

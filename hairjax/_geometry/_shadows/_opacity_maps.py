@@ -23,6 +23,7 @@ import numpy as np
 from jaxtyping import Array, Float, Int
 
 from ..._constants import SHADOW_FILTER_RADIUS
+from .._projection import View
 from ._base import AbstractShadowMethod, check_resolution, register_shadow_method
 from ._frame import LightFrame, light_fragments
 
@@ -40,7 +41,7 @@ class OpacityMapSetup:
     beyond the last plane, dropped); per point the plane index `plane[P]`, its weight
     `f[P]` and texel `texel[P]` (−1 outside)."""
 
-    view: object
+    view: View
     frag_strand: np.ndarray
     frag_coverage: np.ndarray
     frag_cell: np.ndarray
@@ -111,8 +112,10 @@ def box_filter(maps: Float[Array, "n r r"]) -> Float[Array, "n r r"]:
     r = SHADOW_FILTER_RADIUS
     k = 2 * r + 1
     padded = jnp.pad(maps, ((0, 0), (r, r), (r, r)))
-    rows = sum(padded[:, i:i + maps.shape[1], :] for i in range(k))
-    return sum(rows[:, :, i:i + maps.shape[2]] for i in range(k)) / (k * k)
+    # Each sum starts from its first term (not 0): an Array throughout, the same values.
+    h, w = maps.shape[1], maps.shape[2]
+    rows = sum((padded[:, i:i + h, :] for i in range(1, k)), start=padded[:, :h, :])
+    return sum((rows[:, :, i:i + w] for i in range(1, k)), start=rows[:, :, :w]) / (k * k)
 
 
 def opacity_maps(frag_alpha: Float[Array, " f"], frag_cell: Int[Array, " f"], maps: int,
