@@ -32,6 +32,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .._errors import SceneError
+from .._registry import Registry
 from ._transforms import Transform
 
 if TYPE_CHECKING:  # types only: the scene reader imports the registry, not the reverse
@@ -173,23 +174,9 @@ class AbstractShadingModel(eqx.Module):
         the parameters' own checks give the ranges)."""
 
 
-_REGISTRY: dict[str, type[AbstractShadingModel]] = {}
-
-
-def register_shading_model(cls: type[AbstractShadingModel]) -> type[AbstractShadingModel]:
-    """Class decorator: make `cls` available under `cls.name` to scene files, `fit` and
-    the renderers. Registering a name twice replaces the earlier class."""
-    _REGISTRY[cls.name] = cls
-    return cls
-
-
-def shading_model_class(name: str) -> type[AbstractShadingModel]:
-    """The registered model class called `name`; `SceneError` listing the names if none."""
-    try:
-        return _REGISTRY[name]
-    except KeyError:
-        raise SceneError(f"shading.model must be one of {shading_model_names()}, got {name!r}") from None
-
-
-def shading_model_names() -> tuple[str, ...]:
-    return tuple(_REGISTRY)
+SHADING_MODELS: Registry[AbstractShadingModel] = Registry("shading", "model", "name")
+# Class decorator: make a model available under its `name` to scene files, `fit` and the
+# renderers (a name registered twice is the later class's).
+register_shading_model = SHADING_MODELS.register
+shading_model_names = SHADING_MODELS.names
+shading_model_class = SHADING_MODELS.get

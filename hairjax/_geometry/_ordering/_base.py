@@ -15,6 +15,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ..._errors import SceneError
+from ..._registry import Registry
 
 __all__ = ["AbstractOrdering", "register_ordering", "ordering_class", "ordering_names", "Ordering"]
 
@@ -35,39 +36,17 @@ class AbstractOrdering(abc.ABC):
         by depth alone reads neither `strands` nor `segments` (`draw_order` passes None)."""
 
 
-_REGISTRY: dict[str, type[AbstractOrdering]] = {}
-
-
-def register_ordering(cls: type[AbstractOrdering]) -> type[AbstractOrdering]:
-    """Class decorator: make `cls` available as `[ordering] method = cls.method`."""
-    _REGISTRY[cls.method] = cls
-    return cls
-
-
-def ordering_names() -> tuple[str, ...]:
-    return tuple(_REGISTRY)
-
-
-def ordering_class(method: str) -> type[AbstractOrdering]:
-    try:
-        return _REGISTRY[method]
-    except (KeyError, TypeError):
-        raise SceneError(f"ordering.method must be one of {ordering_names()}, got {method!r}") from None
+ORDERINGS: Registry[AbstractOrdering] = Registry("ordering", "method", "method")
+register_ordering = ORDERINGS.register
+ordering_names = ORDERINGS.names
+ordering_class = ORDERINGS.get
 
 
 def Ordering(method: str = "bins", *args: Any, **options: Any) -> AbstractOrdering:  # noqa: N802 (a factory named like the type it makes)
     """The registered ordering `method` with its options (its dataclass fields, in order or
     by name), e.g. `Ordering("bins", 64)`; `SceneError` for an unknown method or an
     option it does not take."""
-    cls = ordering_class(method)
-    if args:
-        return cls(*args, **options)
-    keys = tuple(f.name for f in dataclasses.fields(cls))
-    for key in options:
-        if key not in keys:
-            takes = ", ".join(keys) if keys else "no options"
-            raise SceneError(f"ordering.{key} is not a key of method = {method!r} (it takes {takes})")
-    return cls(**options)
+    return ORDERINGS.make(method, *args, **options)
 
 
 def check_count(name: str, value, lo: int, hi: int, hi_text: str | None = None) -> int:

@@ -17,6 +17,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ..._errors import SceneError
+from ..._registry import Registry
 
 __all__ = ["AbstractShadowMethod", "register_shadow_method", "shadow_method_class",
            "shadow_method_names", "Shadows", "check_resolution"]
@@ -51,24 +52,10 @@ class AbstractShadowMethod(abc.ABC):
         raise AttributeError(f"shadows.method = {self.method!r} casts no shadows: it has no resolution")
 
 
-_REGISTRY: dict[str, type[AbstractShadowMethod]] = {}
-
-
-def register_shadow_method(cls: type[AbstractShadowMethod]) -> type[AbstractShadowMethod]:
-    """Class decorator: make `cls` available as `[shadows] method = cls.method`."""
-    _REGISTRY[cls.method] = cls
-    return cls
-
-
-def shadow_method_names() -> tuple[str, ...]:
-    return tuple(_REGISTRY)
-
-
-def shadow_method_class(method: str) -> type[AbstractShadowMethod]:
-    try:
-        return _REGISTRY[method]
-    except (KeyError, TypeError):
-        raise SceneError(f"shadows.method must be one of {shadow_method_names()}, got {method!r}") from None
+SHADOW_METHODS: Registry[AbstractShadowMethod] = Registry("shadows", "method", "method")
+register_shadow_method = SHADOW_METHODS.register
+shadow_method_names = SHADOW_METHODS.names
+shadow_method_class = SHADOW_METHODS.get
 
 
 def Shadows(method: str = "opacity-maps", *args: Any, **options: Any) -> AbstractShadowMethod:  # noqa: N802 (a factory named like the type it makes)
@@ -76,15 +63,7 @@ def Shadows(method: str = "opacity-maps", *args: Any, **options: Any) -> Abstrac
     order or by name), e.g. `Shadows("opacity-maps", 64, 256)`,
     `Shadows("exact", resolution=128)`; `SceneError` for an unknown method or an option it
     does not take."""
-    cls = shadow_method_class(method)
-    if args:
-        return cls(*args, **options)
-    keys = tuple(f.name for f in dataclasses.fields(cls))
-    for key in options:
-        if key not in keys:
-            takes = ", ".join(keys) if keys else "no options"
-            raise SceneError(f"shadows.{key} is not a key of method = {method!r} (it takes {takes})")
-    return cls(**options)
+    return SHADOW_METHODS.make(method, *args, **options)
 
 
 def check_resolution(value) -> int:
