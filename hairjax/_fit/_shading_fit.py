@@ -66,6 +66,9 @@ class TargetTerms(eqx.Module):
     varying: tuple[str, ...] = eqx.field(static=True)
     searched: tuple[str, ...] = eqx.field(static=True)
     lit: tuple[str, ...] = eqx.field(static=True, default=())  # the gains of lit terms
+    # (gain, fitted searched parameter) pairs where the parameter reaches the gain's term:
+    # the derivative images composited; every other pair's is 0 by structure.
+    pairs: tuple[tuple[str, str], ...] = eqx.field(static=True, default=())
 
 
 def _columns(terms: TargetTerms, params, gains, reflectance=None) -> jax.Array:
@@ -127,16 +130,24 @@ def _gain_images_jvp(primals, tangents):
             return _columns(terms, with_values(params, dict(zip(terms.searched, v)), ()), terms.varying)
 
         parts = [columns(values)]
+        layout = []  # (parameter index, gain index) of each derivative block after the values
         if terms.searched:  # ∂(columns)/∂(each fitted searched parameter), per point
             jac = jax.jacfwd(columns)(values)
-            parts += [jac[..., i] for i in range(len(terms.searched))]
-        blocks = jnp.split(composite(terms.geometry, jnp.concatenate(parts, axis=1)), len(parts), axis=1)
-        derivative = jnp.zeros_like(blocks[0])
-        for i, block in enumerate(blocks[1:]):
-            derivative = derivative + block * d_values[i]
+            for i, p in enumerate(terms.searched):
+                for j, g in enumerate(terms.varying):
+                    if (g, p) in terms.pairs:
+                        parts.append(jac[:, 3 * j:3 * j + 3, i])
+                        layout.append((i, j))
+        stacked = composite(terms.geometry, jnp.concatenate(parts, axis=1))
         k = len(terms.varying)
-        images.update(zip(terms.varying, jnp.split(blocks[0], k, axis=1)))
-        d_images.update(zip(terms.varying, jnp.split(derivative, k, axis=1)))
+        values_image, derivatives = stacked[:, :3 * k], stacked[:, 3 * k:]
+        images.update(zip(terms.varying, jnp.split(values_image, k, axis=1)))
+        for j, g in enumerate(terms.varying):
+            d = jnp.zeros_like(values_image[:, :3])
+            for b, (i, jj) in enumerate(layout):
+                if jj == j:
+                    d = d + derivatives[:, 3 * b:3 * b + 3] * d_values[i]
+            d_images[g] = d
     return images, d_images
 
 
@@ -176,9 +187,12 @@ def prepare_terms(gains: tuple[str, ...], scene, params, names, target, sqrt_wei
         else geom.streak[:, None]
     light = geom.light_rgb[None, :] * streak
     points = shading_points(geom)
-    by_searched, lit = _reaches(model, points, params, searched)
-    shadowed = "kappa" in searched and geom.omega is not None  # τ moves every lit term
-    varying = tuple(n for n in gains if by_searched[n] or (shadowed and n in lit))
+    reached, lit = _reaches(model, points, params, searched)
+    if "kappa" in searched and geom.omega is not None:  # τ moves every lit term
+        reached = {n: p | ({"kappa"} if n in lit else set()) for n, p in reached.items()}
+    by_searched = {n: bool(p - {"kappa"}) for n, p in reached.items()}
+    varying = tuple(n for n in gains if reached[n])
+    pairs = tuple((n, p) for n in varying for p in searched if p in reached[n])
     fixed_terms = TargetTerms(full, streak, light, {}, {}, jnp.zeros(()), jnp.asarray(target),
                               jnp.asarray(sqrt_weight), tuple(n for n in gains if n not in varying), (),
                               lit)
@@ -189,11 +203,11 @@ def prepare_terms(gains: tuple[str, ...], scene, params, names, target, sqrt_wei
         bases = {n: {**reflectance.ambient, **reflectance.lit}[n] for n in varying}
     constant = full.transmittance[:, None] * full.backdrop
     return TargetTerms(geom, streak, light, fixed, bases, constant, jnp.asarray(target),
-                       jnp.asarray(sqrt_weight), varying, searched, lit)
+                       jnp.asarray(sqrt_weight), varying, searched, lit, pairs)
 
 
 def _reaches(model: AbstractShadingModel, points, params, searched):
-    """({gain: whether a fitted searched parameter other than κ reaches its term}, the lit
+    """({gain: the fitted searched parameters other than κ that reach its term}, the lit
     gains), by `dependence` on the model's `reflectance` (κ enters through τ alone)."""
     names = [n for n in searched if n != "kappa"]
 
@@ -203,8 +217,8 @@ def _reaches(model: AbstractShadingModel, points, params, searched):
 
     values = [jnp.reshape(getattr(params, n), ()) for n in names]
     ambient, lit = dependence(terms_of, *values)
-    by_searched = {n: bool(d) for n, d in {**ambient, **lit}.items()}
-    return by_searched, tuple(lit)
+    reached = {n: {names[i] for i in d} for n, d in {**ambient, **lit}.items()}
+    return reached, tuple(lit)
 
 
 @functools.cache
