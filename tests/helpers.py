@@ -9,8 +9,11 @@ import numpy as np
 import hairjax as hj
 from hairjax._disagreement import MAX_BAND, PIXEL_TOL, TAU_TOL, camera_band, shadow_band  # noqa: F401 (tests')
 
+# tests/helpers.py sits directly in tests/: the repository root is one folder up, whichever
+# subfolder of tests/ imports this (test files use these rather than their own __file__).
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"
+EXAMPLES = REPO / "experiments" / "scenes"
 
 
 def load_experiment(name: str):
