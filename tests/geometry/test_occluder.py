@@ -4,12 +4,10 @@ cases, the κ-gradient, and JAX against GL."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import jax
 import numpy as np
 import pytest
-from helpers import DATA, central_difference, shadow_method, unexplained_pixels
+from helpers import DATA, EXAMPLES, central_difference, shadow_method, unexplained_pixels
 
 import hairjax as hj
 from hairjax._disagreement import OCCLUDER_VERTEX_STEP, PIXEL_TOL
@@ -17,8 +15,6 @@ from hairjax._geometry._occluder import interpolation_bound
 from hairjax._geometry._projection import camera_view
 from hairjax._geometry._shadows import light_frame
 from hairjax._shading import occluder_colors, point_colors
-
-EXAMPLES = Path(__file__).resolve().parents[1] / "experiments" / "scenes"
 
 
 def quad(corners) -> hj.Occluder:
