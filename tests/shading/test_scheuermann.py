@@ -4,13 +4,12 @@ differences, the per-point inputs, scene-file errors, and GL against JAX."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 from helpers import (
+    EXAMPLES,
     MAX_BAND,
     PIXEL_TOL,
     TAU_TOL,
@@ -40,7 +39,7 @@ from hairjax._shading._scheuermann_inputs import (
     strand_position,
 )
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "experiments" / "scenes" / "scheuermann.toml"
+EXAMPLE = EXAMPLES / "scheuermann.toml"
 
 
 def unit(*v):
