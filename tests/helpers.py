@@ -41,6 +41,23 @@ def small_furball_scene(strands=40, size=48, shadows="opacity-maps", maps=8, res
     )
 
 
+def scheuermann_scene(size=24, strands=30, shadows="opacity-maps", **maps) -> hj.Scene:
+    """A small scalp with Scheuermann shading (docs/model.md §17); `maps` go to
+    ScheuermannMaps (textures, noise). For its shading tests and its fit's."""
+    hair = hj.scalp(strands=strands, points=6, seed=4, length=0.8, gravity=(0.0, -0.4, 0.0),
+                    alpha=0.6)
+    return hj.Scene(
+        hair, camera=hj.Camera(eye=(1.6, 0.6, 2.4), target=(0.0, 0.0, 0.0), width=size, height=size),
+        light=hj.Light(direction=(-0.3, -0.6, -0.75)),
+        shading=hj.Scheuermann(
+            hj.ScheuermannParams(kd=(0.5, 0.35, 0.2), ambient=0.05, primary_color=0.4,
+                                 primary_exponent=30.0, primary_shift=0.15,
+                                 secondary_color=(0.4, 0.3, 0.2), secondary_exponent=8.0,
+                                 secondary_shift=-0.2, kappa=0.9),
+            hj.ScheuermannMaps(normal_center=(0.0, 0.0, 0.0), **maps)),
+        shadows=shadow_method(shadows, 6, 24))
+
+
 def fit_terms(scene, params, names, target):
     """The fit's per-target terms (hairjax/_fit/_shading_fit.py) for `target` (an image)."""
     from hairjax._fit import _shading_fit
