@@ -1,4 +1,4 @@
-"""hairjax/_band.py: the pixels where the GL and JAX renderers may differ, from geometry.
+"""hairjax/_disagreement: the pixels where the GL and JAX renderers may differ, from geometry.
 
 Each GL test renders with GL's own Ω (as a fit's GL targets are), so both the camera-side
 and the light-side discontinuities of docs/model.md §11 can show; tests/test_gl.py checks
