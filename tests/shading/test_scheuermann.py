@@ -370,8 +370,8 @@ def gl_reference():
 
 
 def test_gl_matches_jax(gl, gl_reference):
-    """Tolerances as tests/test_gl.py (hairjax/_band.py): 1e-4 per pixel and per τ outside
-    the bands that float32 boundary decisions explain."""
+    """Tolerances as tests/gl/test_renderer.py (hairjax/_disagreement): 1e-4 per pixel and
+    per τ outside the bands that float32 boundary decisions explain."""
     from hairjax.gl import render_gl
 
     scene, jax_image, omega, occluder = gl_reference
