@@ -202,30 +202,6 @@ def test_gl_lookup_matches_jax(gl, n):
         assert np.abs(analytic - jax_image).max() > 10 * tol
 
 
-def test_lookup_error_experiment_runs(tmp_path, capsys, gl):
-    """experiments/08_lookup_error.py end to end on a tiny scene, both renderers."""
-    import csv
-
-    from helpers import load_experiment
-
-    scene = tmp_path / "tiny.toml"
-    scene.write_text('[hair]\nsource = "furball"\nstrands = 200\npoints = 6\n'
-                     '[shadows]\nmethod = "none"\n')
-    out = tmp_path / "out"
-    status = load_experiment("08_lookup_error").main(
-        ["--scene", str(scene), "--size", "32", "--sizes", "4,64", "--repeats", "1", "--gl",
-         "--out", str(out)])
-    assert status == 0 and "GL RMSE" in capsys.readouterr().out
-    with open(out / "lookup_error.csv", newline="") as f:
-        rows = list(csv.DictReader(f))
-    assert [int(r["size"]) for r in rows] == [4, 64]
-    # A 16× finer table errs less (O(h) RMSE, test_lookup_converges_to_the_formula), in
-    # both renderers.
-    for key in ("rmse", "gl_rmse"):
-        assert float(rows[1][key]) < float(rows[0][key]) / 4, key
-    assert (out / "lookup_error.png").stat().st_size > 0
-
-
 # --------------------------------------------------------------------------- fit
 
 TRUE = hj.ShadingParams(kd=(0.3, 0.5, 0.2), ks=0.4, shininess=25.0, kappa=2.5, ambient=0.05)
