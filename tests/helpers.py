@@ -94,7 +94,7 @@ def central_difference(f, x: float, eps: float) -> float:
 
 
 def unexplained_pixels(scene, gl_image, jax_image):
-    """Pixels differing by > PIXEL_TOL outside the camera band (hairjax/_band.py, where the
+    """Pixels differing by > PIXEL_TOL outside the camera band (hairjax/_disagreement, where the
     tolerances and the bands are), and the band."""
     diff = np.abs(gl_image - jax_image).max(axis=-1).ravel()
     # Any fragment's colour and what lies behind it are ≤ the brightest pixel value, so a

@@ -197,7 +197,7 @@ SCENES = gl_scenes()
 @pytest.mark.parametrize("name", list(SCENES))
 def test_gl_agrees_with_jax(gl, name):
     """With JAX's Ω and occluder light, GL's image equals JAX's to 1e-4 outside the camera
-    band (hairjax/_band.py: it holds the mesh's silhouette pixels and those where GL's
+    band (hairjax/_disagreement: it holds the mesh's silhouette pixels and those where GL's
     vertex rounding may move the interpolated normal by > 1e-4, 16 % of Sintel at 64²,
     where most triangles are smaller than a pixel), and within that rounding's bound
     inside it. GL's own render differs only in renderer_band (which adds the points and

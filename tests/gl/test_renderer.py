@@ -148,7 +148,7 @@ def test_a_wrong_shader_fails_the_check(gl, references):
 @pytest.mark.parametrize("light", ["directional", "point"])
 def test_world_width_ribbons_match(gl, light):
     """Ribbons of world width (docs/model.md §5, §7): GL's camera pass with JAX's Ω equals
-    JAX's image but for the band (tolerances in hairjax/_band.py), and GL's own Ω gives τ
+    JAX's image but for the band (tolerances in hairjax/_disagreement), and GL's own Ω gives τ
     within TAU_TOL but where a light-side boundary explains it; in both views."""
     from hairjax.gl import render_gl
 
