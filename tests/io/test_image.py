@@ -67,8 +67,9 @@ def test_exr_of_float64_data_is_its_float32_rounding(tmp_path):
 
 def test_png_is_8_bit_srgb_of_the_linear_values(tmp_path):
     # Every 8-bit step's neighbourhood, the linear segment near 0, and values outside [0, 1].
-    x = np.concatenate([np.linspace(0.0, 1.0, 1021), np.geomspace(1e-6, 0.0031308, 40),
-                        [-0.5, -1e-9, 1.0 + 1e-9, 3.0]])
+    x = np.concatenate(
+        [np.linspace(0.0, 1.0, 1021), np.geomspace(1e-6, 0.0031308, 40), [-0.5, -1e-9, 1.0 + 1e-9, 3.0]]
+    )
     rgba = np.zeros((len(x), 3, 4))
     rgba[:, 0, :3] = x[:, None]
     rgba[:, 1, :3] = x[::-1, None]
@@ -84,8 +85,7 @@ def test_png_is_8_bit_srgb_of_the_linear_values(tmp_path):
     assert codes[x == 0.0, 0].max() == 0 and codes[x >= 1.0, 0].min() == 255
     assert codes[x < 0, 0].max() == 0  # negatives clip to black
     # read_image decodes the codes back to linear.
-    np.testing.assert_allclose(hj.read_image(path), srgb_to_linear(codes / 255.0), rtol=1e-6,
-                               atol=1e-7)
+    np.testing.assert_allclose(hj.read_image(path), srgb_to_linear(codes / 255.0), rtol=1e-6, atol=1e-7)
 
 
 def test_png_of_one_channel_is_grey(tmp_path):
@@ -164,8 +164,9 @@ def failing_oiio(written: list, fail_by: str):
         def geterror(self):
             return "no space left on device"
 
-    fake = types.SimpleNamespace(ImageSpec=real.ImageSpec, geterror=lambda: "",
-                                 ImageOutput=types.SimpleNamespace(create=Output))
+    fake = types.SimpleNamespace(
+        ImageSpec=real.ImageSpec, geterror=lambda: "", ImageOutput=types.SimpleNamespace(create=Output)
+    )
     return fake
 
 
@@ -176,8 +177,11 @@ def test_a_failed_write_leaves_no_partial_file(tmp_path, monkeypatch, fail_by, n
     before = hj.write_image(tmp_path / "out" / "kept.exr", np.ones((2, 2, 4)))
     written = []
     monkeypatch.setitem(sys.modules, "OpenImageIO", failing_oiio(written, fail_by))
-    error = (ImageError, rf"^{target}: write failed: no space left on device$") if fail_by == "return" \
+    error = (
+        (ImageError, rf"^{target}: write failed: no space left on device$")
+        if fail_by == "return"
         else (RuntimeError, "interrupted")
+    )
     with pytest.raises(error[0], match=error[1]):
         hj.write_image(target, np.full((8, 8, 4), 0.5))
     # The half-written bytes went to a temporary beside the target, which is gone.

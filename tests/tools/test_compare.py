@@ -16,8 +16,18 @@ import hairjax as hj
 from hairjax.tools import _compare, compare, format_report, image_stats, median_time
 
 # The keys `hairjax compare` prints (format_report) and writes to --json.
-REPORT_KEYS = {"scene", "size", "max_abs", "rmse", "psnr_db", "share_over_1e-4", "tau_max_abs",
-               "jax_s", "gl_s", "repeats"}
+REPORT_KEYS = {
+    "scene",
+    "size",
+    "max_abs",
+    "rmse",
+    "psnr_db",
+    "share_over_1e-4",
+    "tau_max_abs",
+    "jax_s",
+    "gl_s",
+    "repeats",
+}
 
 
 # --------------------------------------------------------------------------- image_stats
@@ -59,8 +69,18 @@ def test_image_stats_of_a_uniform_difference_and_of_equal_images():
 
 
 def report_of(**changes) -> dict:
-    r = {"scene": "tiny", "size": [16, 12], "max_abs": 0.5, "rmse": 0.0913, "psnr_db": 20.79,
-         "share_over_1e-4": 0.2, "tau_max_abs": 3.25e-5, "jax_s": 0.5, "gl_s": 0.25, "repeats": 3}
+    r = {
+        "scene": "tiny",
+        "size": [16, 12],
+        "max_abs": 0.5,
+        "rmse": 0.0913,
+        "psnr_db": 20.79,
+        "share_over_1e-4": 0.2,
+        "tau_max_abs": 3.25e-5,
+        "jax_s": 0.5,
+        "gl_s": 0.25,
+        "repeats": 3,
+    }
     return {**r, **changes}
 
 
@@ -68,11 +88,15 @@ def test_format_report_names_every_number():
     text = format_report(report_of())
     lines = text.splitlines()
     assert lines[0] == "tiny (16x12): GL vs JAX"
-    for line in ("  max abs difference   0.5", "  RMSE                 0.0913",
-                 "  PSNR                 20.8 dB", "  pixels > 1e-4        20.0000 %",
-                 "  max |Δτ| per point   3.25e-05",
-                 "  time, JAX (full)     0.500 s  (median of 3)",
-                 "  time, GL             0.250 s  (ratio JAX/GL 2.00)"):
+    for line in (
+        "  max abs difference   0.5",
+        "  RMSE                 0.0913",
+        "  PSNR                 20.8 dB",
+        "  pixels > 1e-4        20.0000 %",
+        "  max |Δτ| per point   3.25e-05",
+        "  time, JAX (full)     0.500 s  (median of 3)",
+        "  time, GL             0.250 s  (ratio JAX/GL 2.00)",
+    ):
         assert line in lines, (line, lines)
     assert len(lines) == 8
 
