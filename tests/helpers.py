@@ -9,8 +9,11 @@ import numpy as np
 import hairjax as hj
 from hairjax._disagreement import MAX_BAND, PIXEL_TOL, TAU_TOL, camera_band, shadow_band  # noqa: F401 (tests')
 
+# tests/helpers.py sits directly in tests/: the repository root is one folder up, whichever
+# subfolder of tests/ imports this (test files use these rather than their own __file__).
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"
+EXAMPLES = REPO / "experiments" / "scenes"
 
 
 def load_experiment(name: str):
@@ -36,6 +39,23 @@ def small_furball_scene(strands=40, size=48, shadows="opacity-maps", maps=8, res
         shadows=shadow_method(shadows, maps, resolution),
         **scene_kw,
     )
+
+
+def scheuermann_scene(size=24, strands=30, shadows="opacity-maps", **maps) -> hj.Scene:
+    """A small scalp with Scheuermann shading (docs/model.md §17); `maps` go to
+    ScheuermannMaps (textures, noise). For its shading tests and its fit's."""
+    hair = hj.scalp(strands=strands, points=6, seed=4, length=0.8, gravity=(0.0, -0.4, 0.0),
+                    alpha=0.6)
+    return hj.Scene(
+        hair, camera=hj.Camera(eye=(1.6, 0.6, 2.4), target=(0.0, 0.0, 0.0), width=size, height=size),
+        light=hj.Light(direction=(-0.3, -0.6, -0.75)),
+        shading=hj.Scheuermann(
+            hj.ScheuermannParams(kd=(0.5, 0.35, 0.2), ambient=0.05, primary_color=0.4,
+                                 primary_exponent=30.0, primary_shift=0.15,
+                                 secondary_color=(0.4, 0.3, 0.2), secondary_exponent=8.0,
+                                 secondary_shift=-0.2, kappa=0.9),
+            hj.ScheuermannMaps(normal_center=(0.0, 0.0, 0.0), **maps)),
+        shadows=shadow_method(shadows, 6, 24))
 
 
 def fit_terms(scene, params, names, target):
@@ -74,7 +94,7 @@ def central_difference(f, x: float, eps: float) -> float:
 
 
 def unexplained_pixels(scene, gl_image, jax_image):
-    """Pixels differing by > PIXEL_TOL outside the camera band (hairjax/_band.py, where the
+    """Pixels differing by > PIXEL_TOL outside the camera band (hairjax/_disagreement, where the
     tolerances and the bands are), and the band."""
     diff = np.abs(gl_image - jax_image).max(axis=-1).ravel()
     # Any fragment's colour and what lies behind it are ≤ the brightest pixel value, so a

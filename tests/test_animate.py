@@ -103,7 +103,7 @@ def test_cli_animate_and_its_errors(scene_file, tmp_path, capsys, gl):
     assert "wrote 2 frames" in capsys.readouterr().out
     assert sorted(p.name for p in out.iterdir()) == ["frame_0000.exr", "frame_0001.exr"]
     # GL's frame is the JAX renderer's frame (to PIXEL_TOL outside the camera band, as
-    # tests/test_gl.py; this scene has no shadows).
+    # tests/gl/test_renderer.py; this scene has no shadows).
     scene = load_animation(scene_file).scene(1 / 2)
     bad, _ = unexplained_pixels(scene, hj.read_image(out / "frame_0001.exr"),
                                 np.asarray(hj.render(scene)))

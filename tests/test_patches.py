@@ -2,11 +2,11 @@
 colours follow from the rule by hand, the JAX rule against GL, and the patch mesh."""
 
 import dataclasses
-from pathlib import Path
 
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from helpers import EXAMPLES
 
 import hairjax as hj
 from hairjax import Camera, PatchGeometry
@@ -280,7 +280,7 @@ def _assert_agree(gl_image, jax_image, view, patches, frags, colors, mask):
 
 # --------------------------------------------------------------------------- scenes
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "experiments" / "scenes" / "patches.toml"
+EXAMPLE = EXAMPLES / "patches.toml"
 
 
 def _small_patch_scene():

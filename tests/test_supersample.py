@@ -66,5 +66,5 @@ def test_gl_follows_the_offset(gl):
     change = np.sqrt(np.mean((gl_moved - render_gl(scene).image) ** 2))
     agree = np.sqrt(np.mean((gl_moved - jax_moved) ** 2))
     # The shift changes the GL image by far more than GL and JAX differ on the shifted scene
-    # (their cross-check, tests/test_gl.py, explains each pixel that differs by > 1e-4).
+    # (their cross-check, tests/gl/test_renderer.py, explains each pixel that differs by > 1e-4).
     assert change > 1e-2 and agree < 0.05 * change

@@ -85,7 +85,7 @@ def test_scene_file_streaks_table(tmp_path):
 def test_gl_streaks_match_jax(gl):
     """GL evaluates the same mean in float32 from the texture (N, P): H(y) is ≤ m·(1 + Δ) in
     size, so its rounding errs the factor by ~m·6e-8/(Δ·m) = 6e-8/Δ ≈ 6e-7 here, far below
-    PIXEL_TOL; pixels differ by more only in the camera band (hairjax/_band.py)."""
+    PIXEL_TOL; pixels differ by more only in the camera band (hairjax/_disagreement)."""
     from hairjax.gl import render_gl
 
     scene = small_furball_scene(strands=60, size=48, streaks=Streaks(texels=16, width=0.1,
@@ -102,7 +102,7 @@ def test_gl_streaks_match_jax(gl):
 def test_fit_terms_carry_the_streaks():
     """The fit's own image (its gain images, hairjax/_fit/_shading_fit.py) equals the
     renderer's for a scene with streaks (the fit leaves out fragments behind T < 1e-5, so to 1e-5 × the
-    brightest colour, as tests/test_fit.py states)."""
+    brightest colour, as tests/fit/test_fit.py states)."""
     from helpers import fit_image, fit_terms
 
     scene = small_furball_scene(strands=60, size=32, streaks=Streaks(contrast=0.8, seed=2))

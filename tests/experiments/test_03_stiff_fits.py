@@ -24,7 +24,7 @@ def test_stiff_fits_quick(tmp_path, capsys):
         assert math.isfinite(float(r["rmse"])), r
         assert int(r["steps"]) >= 0
     # With Ks held at 0 the image does not depend on the shininess at all: hj.fit reports it
-    # undetermined (as tests/test_fit.py::test_shininess_undetermined_without_specular).
+    # undetermined (as tests/fit/test_fit.py::test_shininess_undetermined_without_specular).
     held = next(r for r in rows if r["case"] == "ks-zero-held")
     assert "shininess" in held["undetermined"].split()
     assert "ks" not in held["fitted"].split()

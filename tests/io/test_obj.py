@@ -2,15 +2,12 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
+from helpers import DATA
 
 from hairjax._errors import MeshFormatError
 from hairjax._io._obj import load_obj
-
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 
 
 def write(tmp_path, text, name="m.obj"):

@@ -8,7 +8,7 @@ def test_scheuermann_fit_recovers_a_gl_target(gl):
     module = load_experiment("04_scheuermann_fit")
     errors, steps, _, rmse = module.run(size=32, strands=150, target="gl")
     # The GL target differs from the JAX model by float32 rounding only (RMSE ~1e-7 on
-    # pixel values ~0.1, tests/test_scheuermann.py); with the fit's conditioning that moves
+    # pixel values ~0.1, tests/shading/test_scheuermann.py); with the fit's conditioning that moves
     # the parameters by ~1e-6 relative (measured 2e-6 at 96², 1000 strands): 1e-4 leaves
     # a margin, and the start is 20-100 % off in every parameter.
     assert set(errors) == set(module.TRUE)

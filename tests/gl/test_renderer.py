@@ -7,9 +7,9 @@ JAX here in float64, so a pixel or point within rounding distance of such a boun
 fall on different sides. Every difference above the tolerance must be explained by one,
 and those must be rare; a wrong shader must leave differences no boundary explains.
 
-Tolerances (the constants and the bands live in hairjax/_band.py, with renderer_band, the
-pixels a fit to GL targets masks; tests/helpers.py passes them on to this file and
-tests/test_stability.py):
+Tolerances (the constants and the bands live in hairjax/_disagreement, with renderer_band,
+the pixels a fit to GL targets masks; tests/helpers.py passes them on to this file and
+the stability tests, tests/stability_helpers.py):
 - 1e-4 per pixel / per τ: float32 arithmetic on values ≤ 1 with ~10² operations per
   fragment and up to ~10³ fragments composited per pixel gives errors ~10⁻⁵ (measured
   RMSE 4e-6 … 7e-5 on these scenes); 1e-4 is the issue's bound.
@@ -25,12 +25,11 @@ tests/test_stability.py):
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 from helpers import (
     DATA,
+    EXAMPLES,
     MAX_BAND,
     PIXEL_TOL,
     TAU_TOL,
@@ -41,8 +40,6 @@ from helpers import (
 )
 
 import hairjax as hj
-
-EXAMPLES = Path(__file__).resolve().parents[1] / "experiments" / "scenes"
 
 
 def load(name):
@@ -151,7 +148,7 @@ def test_a_wrong_shader_fails_the_check(gl, references):
 @pytest.mark.parametrize("light", ["directional", "point"])
 def test_world_width_ribbons_match(gl, light):
     """Ribbons of world width (docs/model.md §5, §7): GL's camera pass with JAX's Ω equals
-    JAX's image but for the band (tolerances in hairjax/_band.py), and GL's own Ω gives τ
+    JAX's image but for the band (tolerances in hairjax/_disagreement), and GL's own Ω gives τ
     within TAU_TOL but where a light-side boundary explains it; in both views."""
     from hairjax.gl import render_gl
 

@@ -1,4 +1,4 @@
-"""Atomic output (hairjax/_files.py), shared by images, the CLI's JSON and the bench."""
+"""Atomic output (hairjax/_io/_files.py), shared by images, the CLI's JSON and the bench."""
 
 import json
 import os

@@ -175,7 +175,7 @@ def gl_weight_error(ctx, n: int) -> float:
 @pytest.mark.parametrize("n", [8, 100])  # exact and rounded u·n − ½ in GL
 def test_gl_lookup_matches_jax(gl, n):
     """GL samples the same table with texture(): the images agree outside the camera band
-    (hairjax/_band.py) to PIXEL_TOL (float32 arithmetic, as for the analytic model) plus
+    (hairjax/_disagreement) to PIXEL_TOL (float32 arithmetic, as for the analytic model) plus
     what GL's bilinear weights may add. That term is measured, not assumed: GPUs often
     keep 8 fractional bits (an error of 2⁻⁹ texel); llvmpipe interpolates in float32,
     measured 0 for n a power of two (u·n − ½ exact), 3.8e-6 texel at n = 100 and 3e-5 at
@@ -202,30 +202,6 @@ def test_gl_lookup_matches_jax(gl, n):
         assert np.abs(analytic - jax_image).max() > 10 * tol
 
 
-def test_lookup_error_experiment_runs(tmp_path, capsys, gl):
-    """experiments/08_lookup_error.py end to end on a tiny scene, both renderers."""
-    import csv
-
-    from helpers import load_experiment
-
-    scene = tmp_path / "tiny.toml"
-    scene.write_text('[hair]\nsource = "furball"\nstrands = 200\npoints = 6\n'
-                     '[shadows]\nmethod = "none"\n')
-    out = tmp_path / "out"
-    status = load_experiment("08_lookup_error").main(
-        ["--scene", str(scene), "--size", "32", "--sizes", "4,64", "--repeats", "1", "--gl",
-         "--out", str(out)])
-    assert status == 0 and "GL RMSE" in capsys.readouterr().out
-    with open(out / "lookup_error.csv", newline="") as f:
-        rows = list(csv.DictReader(f))
-    assert [int(r["size"]) for r in rows] == [4, 64]
-    # A 16× finer table errs less (O(h) RMSE, test_lookup_converges_to_the_formula), in
-    # both renderers.
-    for key in ("rmse", "gl_rmse"):
-        assert float(rows[1][key]) < float(rows[0][key]) / 4, key
-    assert (out / "lookup_error.png").stat().st_size > 0
-
-
 # --------------------------------------------------------------------------- fit
 
 TRUE = hj.ShadingParams(kd=(0.3, 0.5, 0.2), ks=0.4, shininess=25.0, kappa=2.5, ambient=0.05)
@@ -234,8 +210,8 @@ INIT = hj.ShadingParams(kd=0.5, ks=0.2, shininess=10.0, kappa=1.0, ambient=0.05)
 
 def test_fit_terms_and_derivatives_for_the_lookup_model():
     """The fit's Kd/Ks images for a lookup scene: its image equals the renderer's (to the
-    fit's stated 1e-5 × brightest colour, tests/test_fit.py), and its one-pass derivative
-    rule equals forward-mode autodiff of the plain images (as tests/test_fit.py checks for
+    fit's stated 1e-5 × brightest colour, tests/fit/test_fit.py), and its one-pass derivative
+    rule equals forward-mode autodiff of the plain images (as tests/fit/test_fit.py checks for
     the formula; rtol 1e-10: the same maths summed in another order)."""
     from helpers import fit_image, fit_terms
 

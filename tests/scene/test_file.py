@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import DATA, EXAMPLES, REPO
 
 import hairjax as hj
 from hairjax import Camera, Light, Occluder, Ordering, Shadows
@@ -19,10 +20,7 @@ from hairjax._scene._file import default_scene_path, load_scene, scene_from_dict
 from hairjax._scene._procedural import furball, scalp
 from hairjax._scene._strands import Strands
 
-ROOT = Path(__file__).resolve().parents[1]
-EXAMPLES = ROOT / "experiments" / "scenes"
-SHARED_DATA = ROOT.parent / "shared" / "data"  # read in place (shared/data/README.md)
-PONYTAIL_TAIL = SHARED_DATA / "tressfx" / "ponytail_tail.tfx"
+PONYTAIL_TAIL = DATA / "tressfx" / "ponytail_tail.tfx"  # read in place (shared/data/README.md)
 
 # A valid [hair] table small enough to generate in microseconds.
 HAIR = '[hair]\nsource = "furball"\nstrands = 50\n'
@@ -40,8 +38,8 @@ def real_load_hair():
     the checkout (CI has it; a clone elsewhere may not)."""
     from hairjax._io import load_hair
 
-    if not SHARED_DATA.is_dir():
-        pytest.skip(f"{SHARED_DATA} is not beside the checkout")
+    if not DATA.is_dir():
+        pytest.skip(f"{DATA} is not beside the checkout")
     return load_hair
 
 
@@ -358,7 +356,7 @@ def test_relative_hair_path_with_real_file(tmp_path, monkeypatch):
     rel = Path(os.path.relpath(PONYTAIL_TAIL, scene_dir)).as_posix()
     assert not Path(rel).is_absolute()
     scene_path = write(scene_dir, f'[hair]\nsource = "{rel}"\nscale = 0.5\n')
-    monkeypatch.chdir(ROOT)
+    monkeypatch.chdir(REPO)
     hair = load_scene(scene_path).strands
     assert hair.num_strands == 255 and hair.num_points == 255 * 16
     np.testing.assert_array_equal(hair.alpha, 0.5)
@@ -557,7 +555,7 @@ def test_scene_from_dict_without_a_file(tmp_path):
 
 # --------------------------------------------------------------------------- docs
 
-DOCS = ROOT / "docs" / "scenes.md"
+DOCS = REPO / "docs" / "scenes.md"
 
 
 def test_docs_list_exactly_the_keys_of_each_table():

@@ -1,22 +1,22 @@
 """Scheuermann shading (docs/model.md §17, scheuermann-2004 slides 9–13): each term against
 hand-computed values, which way the shifts move the highlight, gradients against finite
-differences, the per-point inputs, scene-file errors, and GL against JAX."""
+differences, the per-point inputs, scene-file errors, and GL against JAX. Fitting a
+Scheuermann scene: tests/fit/test_scheuermann_fit.py."""
 
 from __future__ import annotations
-
-from pathlib import Path
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 from helpers import (
+    EXAMPLES,
     MAX_BAND,
     PIXEL_TOL,
     TAU_TOL,
     render_gl_with_edited_shader,
+    scheuermann_scene,
     shadow_band,
-    shadow_method,
     unexplained_pixels,
 )
 
@@ -40,7 +40,7 @@ from hairjax._shading._scheuermann_inputs import (
     strand_position,
 )
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "experiments" / "scenes" / "scheuermann.toml"
+EXAMPLE = EXAMPLES / "scheuermann.toml"
 
 
 def unit(*v):
@@ -241,26 +241,11 @@ def test_textures_and_noise_are_sampled_along_the_strand():
     assert scheuermann_inputs(strands, tangent, ScheuermannMaps())[2] is None
 
 
-def small_scene(size=24, strands=30, shadows="opacity-maps", **maps) -> hj.Scene:
-    hair = hj.scalp(strands=strands, points=6, seed=4, length=0.8, gravity=(0.0, -0.4, 0.0),
-                    alpha=0.6)
-    return hj.Scene(
-        hair, camera=hj.Camera(eye=(1.6, 0.6, 2.4), target=(0.0, 0.0, 0.0), width=size, height=size),
-        light=hj.Light(direction=(-0.3, -0.6, -0.75)),
-        shading=hj.Scheuermann(
-            ScheuermannParams(kd=(0.5, 0.35, 0.2), ambient=0.05, primary_color=0.4,
-                              primary_exponent=30.0, primary_shift=0.15,
-                              secondary_color=(0.4, 0.3, 0.2), secondary_exponent=8.0,
-                              secondary_shift=-0.2, kappa=0.9),
-            ScheuermannMaps(normal_center=(0.0, 0.0, 0.0), **maps)),
-        shadows=shadow_method(shadows, 6, 24))
-
-
 def test_base_texture_and_occlusion_scale_the_colour():
     """base(u)·AO(u) multiplies the whole point colour: constant textures scale the hair's
     part of the image by their product, per channel (black background, no occluder)."""
-    plain = np.asarray(hj.render(small_scene()))
-    scaled = np.asarray(hj.render(small_scene(base_texture=((0.5, 0.25, 1.0),), occlusion=(0.5,))))
+    plain = np.asarray(hj.render(scheuermann_scene()))
+    scaled = np.asarray(hj.render(scheuermann_scene(base_texture=((0.5, 0.25, 1.0),), occlusion=(0.5,))))
     np.testing.assert_allclose(scaled[..., :3], plain[..., :3] * [0.25, 0.125, 0.5], rtol=1e-12,
                                atol=1e-15)
     np.testing.assert_array_equal(scaled[..., 3], plain[..., 3])
@@ -270,16 +255,16 @@ def test_base_texture_and_occlusion_scale_the_colour():
 def test_constant_alpha_texture_equals_scaled_hair_alpha():
     """The alpha texture multiplies each segment's opacity in the camera pass and in the
     shadows: a constant ½ renders as hair alpha ½ as large."""
-    textured = small_scene(alpha_texture=(0.5,))
-    halved = small_scene()
+    textured = scheuermann_scene(alpha_texture=(0.5,))
+    halved = scheuermann_scene()
     halved = halved.replace(strands=halved.strands.replace(alpha=halved.strands.alpha * 0.5))
     a, b = np.asarray(hj.render(textured)), np.asarray(hj.render(halved))
     np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-15)
-    assert not np.allclose(a, np.asarray(hj.render(small_scene())))
+    assert not np.allclose(a, np.asarray(hj.render(scheuermann_scene())))
 
 
 def test_kajiya_kay_scenes_build_none_of_it():
-    scene = small_scene().replace(shading=hj.KajiyaKay(hj.ShadingParams()))
+    scene = scheuermann_scene().replace(shading=hj.KajiyaKay(hj.ShadingParams()))
     assert prepare(scene).shading_inputs == hj.PointInputs()
     assert geometry_stage(scene).shading_inputs is None
 
@@ -291,7 +276,7 @@ def test_gradients_match_central_differences():
     """d(Σ w·image)/dθ for every parameter (each RGB one along a fixed direction) against
     central differences in float64. ε = 1e-6·max(1, |θ|): truncation O(ε²) ≈ 1e-12 and
     roundoff ~1e-16/ε = 1e-10 relative, so 1e-6 leaves a wide margin."""
-    scene = small_scene()
+    scene = scheuermann_scene()
     geom = geometry_stage(scene)
     weight = jnp.asarray(np.random.default_rng(0).uniform(0.5, 1.5, (24, 24, 4)))
 
@@ -385,8 +370,8 @@ def gl_reference():
 
 
 def test_gl_matches_jax(gl, gl_reference):
-    """Tolerances as tests/test_gl.py (hairjax/_band.py): 1e-4 per pixel and per τ outside
-    the bands that float32 boundary decisions explain."""
+    """Tolerances as tests/gl/test_renderer.py (hairjax/_disagreement): 1e-4 per pixel and
+    per τ outside the bands that float32 boundary decisions explain."""
     from hairjax.gl import render_gl
 
     scene, jax_image, omega, occluder = gl_reference
@@ -463,7 +448,7 @@ def test_value_and_gradients_finite_at_the_special_points():
 def test_a_scene_may_hold_traced_parameters():
     """A Scene built inside a trace (e.g. under jax.grad) cannot check values it does not
     have yet; it must not fail on them."""
-    base = small_scene(size=8, strands=3, shadows="none")
+    base = scheuermann_scene(size=8, strands=3, shadows="none")
 
     def f(shift):
         params = ScheuermannParams(**{**_fields(base.params), "primary_shift": shift})
@@ -481,7 +466,7 @@ def test_numpy_exact_omega_equals_the_renderers():
     from hairjax._geometry._shadows import exact_opacity, shadow_setup
     from hairjax._shading._scheuermann_inputs import exact_omega_numpy
 
-    s = small_scene(strands=60).strands
+    s = scheuermann_scene(strands=60).strands
     segs = s.segments()
     setup = shadow_setup(s.points, segs, s.strand_of_point[segs[:, 0]], s.width,
                          hj.Light(direction=(0.3, -1.0, 0.2)), hj.Shadows("exact", resolution=32))
@@ -517,7 +502,7 @@ def test_gl_matches_jax_point_light(gl):
     """A point light (L varies per point, so H does) with `exact` shadows, default textures."""
     from hairjax.gl import render_gl
 
-    scene = small_scene(size=48, strands=80, shadows="exact").replace(
+    scene = scheuermann_scene(size=48, strands=80, shadows="exact").replace(
         light=hj.Light(kind="point", position=(1.2, 1.5, 1.8)))
     geom = geometry_stage(scene)
     jax_image = np.asarray(hj.shading_stage(geom, scene.params))
@@ -576,7 +561,7 @@ def test_opacity_gradient_with_alpha_texture_matches_central_differences():
     """The alpha texture scales coverage, so the image stays differentiable in the strand
     opacity a (geometry stage): d(Σ w·image)/da along a fixed direction against central
     differences (float64; ε = 1e-6, error budget as in the parameter test)."""
-    scene = small_scene(size=16, strands=12, alpha_texture=(1.0, 0.8, 0.2))
+    scene = scheuermann_scene(size=16, strands=12, alpha_texture=(1.0, 0.8, 0.2))
     weight = jnp.asarray(np.random.default_rng(3).uniform(0.5, 1.5, (16, 16, 4)))
     direction = jnp.asarray(np.random.default_rng(4).uniform(-1.0, 1.0, 12))
     a0 = jnp.asarray(scene.strands.alpha)
@@ -589,69 +574,3 @@ def test_opacity_gradient_with_alpha_texture_matches_central_differences():
     fd = (float(loss(a0 + eps * direction)) - float(loss(a0 - eps * direction))) / (2 * eps)
     assert abs(fd) > 1e-3
     np.testing.assert_allclose(analytic, fd, rtol=1e-6)
-
-
-# --------------------------------------------------------------------------- hairjax.fit
-
-
-FIT_NAMES = ("kd", "primary_color", "primary_exponent", "primary_shift", "secondary_color",
-             "secondary_exponent", "secondary_shift", "kappa")
-
-
-def test_fit_recovers_every_parameter():
-    """hairjax.fit on a Scheuermann scene: from 20-100 % off, every fittable parameter back
-    to 1e-8 relative on a noise-free float64 target (LM converges to ~1e-15; 1e-8 leaves
-    room for the tolerance rtol = 1e-8), with finite standard errors and a JSON report."""
-    import json
-
-    scene = small_scene(size=16, strands=20)
-    truth = scene.params
-    target = np.asarray(hj.render(scene, truth))
-    start = ScheuermannParams(kd=0.3, ambient=truth.ambient, primary_color=0.2, primary_exponent=15.0,
-                              primary_shift=0.0, secondary_color=0.2, secondary_exponent=14.0,
-                              secondary_shift=-0.05, kappa=0.5)
-    result = hj.fit(scene, target, init=start)
-    assert result.fitted == FIT_NAMES and result.termination == "converged"
-    for name in FIT_NAMES:
-        np.testing.assert_allclose(getattr(result.params, name), getattr(truth, name), rtol=1e-8,
-                                   err_msg=name)
-        assert np.all(np.isfinite(result.std_error[name]))
-    assert result.loss[0] > 1e-3 and result.rmse < 1e-10
-    assert json.loads(json.dumps(result.to_json()))["params"]["primary_shift"] == pytest.approx(0.15)
-
-
-def test_fit_refuses_what_it_cannot_do():
-    scene = small_scene(size=8, strands=3, shadows="none")
-    target = np.zeros((8, 8, 3))
-    with pytest.raises(hj.FitError, match="unknown parameter 'ks' for a scheuermann scene"):
-        hj.fit(scene, target, fit=("kd", "ks"))
-    with pytest.raises(hj.FitError, match="grey value"):
-        hj.fit(scene, target, fit=("kd",), scalar=("primary_shift",))
-    kk = scene.replace(shading=hj.KajiyaKay(hj.ShadingParams()))
-    with pytest.raises(hj.FitError, match="share a shading model"):
-        hj.fit([scene, kk], [target, target])
-    with pytest.raises(hj.FitError, match="from ScheuermannParams"):
-        hj.fit(scene, target, init=hj.ShadingParams())
-
-
-def test_fit_from_the_cli(tmp_path, capsys):
-    import json
-
-    from hairjax.cli import main
-
-    scene_file = tmp_path / "s.toml"
-    scene_file.write_text('[hair]\nsource = "scalp"\nstrands = 20\npoints = 5\n'
-                          '[camera]\nwidth = 16\nheight = 12\n[shadows]\nmethod = "none"\n'
-                          '[shading]\nmodel = "scheuermann"\nprimary_shift = 0.2\n')
-    scene = hj.load_scene(scene_file)
-    target = tmp_path / "t.exr"
-    hj.write_image(target, np.asarray(hj.render(scene)))
-    report = tmp_path / "fit.json"
-    assert main(["fit", str(scene_file), "--target", str(target), "--fit",
-                 "primary_shift,secondary_color", "--json", str(report)]) == 0
-    out = capsys.readouterr().out
-    assert "primary_shift" in out and "fixed" in out  # every parameter listed, unfitted ones fixed
-    # The target is float32 (EXR): recovery to float32 rounding.
-    assert json.loads(report.read_text())["params"]["primary_shift"] == pytest.approx(0.2, rel=1e-4)
-    assert main(["fit", str(scene_file), "--target", str(target), "--fit", "kd,shininess"]) == 2
-    assert "unknown parameter 'shininess'" in capsys.readouterr().err

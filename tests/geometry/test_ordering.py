@@ -149,7 +149,7 @@ def test_static_scene_file_loads_and_renders(tmp_path):
 
 def test_static_order_gl_matches_jax(gl):
     """GL draws in the same static order: its image equals JAX's but for the band of
-    boundary pixels (tests/helpers.py `unexplained_pixels`, tolerances in hairjax/_band.py)."""
+    boundary pixels (tests/helpers.py `unexplained_pixels`, tolerances in hairjax/_disagreement)."""
     from helpers import small_furball_scene, unexplained_pixels
 
     import hairjax as hj

@@ -1,8 +1,8 @@
-"""hairjax/_band.py: the pixels where the GL and JAX renderers may differ, from geometry.
+"""hairjax/_disagreement: the pixels where the GL and JAX renderers may differ, from geometry.
 
 Each GL test renders with GL's own Ω (as a fit's GL targets are), so both the camera-side
-and the light-side discontinuities of docs/model.md §11 can show; tests/test_gl.py checks
-the camera pass with JAX's Ω on the larger scenes.
+and the light-side discontinuities of docs/model.md §11 can show; tests/gl/test_renderer.py
+checks the camera pass with JAX's Ω on the larger scenes.
 """
 
 from __future__ import annotations

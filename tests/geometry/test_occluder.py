@@ -4,12 +4,10 @@ cases, the κ-gradient, and JAX against GL."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import jax
 import numpy as np
 import pytest
-from helpers import DATA, central_difference, shadow_method, unexplained_pixels
+from helpers import DATA, EXAMPLES, central_difference, shadow_method, unexplained_pixels
 
 import hairjax as hj
 from hairjax._disagreement import OCCLUDER_VERTEX_STEP, PIXEL_TOL
@@ -17,8 +15,6 @@ from hairjax._geometry._occluder import interpolation_bound
 from hairjax._geometry._projection import camera_view
 from hairjax._geometry._shadows import light_frame
 from hairjax._shading import occluder_colors, point_colors
-
-EXAMPLES = Path(__file__).resolve().parents[1] / "experiments" / "scenes"
 
 
 def quad(corners) -> hj.Occluder:
@@ -201,7 +197,7 @@ SCENES = gl_scenes()
 @pytest.mark.parametrize("name", list(SCENES))
 def test_gl_agrees_with_jax(gl, name):
     """With JAX's Ω and occluder light, GL's image equals JAX's to 1e-4 outside the camera
-    band (hairjax/_band.py: it holds the mesh's silhouette pixels and those where GL's
+    band (hairjax/_disagreement: it holds the mesh's silhouette pixels and those where GL's
     vertex rounding may move the interpolated normal by > 1e-4, 16 % of Sintel at 64²,
     where most triangles are smaller than a pixel), and within that rounding's bound
     inside it. GL's own render differs only in renderer_band (which adds the points and

@@ -12,12 +12,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import DATA
 
 from hairjax._errors import HairFormatError
 from hairjax._io import format_info, hair_info, load_hair
 from hairjax._scene._strands import Strands
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 needs_data = pytest.mark.skipif(not DATA.is_dir(), reason=f"shared hair assets not found at {DATA}")
 
 # From shared/data/README.md: file -> (strands, points).

@@ -1,0 +1,152 @@
+"""`hairjax compare`'s measures (hairjax/tools/_compare.py): the image statistics on
+hand-made images whose maximum, RMSE, PSNR and share of pixels over 1e-4 follow by hand,
+the report's text, the median timing, and `compare` itself on a tiny scene with both
+renderers. (The CLI's `compare` command end to end: tests/gl/test_plumbing.py.)"""
+
+from __future__ import annotations
+
+import math
+import types
+
+import numpy as np
+import pytest
+from helpers import PIXEL_TOL, small_furball_scene
+
+import hairjax as hj
+from hairjax.tools import _compare, compare, format_report, image_stats, median_time
+
+# The keys `hairjax compare` prints (format_report) and writes to --json.
+REPORT_KEYS = {
+    "scene",
+    "size",
+    "max_abs",
+    "rmse",
+    "psnr_db",
+    "share_over_1e-4",
+    "tau_max_abs",
+    "jax_s",
+    "gl_s",
+    "repeats",
+}
+
+
+# --------------------------------------------------------------------------- image_stats
+
+
+def test_image_stats_by_hand():
+    """Ten RGB pixels, four differing in one channel each: by 0.5, by 2e-4 (over the
+    tolerance), by exactly 1e-4 (not over it: the test is >) and by 5e-5."""
+    assert PIXEL_TOL == 1e-4
+    a = np.zeros((2, 5, 3))
+    b = a.copy()
+    b[0, 0, 1] = 0.5
+    b[1, 3, 0] = 2e-4
+    b[1, 2, 2] = 1e-4
+    b[1, 4, 2] = -5e-5
+    mse = (0.5**2 + 2e-4**2 + 1e-4**2 + 5e-5**2) / 30  # over all 30 values
+    stats = image_stats(a, b)
+    assert set(stats) == {"max_abs", "rmse", "psnr_db", "share_over_1e-4"}
+    assert stats["max_abs"] == 0.5
+    assert stats["rmse"] == pytest.approx(math.sqrt(mse), rel=1e-14)
+    assert stats["psnr_db"] == pytest.approx(10 * math.log10(1 / mse), rel=1e-14)  # peak 1
+    assert stats["share_over_1e-4"] == 2 / 10  # pixels, not values: (0, 0) and (1, 3)
+    assert image_stats(b, a) == stats  # symmetric
+    assert all(type(v) is float for v in stats.values())
+
+
+def test_image_stats_of_a_uniform_difference_and_of_equal_images():
+    a = np.full((3, 4, 4), 0.25, np.float32)  # float32 in, as GL's images are
+    stats = image_stats(a, a + np.float32(0.1))
+    assert stats["max_abs"] == pytest.approx(0.1, rel=1e-6)
+    assert stats["rmse"] == pytest.approx(0.1, rel=1e-6)
+    assert stats["psnr_db"] == pytest.approx(20.0, rel=1e-5)  # −10·log10(0.01)
+    assert stats["share_over_1e-4"] == 1.0
+    same = image_stats(a, a.copy())
+    assert same == {"max_abs": 0.0, "rmse": 0.0, "psnr_db": math.inf, "share_over_1e-4": 0.0}
+
+
+# --------------------------------------------------------------------------- the report
+
+
+def report_of(**changes) -> dict:
+    r = {
+        "scene": "tiny",
+        "size": [16, 12],
+        "max_abs": 0.5,
+        "rmse": 0.0913,
+        "psnr_db": 20.79,
+        "share_over_1e-4": 0.2,
+        "tau_max_abs": 3.25e-5,
+        "jax_s": 0.5,
+        "gl_s": 0.25,
+        "repeats": 3,
+    }
+    return {**r, **changes}
+
+
+def test_format_report_names_every_number():
+    text = format_report(report_of())
+    lines = text.splitlines()
+    assert lines[0] == "tiny (16x12): GL vs JAX"
+    for line in (
+        "  max abs difference   0.5",
+        "  RMSE                 0.0913",
+        "  PSNR                 20.8 dB",
+        "  pixels > 1e-4        20.0000 %",
+        "  max |Δτ| per point   3.25e-05",
+        "  time, JAX (full)     0.500 s  (median of 3)",
+        "  time, GL             0.250 s  (ratio JAX/GL 2.00)",
+    ):
+        assert line in lines, (line, lines)
+    assert len(lines) == 8
+
+
+def test_format_report_without_omega_from_gl():
+    text = format_report(report_of(tau_max_abs=None, psnr_db=math.inf))
+    assert "max |Δτ| per point   n/a (no Ω from GL)" in text
+    assert "PSNR                 inf dB" in text
+
+
+def test_median_time_skips_a_warm_up_call_and_takes_the_median(monkeypatch):
+    clock = types.SimpleNamespace(now=0.0)
+    durations = iter([100.0, 5.0, 1.0, 3.0])  # the warm-up (compilation) is slow
+
+    def fn():
+        clock.now += next(durations)
+
+    monkeypatch.setattr(_compare, "time", types.SimpleNamespace(perf_counter=lambda: clock.now))
+    assert median_time(fn, 3) == 3.0
+    with pytest.raises(StopIteration):
+        fn()  # exactly 1 + 3 calls were made
+
+
+# --------------------------------------------------------------------------- compare
+
+
+@pytest.mark.parametrize("shadows", ["opacity-maps", "none"])
+def test_compare_on_a_tiny_scene(gl, shadows):
+    from hairjax._geometry._stage import geometry_stage
+    from hairjax.gl import render_gl
+
+    scene = small_furball_scene(strands=40, size=24, shadows=shadows).replace(name="tiny")
+    report = compare(scene, repeats=1)
+    assert set(report) == REPORT_KEYS
+    assert report["scene"] == "tiny" and report["size"] == [24, 24] and report["repeats"] == 1
+    assert report["jax_s"] > 0 and report["gl_s"] > 0
+    # The statistics are those of GL's image against JAX's.
+    gl_result = render_gl(scene)
+    expected = image_stats(gl_result.image, np.asarray(hj.render(scene)))
+    for key, value in expected.items():
+        assert report[key] == pytest.approx(value, rel=1e-6, abs=1e-12), key
+    assert 0 < report["rmse"] < 1e-3 and report["max_abs"] > 0  # they agree, not bit for bit
+    if shadows == "none":
+        assert report["tau_max_abs"] is None  # GL reports no Ω without shadows
+        assert "n/a (no Ω from GL)" in format_report(report)
+    else:
+        kappa = float(scene.params.kappa)
+        jax_omega = np.asarray(geometry_stage(scene).omega, np.float64)
+        tau = np.abs(np.exp(-kappa * jax_omega) - np.exp(-kappa * gl_result.omega.astype(np.float64)))
+        assert report["tau_max_abs"] == pytest.approx(tau.max(), rel=1e-6, abs=1e-12)
+        assert f"{report['tau_max_abs']:.3g}" in format_report(report)
+    text = format_report(report)
+    assert f"{report['rmse']:.3g}" in text and f"{report['psnr_db']:.1f} dB" in text
