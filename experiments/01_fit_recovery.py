@@ -39,9 +39,12 @@ START = hj.ShadingParams(kd=0.5, ks=0.3, shininess=40.0, kappa=2.0)
 def hidden_sets(n: int, seed: int):
     rng = np.random.default_rng(seed)
     for _ in range(n):
-        yield hj.ShadingParams(kd=rng.uniform(0.05, 1.0, 3), ks=rng.uniform(0.0, 1.0),
-                               shininess=np.exp(rng.uniform(np.log(2), np.log(500))),
-                               kappa=np.exp(rng.uniform(np.log(0.1), np.log(20))))
+        yield hj.ShadingParams(
+            kd=rng.uniform(0.05, 1.0, 3),
+            ks=rng.uniform(0.0, 1.0),
+            shininess=np.exp(rng.uniform(np.log(2), np.log(500))),
+            kappa=np.exp(rng.uniform(np.log(0.1), np.log(20))),
+        )
 
 
 def resized(scene, size):
@@ -74,9 +77,13 @@ def main(argv=None) -> int:
     solvers = args.solvers.split(",")
     noises = [float(x) for x in args.noise.split(",")]
     if args.quick:
-        scenes = {"quick": lambda: hj.Scene(hj.furball(300, 8, seed=2),
-                                            camera=hj.Camera(eye=(0, 0.3, 3.5), width=48, height=48),
-                                            shadows=hj.Shadows("opacity-maps", 8, 32))}
+        scenes = {
+            "quick": lambda: hj.Scene(
+                hj.furball(300, 8, seed=2),
+                camera=hj.Camera(eye=(0, 0.3, 3.5), width=48, height=48),
+                shadows=hj.Shadows("opacity-maps", 8, 32),
+            )
+        }
         args.sets, solvers = min(args.sets, 2), ["levenberg-marquardt"]
     else:
         scenes = {k: SCENES[k] for k in args.scenes.split(",")}
@@ -98,30 +105,49 @@ def main(argv=None) -> int:
                     noisy[..., :3] += rng.normal(0, noise * target[..., :3].max(), target[..., :3].shape)
                 for solver in solvers:
                     start = time.perf_counter()
-                    r = hj.fit(scene, noisy, init=START, solver=solver, max_steps=args.max_steps,
-                               masks=[mask])
+                    r = hj.fit(
+                        scene, noisy, init=START, solver=solver, max_steps=args.max_steps, masks=[mask]
+                    )
                     errors = relative_errors(r.params, truth)
                     # Weakly identifiable: the fit's own standard error exceeds half the
                     # bound (e.g. a faint, shadowed highlight constrains Ks and p poorly).
                     bound = 1e-3 if noise == 0 else 2e-2
-                    weak = [n for n in PARAMS if n not in r.undetermined and np.max(
-                        np.asarray(r.std_error[n]) / np.abs(np.asarray(getattr(r.params, n)))) > bound / 2]
-                    rows.append(dict(scene=scene_name, set=k, noise=noise, solver=solver,
-                                     masked=float(1 - mask.mean()), steps=r.steps, restarts=r.restarts,
-                                     time_s=time.perf_counter() - start, termination=r.termination,
-                                     undetermined=" ".join([*r.undetermined, *weak]),
-                                     **{f"err_{n}": errors[n] for n in PARAMS},
-                                     **{f"true_{n}": float(np.mean(getattr(truth, n))) for n in PARAMS}))
+                    weak = [
+                        n
+                        for n in PARAMS
+                        if n not in r.undetermined
+                        and np.max(np.asarray(r.std_error[n]) / np.abs(np.asarray(getattr(r.params, n))))
+                        > bound / 2
+                    ]
+                    rows.append(
+                        dict(
+                            scene=scene_name,
+                            set=k,
+                            noise=noise,
+                            solver=solver,
+                            masked=float(1 - mask.mean()),
+                            steps=r.steps,
+                            restarts=r.restarts,
+                            time_s=time.perf_counter() - start,
+                            termination=r.termination,
+                            undetermined=" ".join([*r.undetermined, *weak]),
+                            **{f"err_{n}": errors[n] for n in PARAMS},
+                            **{f"true_{n}": float(np.mean(getattr(truth, n))) for n in PARAMS},
+                        )
+                    )
                     with open(partial, "a", newline="") as f:
                         writer = csv.DictWriter(f, fieldnames=list(rows[-1]))
                         if len(rows) == 1:
                             writer.writeheader()
                         writer.writerow(rows[-1])
-                    print(f"{scene_name} set {k:2d} noise {noise:g} {solver}: {r.termination}, "
-                          f"{1 - mask.mean():.2%} masked, "
-                          f"{r.steps} steps, errors " + " ".join(f"{n} {errors[n]:.2e}" for n in PARAMS)
-                          + (f", undetermined: {', '.join(r.undetermined)}" if r.undetermined else ""),
-                          flush=True)
+                    print(
+                        f"{scene_name} set {k:2d} noise {noise:g} {solver}: {r.termination}, "
+                        f"{1 - mask.mean():.2%} masked, "
+                        f"{r.steps} steps, errors "
+                        + " ".join(f"{n} {errors[n]:.2e}" for n in PARAMS)
+                        + (f", undetermined: {', '.join(r.undetermined)}" if r.undetermined else ""),
+                        flush=True,
+                    )
 
     with open(args.out, "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
@@ -129,27 +155,38 @@ def main(argv=None) -> int:
         writer.writerows(rows)
     partial.unlink()
     print(f"\nwrote {args.out}\n")
-    print(f"{'scene':<8} {'noise':>5} {'solver':<20} " + " ".join(f"{n + ' med/worst':>22}" for n in PARAMS)
-          + "  bound")
+    print(
+        f"{'scene':<8} {'noise':>5} {'solver':<20} "
+        + " ".join(f"{n + ' med/worst':>22}" for n in PARAMS)
+        + "  bound"
+    )
     failures = 0
     for scene_name in scenes:
         for noise in noises:
             bound = 1e-3 if noise == 0 else 2e-2
             for solver in solvers:
-                sel = [r for r in rows if r["scene"] == scene_name and r["noise"] == noise
-                       and r["solver"] == solver]
+                sel = [
+                    r
+                    for r in rows
+                    if r["scene"] == scene_name and r["noise"] == noise and r["solver"] == solver
+                ]
                 cells = []
                 for n in PARAMS:
                     errs = [r[f"err_{n}"] for r in sel if n not in r["undetermined"].split()]
                     worst = max(errs) if errs else float("nan")
                     failures += sum(e > bound for e in errs)
                     cells.append(f"{np.median(errs) if errs else float('nan'):9.2e}/{worst:9.2e}")
-                print(f"{scene_name:<8} {noise:5g} {solver:<20} " + " ".join(f"{c:>22}" for c in cells)
-                      + f"  {bound:g}")
+                print(
+                    f"{scene_name:<8} {noise:5g} {solver:<20} "
+                    + " ".join(f"{c:>22}" for c in cells)
+                    + f"  {bound:g}"
+                )
     excluded = sum(len(r["undetermined"].split()) for r in rows)
-    print(f"\n{failures} identifiable parameter(s) outside the bound; {excluded} of "
-          f"{len(rows) * len(PARAMS)} fitted values excluded as undetermined or weakly "
-          "identifiable (standard error > half the bound)")
+    print(
+        f"\n{failures} identifiable parameter(s) outside the bound; {excluded} of "
+        f"{len(rows) * len(PARAMS)} fitted values excluded as undetermined or weakly "
+        "identifiable (standard error > half the bound)"
+    )
     return 0
 
 

@@ -30,13 +30,25 @@ NAMES = ("kd", "ks", "shininess", "kappa")
 
 
 def worst_error(params) -> float:
-    return max(float(np.max(np.abs(np.asarray(getattr(params, n)) - np.asarray(getattr(TRUE, n)))
-                            / np.abs(np.asarray(getattr(TRUE, n))))) for n in NAMES)
+    return max(
+        float(
+            np.max(
+                np.abs(np.asarray(getattr(params, n)) - np.asarray(getattr(TRUE, n)))
+                / np.abs(np.asarray(getattr(TRUE, n)))
+            )
+        )
+        for n in NAMES
+    )
 
 
 def vector(p) -> np.ndarray:
-    return np.concatenate([np.log(np.asarray(p.kd)), np.log(np.asarray(p.ks)),
-                           [np.log(float(p.shininess)), np.log(float(p.kappa))]])
+    return np.concatenate(
+        [
+            np.log(np.asarray(p.kd)),
+            np.log(np.asarray(p.ks)),
+            [np.log(float(p.shininess)), np.log(float(p.kappa))],
+        ]
+    )
 
 
 def params_of(v) -> hj.ShadingParams:
@@ -82,10 +94,18 @@ def unstaged(scene, target):
 
     start = time.perf_counter()
     with jax.disable_jit():
-        sol = optx.least_squares(fn, optx.LevenbergMarquardt(rtol=1e-5, atol=1e-7),
-                                 jnp.asarray(vector(START)), max_steps=100, throw=False)
-    return (time.perf_counter() - start, int(sol.stats["num_steps"]),
-            worst_error(params_of(np.asarray(sol.value))))
+        sol = optx.least_squares(
+            fn,
+            optx.LevenbergMarquardt(rtol=1e-5, atol=1e-7),
+            jnp.asarray(vector(START)),
+            max_steps=100,
+            throw=False,
+        )
+    return (
+        time.perf_counter() - start,
+        int(sol.stats["num_steps"]),
+        worst_error(params_of(np.asarray(sol.value))),
+    )
 
 
 def main(argv=None) -> int:
@@ -95,13 +115,17 @@ def main(argv=None) -> int:
     p.add_argument("--skip", default="", help="comma-separated baselines to skip: scipy,unstaged")
     args = p.parse_args(argv)
     scene = hj.load_scene(hj.default_scene_path())
-    scene = scene.replace(strands=hj.furball(args.strands, 16, alpha=0.5),
-                          camera=dataclasses.replace(scene.camera, width=args.size, height=args.size))
+    scene = scene.replace(
+        strands=hj.furball(args.strands, 16, alpha=0.5),
+        camera=dataclasses.replace(scene.camera, width=args.size, height=args.size),
+    )
     target_jax = np.asarray(hj.render(scene, TRUE))
     target_gl = render_gl(scene, TRUE).image
     # The first fit compiles the step functions; the second shows the warm cost.
-    results = {"staged, first (compiles)": staged(scene, target_jax),
-               "staged (hairjax.fit)": staged(scene, target_jax)}
+    results = {
+        "staged, first (compiles)": staged(scene, target_jax),
+        "staged (hairjax.fit)": staged(scene, target_jax),
+    }
     if "scipy" not in args.skip:
         results["(a) scipy FD over GL"] = scipy_gl(scene, target_gl)
     if "unstaged" not in args.skip:

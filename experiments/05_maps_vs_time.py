@@ -32,8 +32,15 @@ import numpy as np
 DEFAULT_MAPS = (1, 2, 4, 8, 16, 32, 64, 128, 256, 512)
 SLOPE_FROM = 16  # fit the slope over N >= this
 SETTINGS = (("clipped", True), ("unclipped", False))
-CSV_COLUMNS = ("maps", "clipped_s", "unclipped_s", "clipped_shadows_s", "unclipped_shadows_s",
-               "clipped_runs", "unclipped_runs")
+CSV_COLUMNS = (
+    "maps",
+    "clipped_s",
+    "unclipped_s",
+    "clipped_shadows_s",
+    "unclipped_shadows_s",
+    "clipped_runs",
+    "unclipped_runs",
+)
 
 
 def _parse_maps(text: str) -> list[int]:
@@ -50,19 +57,32 @@ def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--scene", type=Path, help="scene TOML (default: the built-in default scene)")
     p.add_argument("--repeats", type=int, default=3, help="runs per setting, median (default 3)")
-    p.add_argument("--out", type=Path, default=Path("out/maps_vs_time"),
-                   help="output folder (default out/maps_vs_time)")
-    p.add_argument("--maps", type=_parse_maps, default=list(DEFAULT_MAPS),
-                   help="numbers of opacity maps, comma-separated (default 1,2,4,...,512)")
-    p.add_argument("--single-run-above", type=float, default=60.0, metavar="SECONDS",
-                   help="run a setting once only if its first run takes longer (default 60)")
+    p.add_argument(
+        "--out", type=Path, default=Path("out/maps_vs_time"), help="output folder (default out/maps_vs_time)"
+    )
+    p.add_argument(
+        "--maps",
+        type=_parse_maps,
+        default=list(DEFAULT_MAPS),
+        help="numbers of opacity maps, comma-separated (default 1,2,4,...,512)",
+    )
+    p.add_argument(
+        "--single-run-above",
+        type=float,
+        default=60.0,
+        metavar="SECONDS",
+        help="run a setting once only if its first run takes longer (default 60)",
+    )
     return p
 
 
 def fit_slope(maps, seconds, start: int = SLOPE_FROM) -> float:
     """Least-squares slope of log(seconds) against log(maps) over maps >= start."""
-    pts = [(math.log(n), math.log(t)) for n, t in zip(maps, seconds)
-           if n >= start and t is not None and t > 0 and math.isfinite(t)]
+    pts = [
+        (math.log(n), math.log(t))
+        for n, t in zip(maps, seconds)
+        if n >= start and t is not None and t > 0 and math.isfinite(t)
+    ]
     if len(pts) < 2:
         return float("nan")
     x, y = np.array(pts).T
@@ -99,10 +119,21 @@ def _plot(rows, slopes, path: Path, title: str) -> None:
     for name, color in (("unclipped", "tab:red"), ("clipped", "tab:blue")):
         label = "without clipping" if name == "unclipped" else "with clipping (§4.2)"
         slope = slopes[f"{name}_s"]
-        ax.plot(maps, [r[f"{name}_s"] for r in rows], "o-", color=color,
-                label=f"{label}, total (slope {slope:.2f})")
-        ax.plot(maps, [r[f"{name}_shadows_s"] for r in rows], "--", color=color, alpha=0.5,
-                label=f"{label}, opacity-map passes")
+        ax.plot(
+            maps,
+            [r[f"{name}_s"] for r in rows],
+            "o-",
+            color=color,
+            label=f"{label}, total (slope {slope:.2f})",
+        )
+        ax.plot(
+            maps,
+            [r[f"{name}_shadows_s"] for r in rows],
+            "--",
+            color=color,
+            alpha=0.5,
+            label=f"{label}, opacity-map passes",
+        )
     ax.set_xscale("log", base=2)
     ax.set_yscale("log")
     ax.set_xlabel("number of opacity maps N")
@@ -126,8 +157,7 @@ def main(argv=None) -> int:
     scene_path = args.scene or hairjax.default_scene_path()
     base = hairjax.load_scene(scene_path)
     if base.shadows.method != "opacity-maps":
-        print(f"note: {scene_path} has shadows.method = {base.shadows.method!r}; "
-              "timing opacity maps instead")
+        print(f"note: {scene_path} has shadows.method = {base.shadows.method!r}; timing opacity maps instead")
     try:
         ctx = get_context()
     except GLUnavailable as err:
@@ -136,16 +166,20 @@ def main(argv=None) -> int:
 
     res = base.shadows.resolution
     s = base.strands
-    title = (f"{base.name}: {s.num_strands:,} strands, {base.camera.width}x{base.camera.height}, "
-             f"maps of {res}^2")
+    title = (
+        f"{base.name}: {s.num_strands:,} strands, {base.camera.width}x{base.camera.height}, maps of {res}^2"
+    )
     print(f"scene {scene_path} ({title})")
     print(f"GL: {ctx.info.get('GL_RENDERER')} ({ctx.info.get('GL_VERSION')})")
-    print(f"median of {args.repeats} run(s) per setting after 1 warm-up; a setting whose first "
-          f"run exceeds {args.single_run_above:g} s is run once")
+    print(
+        f"median of {args.repeats} run(s) per setting after 1 warm-up; a setting whose first "
+        f"run exceeds {args.single_run_above:g} s is run once"
+    )
 
     def with_maps(n):
-        return base.replace(shadows=hairjax.Shadows("opacity-maps", maps=n,
-                                                    resolution=base.shadows.resolution))
+        return base.replace(
+            shadows=hairjax.Shadows("opacity-maps", maps=n, resolution=base.shadows.resolution)
+        )
 
     render_gl(with_maps(args.maps[0]))  # warm-up: shader compilation
 
@@ -160,12 +194,17 @@ def main(argv=None) -> int:
             if runs < args.repeats:
                 single.append(f"N={n} {name}")
         rows.append(row)
-        print(f"  N={n:4d}: clipped {_fmt(row['clipped_s'])}  unclipped {_fmt(row['unclipped_s'])}"
-              f"  ({time.perf_counter() - started:.0f} s so far)", flush=True)
+        print(
+            f"  N={n:4d}: clipped {_fmt(row['clipped_s'])}  unclipped {_fmt(row['unclipped_s'])}"
+            f"  ({time.perf_counter() - started:.0f} s so far)",
+            flush=True,
+        )
 
     maps = [r["maps"] for r in rows]
-    slopes = {key: fit_slope(maps, [r[key] for r in rows])
-              for key in ("clipped_s", "unclipped_s", "clipped_shadows_s", "unclipped_shadows_s")}
+    slopes = {
+        key: fit_slope(maps, [r[key] for r in rows])
+        for key in ("clipped_s", "unclipped_s", "clipped_shadows_s", "unclipped_shadows_s")
+    }
 
     args.out.mkdir(parents=True, exist_ok=True)
     from hairjax.tools import write_csv
@@ -175,21 +214,24 @@ def main(argv=None) -> int:
     _plot(rows, slopes, png_path, title)
 
     print()
-    print("    N   clipped total  clipped shadows   unclipped total  unclipped shadows  "
-          "unclipped/clipped")
+    print("    N   clipped total  clipped shadows   unclipped total  unclipped shadows  unclipped/clipped")
     for r in rows:
         ratio = r["unclipped_s"] / r["clipped_s"] if r["clipped_s"] > 0 else float("nan")
         mark = lambda name: "*" if r[f"{name}_runs"] < args.repeats else " "  # noqa: E731
-        print(f"  {r['maps']:3d}     {_fmt(r['clipped_s'])}{mark('clipped')}     "
-              f"{_fmt(r['clipped_shadows_s'])}      {_fmt(r['unclipped_s'])}{mark('unclipped')}"
-              f"       {_fmt(r['unclipped_shadows_s'])}         {ratio:6.2f}x")
+        print(
+            f"  {r['maps']:3d}     {_fmt(r['clipped_s'])}{mark('clipped')}     "
+            f"{_fmt(r['clipped_shadows_s'])}      {_fmt(r['unclipped_s'])}{mark('unclipped')}"
+            f"       {_fmt(r['unclipped_shadows_s'])}         {ratio:6.2f}x"
+        )
     if single:
         print(f"* one run only (first run over {args.single_run_above:g} s): {', '.join(single)}")
     print()
     print(f"slope of log(time) vs log(N), N >= {SLOPE_FROM} (1 = linear):")
     for name in ("clipped", "unclipped"):
-        print(f"  {name:9s}: total {slopes[f'{name}_s']:.2f}, "
-              f"opacity-map passes {slopes[f'{name}_shadows_s']:.2f}")
+        print(
+            f"  {name:9s}: total {slopes[f'{name}_s']:.2f}, "
+            f"opacity-map passes {slopes[f'{name}_shadows_s']:.2f}"
+        )
     print(f"\nwrote {csv_path}\nwrote {png_path}")
     print(f"total {time.perf_counter() - started:.1f} s")
     return 0

@@ -53,9 +53,12 @@ def _hj():
 
 def quick_scene():
     hj = _hj()
-    return hj.Scene(hj.furball(200, 8, seed=2),
-                    camera=hj.Camera(eye=(0.0, 0.3, 3.5), width=40, height=40),
-                    shadows=hj.Shadows("none"), name="quick")
+    return hj.Scene(
+        hj.furball(200, 8, seed=2),
+        camera=hj.Camera(eye=(0.0, 0.3, 3.5), width=40, height=40),
+        shadows=hj.Shadows("none"),
+        name="quick",
+    )
 
 
 def turned(scene, degrees: float):
@@ -74,8 +77,11 @@ def image_difference(a: np.ndarray, b: np.ndarray) -> dict:
 
     a, b = np.asarray(a, np.float64)[..., :3], np.asarray(b, np.float64)[..., :3]
     stats = image_stats(a, b)
-    return dict(rmse=stats["rmse"], max_abs=stats["max_abs"],
-                frac_visible=float(np.mean(np.abs(a - b).max(axis=-1) > VISIBLE)))
+    return dict(
+        rmse=stats["rmse"],
+        max_abs=stats["max_abs"],
+        frac_visible=float(np.mean(np.abs(a - b).max(axis=-1) > VISIBLE)),
+    )
 
 
 def _timings(name, scene, repeats: int, gl: bool) -> dict:
@@ -91,10 +97,14 @@ def _timings(name, scene, repeats: int, gl: bool) -> dict:
         forget(scene)
         jax.block_until_ready(render(scene))
 
-    row = dict(scene=name, segments=len(order),
-               order_s=median_time(lambda: visibility_order(scene), repeats),
-               sort_s=median_time(lambda: draw_order(segment_depth(depth, seg), scene.ordering), repeats),
-               render_jax_s=median_time(full_render, repeats), render_gl_s=float("nan"))
+    row = dict(
+        scene=name,
+        segments=len(order),
+        order_s=median_time(lambda: visibility_order(scene), repeats),
+        sort_s=median_time(lambda: draw_order(segment_depth(depth, seg), scene.ordering), repeats),
+        render_jax_s=median_time(full_render, repeats),
+        render_gl_s=float("nan"),
+    )
     if gl:
         from hairjax.gl import render_gl
 
@@ -121,14 +131,20 @@ def _plot(rows, path: Path, title: str) -> None:
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
     scenes = list(dict.fromkeys(r["scene"] for r in rows))
     styles = {"jax": dict(marker="o", linestyle="-"), "gl": dict(marker="x", linestyle="--")}
-    for (scene, path_name) in sorted({(r["scene"], r["path"]) for r in rows}):
-        sel = sorted((r for r in rows if (r["scene"], r["path"]) == (scene, path_name)),
-                     key=lambda r: r["angle"])
+    for scene, path_name in sorted({(r["scene"], r["path"]) for r in rows}):
+        sel = sorted(
+            (r for r in rows if (r["scene"], r["path"]) == (scene, path_name)), key=lambda r: r["angle"]
+        )
         angles = [r["angle"] for r in sel]
         color = f"C{scenes.index(scene)}"
         for ax, key in zip(axes, ("rmse", "max_abs")):
-            ax.plot(angles, [r[key] for r in sel], color=color, label=f"{scene} ({path_name})",
-                    **styles.get(path_name, {}))
+            ax.plot(
+                angles,
+                [r[key] for r in sel],
+                color=color,
+                label=f"{scene} ({path_name})",
+                **styles.get(path_name, {}),
+            )
     for ax, label in zip(axes, ("RMSE, stale vs fresh order", "max |stale − fresh|")):
         ax.set_xlabel("camera turned by (degrees)")
         ax.set_ylabel(label)
@@ -157,14 +173,25 @@ def _parse_angles(text: str) -> list[float]:
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--scenes", default="default,tressfx", help=f"among {', '.join(SCENES)}")
-    p.add_argument("--angles", type=_parse_angles, default=[float(a) for a in range(0, 50, 5)],
-                   help="degrees, comma-separated (default 0,5,...,45; 0 is always added)")
+    p.add_argument(
+        "--angles",
+        type=_parse_angles,
+        default=[float(a) for a in range(0, 50, 5)],
+        help="degrees, comma-separated (default 0,5,...,45; 0 is always added)",
+    )
     p.add_argument("--repeats", type=int, default=3, help="timing runs, median (default 3)")
-    p.add_argument("--gl", action=argparse.BooleanOptionalAction, default=None,
-                   help="also measure the GL renderer (default: when OpenGL is available)")
+    p.add_argument(
+        "--gl",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="also measure the GL renderer (default: when OpenGL is available)",
+    )
     p.add_argument("--out", type=Path, default=Path("out/order_reuse"))
-    p.add_argument("--quick", action="store_true",
-                   help="a 200-strand ball at 40² without shadows, angles 0,10,30, JAX only, 1 timing run")
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help="a 200-strand ball at 40² without shadows, angles 0,10,30, JAX only, 1 timing run",
+    )
     return p
 
 
@@ -195,8 +222,9 @@ def main(argv=None) -> int:
         scene = make()
         cam = scene.camera
         titles.append(f"{name}: {scene.strands.num_strands:,} strands, {cam.width}×{cam.height}")
-        print(f"scene {titles[-1]}; ordering {scene.ordering.method} ({scene.ordering.bins} bins)",
-              flush=True)
+        print(
+            f"scene {titles[-1]}; ordering {scene.ordering.method} ({scene.ordering.bins} bins)", flush=True
+        )
         stale = visibility_order(scene)[4]  # the 0° order, reused at every angle
         for angle in args.angles:
             view = turned(scene, angle)
@@ -208,10 +236,17 @@ def main(argv=None) -> int:
             if gl:
                 d = image_difference(render_gl(view, order=stale).image, render_gl(view).image)
                 rows.append(dict(scene=name, path="gl", angle=angle, **d))
-            print(f"  {angle:5.1f}°  " + "  ".join(
-                f"{r['path']}: rmse {r['rmse']:.2e} max {r['max_abs']:.2e} "
-                f"visible {100 * r['frac_visible']:.2f} %" for r in rows if r["scene"] == name
-                and r["angle"] == angle) + f"  ({time.perf_counter() - started:.0f} s)", flush=True)
+            print(
+                f"  {angle:5.1f}°  "
+                + "  ".join(
+                    f"{r['path']}: rmse {r['rmse']:.2e} max {r['max_abs']:.2e} "
+                    f"visible {100 * r['frac_visible']:.2f} %"
+                    for r in rows
+                    if r["scene"] == name and r["angle"] == angle
+                )
+                + f"  ({time.perf_counter() - started:.0f} s)",
+                flush=True,
+            )
             del view
         timing_rows.append(_timings(name, scene, args.repeats, gl))
 
@@ -227,16 +262,22 @@ def main(argv=None) -> int:
     print()
     print(f"{'scene':<10} {'path':<4} {'angle':>6} {'RMSE':>10} {'max abs':>10} {'> 1/255':>9}")
     for r in rows:
-        print(f"{r['scene']:<10} {r['path']:<4} {r['angle']:6.1f} {r['rmse']:10.3e} "
-              f"{r['max_abs']:10.3e} {100 * r['frac_visible']:8.2f}%")
+        print(
+            f"{r['scene']:<10} {r['path']:<4} {r['angle']:6.1f} {r['rmse']:10.3e} "
+            f"{r['max_abs']:10.3e} {100 * r['frac_visible']:8.2f}%"
+        )
     print()
     print(f"median of {args.repeats} run(s) after a warm-up")
-    print(f"{'scene':<10} {'segments':>9} {'order':>10} {'bin sort':>10} {'JAX render':>11} "
-          f"{'GL render':>10} {'order/JAX':>9} {'order/GL':>9}")
+    print(
+        f"{'scene':<10} {'segments':>9} {'order':>10} {'bin sort':>10} {'JAX render':>11} "
+        f"{'GL render':>10} {'order/JAX':>9} {'order/GL':>9}"
+    )
     for t in timing_rows:
-        print(f"{t['scene']:<10} {t['segments']:>9,} {_fmt_s(t['order_s']):>10} {_fmt_s(t['sort_s']):>10} "
-              f"{_fmt_s(t['render_jax_s']):>11} {_fmt_s(t['render_gl_s']):>10} "
-              f"{100 * t['order_s'] / t['render_jax_s']:8.2f}% {100 * t['order_s'] / t['render_gl_s']:8.2f}%")
+        print(
+            f"{t['scene']:<10} {t['segments']:>9,} {_fmt_s(t['order_s']):>10} {_fmt_s(t['sort_s']):>10} "
+            f"{_fmt_s(t['render_jax_s']):>11} {_fmt_s(t['render_gl_s']):>10} "
+            f"{100 * t['order_s'] / t['render_jax_s']:8.2f}% {100 * t['order_s'] / t['render_gl_s']:8.2f}%"
+        )
     print(f"\nwrote {csv_path}\nwrote {timings_path}\nwrote {png_path}")
     print(f"total {time.perf_counter() - started:.1f} s")
     return 0

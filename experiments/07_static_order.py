@@ -73,18 +73,21 @@ def _sized(scene, size: int):
 SCENES = {
     "default": lambda size: _sized(_hj().load_scene(_hj().default_scene_path()), size),
     "tressfx": lambda size: _sized(
-        _hj().load_scene(ROOT / "experiments" / "scenes" / "tressfx_ponytail.toml"), size),
+        _hj().load_scene(ROOT / "experiments" / "scenes" / "tressfx_ponytail.toml"), size
+    ),
     # scheuermann-2004's case (slide 14): scalp hair on an opaque sphere head, which hides the far side.
-    "head": lambda size: _sized(
-        _hj().load_scene(ROOT / "experiments" / "scenes" / "scheuermann.toml"), size),
+    "head": lambda size: _sized(_hj().load_scene(ROOT / "experiments" / "scenes" / "scheuermann.toml"), size),
 }
 
 
 def quick_scene(size: int = 40):
     hj = _hj()
-    return hj.Scene(hj.furball(200, 8, seed=2),
-                    camera=hj.Camera(eye=(0.0, 0.3, 3.5), width=size, height=size),
-                    shadows=hj.Shadows("none"), name="quick")
+    return hj.Scene(
+        hj.furball(200, 8, seed=2),
+        camera=hj.Camera(eye=(0.0, 0.3, 3.5), width=size, height=size),
+        shadows=hj.Shadows("none"),
+        name="quick",
+    )
 
 
 def _label(method: str, bins: int) -> str:
@@ -120,17 +123,28 @@ def _timings(name, scene, bin_counts, repeats: int) -> list[dict]:
         ordering = _hj().Ordering(method, n) if method == "bins" else _hj().Ordering(method)
         return lambda: draw_order(segment_depth(depth, seg), ordering)
 
-    rows = [dict(base, method="exact", bins=0, when="every view",
-                 order_s=median_time(sort("exact"), repeats)),
-            dict(base, method="static", bins=0, when="once",
-                 order_s=median_time(lambda: static_order(points, all_segments,
-                                                          hair_centre(points, offsets)), repeats))]
+    rows = [
+        dict(base, method="exact", bins=0, when="every view", order_s=median_time(sort("exact"), repeats)),
+        dict(
+            base,
+            method="static",
+            bins=0,
+            when="once",
+            order_s=median_time(
+                lambda: static_order(points, all_segments, hair_centre(points, offsets)), repeats
+            ),
+        ),
+    ]
     for n in bin_counts:
-        rows.append(dict(base, method="bins", bins=n, when="every view",
-                         order_s=median_time(sort("bins", n), repeats)))
+        rows.append(
+            dict(
+                base, method="bins", bins=n, when="every view", order_s=median_time(sort("bins", n), repeats)
+            )
+        )
     n = scene.ordering.bins
-    rows.append(dict(base, method="reused", bins=n, when="once",
-                     order_s=median_time(sort("bins", n), repeats)))
+    rows.append(
+        dict(base, method="reused", bins=n, when="once", order_s=median_time(sort("bins", n), repeats))
+    )
     return rows
 
 
@@ -147,20 +161,38 @@ def _plot(rows, timing_rows, path: Path, title: str) -> None:
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.4))
     for si, scene in enumerate(scenes):
         for li, label in enumerate(labels):
-            sel = sorted((r for r in rows if r["scene"] == scene
-                          and _label(r["method"], r["bins"]) == label), key=lambda r: r["angle"])
-            axes[0].plot([r["angle"] for r in sel], [r["rmse"] for r in sel], color=f"C{li}",
-                         linestyle=lines[si % 4], marker=".", label=f"{scene}: {label}")
+            sel = sorted(
+                (r for r in rows if r["scene"] == scene and _label(r["method"], r["bins"]) == label),
+                key=lambda r: r["angle"],
+            )
+            axes[0].plot(
+                [r["angle"] for r in sel],
+                [r["rmse"] for r in sel],
+                color=f"C{li}",
+                linestyle=lines[si % 4],
+                marker=".",
+                label=f"{scene}: {label}",
+            )
         for t in timing_rows:
             if t["scene"] != scene or t["method"] == "exact":  # the reference: error 0
                 continue
             li = labels.index(_label(t["method"], t["bins"]))
-            err = np.median([r["rmse"] for r in rows if r["scene"] == scene
-                             and (r["method"], r["bins"]) == (t["method"], t["bins"])])
+            err = np.median(
+                [
+                    r["rmse"]
+                    for r in rows
+                    if r["scene"] == scene and (r["method"], r["bins"]) == (t["method"], t["bins"])
+                ]
+            )
             once = t["when"] == "once"
-            axes[1].scatter(t["order_s"], err, color=f"C{li}", marker=markers[si % 4],
-                            facecolors="none" if once else f"C{li}",
-                            label=f"{scene}: {_label(t['method'], t['bins'])}")
+            axes[1].scatter(
+                t["order_s"],
+                err,
+                color=f"C{li}",
+                marker=markers[si % 4],
+                facecolors="none" if once else f"C{li}",
+                label=f"{scene}: {_label(t['method'], t['bins'])}",
+            )
     axes[0].set_xlabel("camera turned by (degrees)")
     axes[0].set_ylabel("RMSE against the exact order")
     axes[0].set_yscale("log")
@@ -192,14 +224,25 @@ def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--scenes", default="default,tressfx,head", help=f"among {', '.join(SCENES)}")
     p.add_argument("--size", type=int, default=192, help="image size in pixels (default 192)")
-    p.add_argument("--angles", type=_angles, default=[float(a) for a in range(0, 360, 30)],
-                   help="degrees, comma-separated (default 0,30,...,330; 0 is always added)")
-    p.add_argument("--bins", type=_ints, default=[16, 64, 256, 1024],
-                   help="bin counts for the per-view bin sort (default 16,64,256,1024)")
+    p.add_argument(
+        "--angles",
+        type=_angles,
+        default=[float(a) for a in range(0, 360, 30)],
+        help="degrees, comma-separated (default 0,30,...,330; 0 is always added)",
+    )
+    p.add_argument(
+        "--bins",
+        type=_ints,
+        default=[16, 64, 256, 1024],
+        help="bin counts for the per-view bin sort (default 16,64,256,1024)",
+    )
     p.add_argument("--repeats", type=int, default=5, help="timing runs, median (default 5)")
     p.add_argument("--out", type=Path, default=Path("out/static_order"))
-    p.add_argument("--quick", action="store_true",
-                   help="a 200-strand ball at 40² without shadows, angles 0,90,180, bins 4,16, 1 timing run")
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help="a 200-strand ball at 40² without shadows, angles 0,90,180, bins 4,16, 1 timing run",
+    )
     return p
 
 
@@ -239,8 +282,10 @@ def main(argv=None) -> int:
                 d = image_difference(np.asarray(hj.render(view, order=order)), reference)
                 rows.append(dict(scene=name, method=method, bins=bins, angle=angle, **d))
                 line.append(f"{label} {d['rmse']:.1e}")
-            print(f"  {angle:5.1f}°  rmse: " + ", ".join(line)
-                  + f"  ({time.perf_counter() - started:.0f} s)", flush=True)
+            print(
+                f"  {angle:5.1f}°  rmse: " + ", ".join(line) + f"  ({time.perf_counter() - started:.0f} s)",
+                flush=True,
+            )
         timing_rows += _timings(name, scene, args.bins, args.repeats)
 
     from hairjax.tools import write_csv
@@ -250,30 +295,38 @@ def main(argv=None) -> int:
     png_path = args.out / "static_order.png"
     write_csv(csv_path, CSV_COLUMNS, rows, float_format=".6g")
     write_csv(timings_path, TIMING_COLUMNS, timing_rows, float_format=".6g")
-    _plot(rows, timing_rows, png_path, "Draw orders against the exact order of each view — "
-          + "; ".join(titles))
+    _plot(
+        rows, timing_rows, png_path, "Draw orders against the exact order of each view — " + "; ".join(titles)
+    )
 
     print()
-    print(f"error against the exact order of each view, over {len(args.angles)} views "
-          f"(median / max); order time: median of {args.repeats} run(s) after a warm-up")
-    print(f"{'scene':<8} {'order':<14} {'computed':<10} {'time':>9} {'RMSE med':>9} {'RMSE max':>9} "
-          f"{'max abs':>8} {'>1/255 med':>10} {'>1/255 max':>10}")
+    print(
+        f"error against the exact order of each view, over {len(args.angles)} views "
+        f"(median / max); order time: median of {args.repeats} run(s) after a warm-up"
+    )
+    print(
+        f"{'scene':<8} {'order':<14} {'computed':<10} {'time':>9} {'RMSE med':>9} {'RMSE max':>9} "
+        f"{'max abs':>8} {'>1/255 med':>10} {'>1/255 max':>10}"
+    )
     for name in scenes:
         labels = dict.fromkeys((r["method"], r["bins"]) for r in rows if r["scene"] == name)
         for method, bins in labels:
             sel = [r for r in rows if r["scene"] == name and (r["method"], r["bins"]) == (method, bins)]
-            t = next((t for t in timing_rows if t["scene"] == name
-                      and (t["method"], t["bins"]) == (method, bins)), None)
+            t = next(
+                (t for t in timing_rows if t["scene"] == name and (t["method"], t["bins"]) == (method, bins)),
+                None,
+            )
             time_text = "–" if t is None else f"{t['order_s'] * 1e3:.2f} ms"
             when = "" if t is None else t["when"]
             rmse = [r["rmse"] for r in sel]
             vis = [100 * r["frac_visible"] for r in sel]
-            print(f"{name:<8} {_label(method, bins):<14} {when:<10} {time_text:>9} {np.median(rmse):9.2e} "
-                  f"{max(rmse):9.2e} {max(r['max_abs'] for r in sel):8.3f} {np.median(vis):9.2f}% "
-                  f"{max(vis):9.2f}%")
+            print(
+                f"{name:<8} {_label(method, bins):<14} {when:<10} {time_text:>9} {np.median(rmse):9.2e} "
+                f"{max(rmse):9.2e} {max(r['max_abs'] for r in sel):8.3f} {np.median(vis):9.2f}% "
+                f"{max(vis):9.2f}%"
+            )
         exact = next(t for t in timing_rows if t["scene"] == name and t["method"] == "exact")
-        print(f"{name:<8} {'exact':<14} {'every view':<10} {exact['order_s'] * 1e3:6.2f} ms "
-              f"(the reference)")
+        print(f"{name:<8} {'exact':<14} {'every view':<10} {exact['order_s'] * 1e3:6.2f} ms (the reference)")
     print(f"\nwrote {csv_path}\nwrote {timings_path}\nwrote {png_path}")
     print(f"total {time.perf_counter() - started:.1f} s")
     return 0

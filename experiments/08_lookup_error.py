@@ -27,8 +27,17 @@ import numpy as np
 from hairjax.tools import image_stats, median_time
 
 DEFAULT_SIZES = (4, 8, 16, 32, 64, 128, 256, 512, 1024)
-CSV_COLUMNS = ("size", "rmse", "max_abs", "shading_s", "analytic_shading_s",
-               "gl_rmse", "gl_max_abs", "gl_render_s", "gl_analytic_render_s")
+CSV_COLUMNS = (
+    "size",
+    "rmse",
+    "max_abs",
+    "shading_s",
+    "analytic_shading_s",
+    "gl_rmse",
+    "gl_max_abs",
+    "gl_render_s",
+    "gl_analytic_render_s",
+)
 
 
 def _parse_sizes(text: str) -> list[int]:
@@ -45,12 +54,17 @@ def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--scene", type=Path, help="scene TOML (default: the built-in default scene)")
     p.add_argument("--size", type=int, default=128, help="render at SIZE × SIZE (default 128)")
-    p.add_argument("--sizes", type=_parse_sizes, default=list(DEFAULT_SIZES),
-                   help="table sizes n, comma-separated (default 4,8,...,1024)")
+    p.add_argument(
+        "--sizes",
+        type=_parse_sizes,
+        default=list(DEFAULT_SIZES),
+        help="table sizes n, comma-separated (default 4,8,...,1024)",
+    )
     p.add_argument("--repeats", type=int, default=3, help="timed runs per size, median (default 3)")
     p.add_argument("--gl", action="store_true", help="also measure the GL renderer")
-    p.add_argument("--out", type=Path, default=Path("out/lookup_error"),
-                   help="output folder (default out/lookup_error)")
+    p.add_argument(
+        "--out", type=Path, default=Path("out/lookup_error"), help="output folder (default out/lookup_error)"
+    )
     return p
 
 
@@ -82,8 +96,13 @@ def measure(scene, sizes, repeats: int, gl: bool) -> list[dict]:
         lookup = dataclasses.replace(geometry, shading=hj.KajiyaKayLookup(scene.params, size=n))
         image = np.asarray(shade(lookup))
         rmse, max_abs = errors(image, reference)
-        row = dict(size=n, rmse=rmse, max_abs=max_abs, shading_s=median_time(lambda: shade(lookup), repeats),
-                   analytic_shading_s=analytic_s)
+        row = dict(
+            size=n,
+            rmse=rmse,
+            max_abs=max_abs,
+            shading_s=median_time(lambda: shade(lookup), repeats),
+            analytic_shading_s=analytic_s,
+        )
         if gl:
             lookup_scene = scene.replace(shading=hj.KajiyaKayLookup(scene.params, size=n))
             image = render_gl(lookup_scene, omega=omega).image
@@ -103,8 +122,7 @@ def format_table(rows, gl: bool) -> str:
     for r in rows:
         line = f"{r['size']:>6} {r['rmse']:>10.3g} {r['max_abs']:>10.3g} {r['shading_s'] * 1e3:>8.2f}ms"
         if gl:
-            line += (f" {r['gl_rmse']:>10.3g} {r['gl_max_abs']:>10.3g}"
-                     f" {r['gl_render_s'] * 1e3:>8.2f}ms")
+            line += f" {r['gl_rmse']:>10.3g} {r['gl_max_abs']:>10.3g} {r['gl_render_s'] * 1e3:>8.2f}ms"
         lines.append(line)
     tail = f"analytic Kajiya-Kay: shading {rows[0]['analytic_shading_s'] * 1e3:.2f} ms"
     if gl:

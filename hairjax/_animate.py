@@ -23,8 +23,15 @@ from ._scene._file import load_scene, scene_from_dict, scene_tables
 from ._scene._scene import Scene
 from ._scene._table import Table, build
 
-__all__ = ["Motion", "Animation", "load_animation", "path_position", "path_acceleration",
-           "inertia_vector", "write_frames"]
+__all__ = [
+    "Motion",
+    "Animation",
+    "load_animation",
+    "path_position",
+    "path_acceleration",
+    "inertia_vector",
+    "write_frames",
+]
 
 
 def _vec3(name: str, value) -> tuple[float, float, float]:
@@ -113,20 +120,36 @@ def load_animation(path) -> Animation:
         data = tomllib.load(f)
     where = str(path)
     if data["hair"].get("source") != "furball":
-        raise SceneError(f"{where}: hair.source must be 'furball' to animate (wenzel-2002's fur "
-                         f"ball), got {data['hair'].get('source')!r}")
+        raise SceneError(
+            f"{where}: hair.source must be 'furball' to animate (wenzel-2002's fur "
+            f"ball), got {data['hair'].get('source')!r}"
+        )
     table = Table("animation", data.get("animation", {}), where, scene_tables()["animation"])
-    kwargs = {k: v for k, v in dict(
-        amplitude=table.vec3("amplitude"), frequency=table.vec3("frequency"),
-        phase=table.vec3("phase"), inertia=table.number("inertia", lo=0),
-        frames=table.integer("frames", lo=1)).items() if v is not None}
+    kwargs = {
+        k: v
+        for k, v in dict(
+            amplitude=table.vec3("amplitude"),
+            frequency=table.vec3("frequency"),
+            phase=table.vec3("phase"),
+            inertia=table.number("inertia", lo=0),
+            frames=table.integer("frames", lo=1),
+        ).items()
+        if v is not None
+    }
     motion = build(where, Motion, **kwargs)
     name = data.get("name", path.stem)
     return Animation(data, path.resolve().parent, name, where, motion)
 
 
-def write_frames(animation: Animation, out_dir, frames: int | None = None, backend: str = "jax",
-                 png: bool = False, gif: bool = False, progress: bool = False) -> list[Path]:
+def write_frames(
+    animation: Animation,
+    out_dir,
+    frames: int | None = None,
+    backend: str = "jax",
+    png: bool = False,
+    gif: bool = False,
+    progress: bool = False,
+) -> list[Path]:
     """Render the loop's frames into `out_dir`: `frame_0000.exr` … (linear float RGBA),
     with `png` also `frame_0000.png` … (8-bit sRGB), with `gif` also `animation.gif`.
 
@@ -178,8 +201,9 @@ def _write_gif(path: Path, frames: list[np.ndarray], fps: float = 24.0) -> Path:
 
     images = [Image.fromarray(f) for f in frames]
     with atomic_path(path, ".gif") as tmp:
-        images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:],
-                       duration=round(1000 / fps), loop=0)
+        images[0].save(
+            tmp, format="GIF", save_all=True, append_images=images[1:], duration=round(1000 / fps), loop=0
+        )
     return path
 
 
@@ -194,8 +218,7 @@ class _progress:
             return lambda: None
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-        self.bar = Progress(TextColumn("frames"), BarColumn(), MofNCompleteColumn(),
-                            TimeElapsedColumn())
+        self.bar = Progress(TextColumn("frames"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn())
         self.bar.start()
         task = self.bar.add_task("frames", total=self.total)
         return lambda: self.bar.advance(task)

@@ -57,5 +57,9 @@ def composite(geometry: Geometry, colors: Float[Array, "P C"]) -> Float[Array, "
     t = geometry.frag_t[:, None]
     frag_color = (1 - t) * colors[geometry.frag_i0] + t * colors[geometry.frag_i0 + 1]
     hw = geometry.height * geometry.width
-    return jax.ops.segment_sum(geometry.frag_weight[:, None] * frag_color, geometry.frag_pixel,
-                               num_segments=hw, indices_are_sorted=True)
+    return jax.ops.segment_sum(
+        geometry.frag_weight[:, None] * frag_color,
+        geometry.frag_pixel,
+        num_segments=hw,
+        indices_are_sorted=True,
+    )

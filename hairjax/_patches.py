@@ -35,9 +35,19 @@ from ._scene._strands import tangents
 from ._shading import point_colors
 from ._shading._scheuermann_inputs import strand_normals
 
-__all__ = ["scene_patches", "scene_point_colors", "render_patches", "Patches", "patch_mesh",
-           "patch_alpha", "PatchFragments", "patch_fragments", "PatchWeights", "four_pass_weights",
-           "composite_patches"]
+__all__ = [
+    "scene_patches",
+    "scene_point_colors",
+    "render_patches",
+    "Patches",
+    "patch_mesh",
+    "patch_alpha",
+    "PatchFragments",
+    "patch_fragments",
+    "PatchWeights",
+    "four_pass_weights",
+    "composite_patches",
+]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -53,8 +63,15 @@ class Patches:
     core: float
 
 
-def patch_mesh(points: np.ndarray, offsets: np.ndarray, tangent: np.ndarray, normal: np.ndarray,
-               width: float, core: float, centre: np.ndarray) -> Patches:
+def patch_mesh(
+    points: np.ndarray,
+    offsets: np.ndarray,
+    tangent: np.ndarray,
+    normal: np.ndarray,
+    width: float,
+    core: float,
+    centre: np.ndarray,
+) -> Patches:
     """Ribbons of world width `width` along the strands (module docstring). Triangles are
     drawn in slide 14's static inside-to-outside order of their segments (`static_order`
     about `centre`), the segment's two triangles one after the other.
@@ -79,8 +96,13 @@ def patch_mesh(points: np.ndarray, offsets: np.ndarray, tangent: np.ndarray, nor
     segments = np.stack([first, first + 1], axis=1)
     p = first[static_order(points, segments, centre)]
     # (L_p, L_p+1, R_p) and (R_p, L_p+1, R_p+1): normal (L_p+1 − L_p) × (R_p − L_p) ∝ T × B = N.
-    tris = np.stack([np.stack([2 * p, 2 * p + 2, 2 * p + 1], axis=1),
-                     np.stack([2 * p + 1, 2 * p + 2, 2 * p + 3], axis=1)], axis=1).reshape(-1, 3)
+    tris = np.stack(
+        [
+            np.stack([2 * p, 2 * p + 2, 2 * p + 1], axis=1),
+            np.stack([2 * p + 1, 2 * p + 2, 2 * p + 3], axis=1),
+        ],
+        axis=1,
+    ).reshape(-1, 3)
     return Patches(vertices, tris.astype(np.int64), u, np.repeat(np.arange(len(points)), 2), float(core))
 
 
@@ -131,9 +153,15 @@ def patch_fragments(view: View, patches: Patches) -> PatchFragments:
     u = np.sum(lam * patches.u[corners], axis=1)
     draw = drawn[k]
     order = np.lexsort((draw, pixel))
-    return PatchFragments(pixel[order], draw[order], d[order], (area[k] < 0)[order],
-                          patch_alpha(u[order], patches.core), lam[order],
-                          patches.point[corners[order]])
+    return PatchFragments(
+        pixel[order],
+        draw[order],
+        d[order],
+        (area[k] < 0)[order],
+        patch_alpha(u[order], patches.core),
+        lam[order],
+        patches.point[corners[order]],
+    )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -141,9 +169,9 @@ class PatchWeights:
     """The four passes' result as weights: colour = Σ_f `weight`_f c_f + `background`_pixel
     · background, alpha channel `coverage` per pixel."""
 
-    fragment: np.ndarray     # [F]
-    background: np.ndarray   # [H*W]
-    coverage: np.ndarray     # [H*W]
+    fragment: np.ndarray  # [F]
+    background: np.ndarray  # [H*W]
+    coverage: np.ndarray  # [H*W]
 
 
 def four_pass_weights(frags: PatchFragments, num_pixels: int) -> PatchWeights:
@@ -210,14 +238,23 @@ def _rank(pixel: np.ndarray) -> np.ndarray:
     return np.arange(n) - np.maximum.accumulate(np.where(start, np.arange(n), 0))
 
 
-def composite_patches(frags: PatchFragments, weights: PatchWeights, colors: Float[Array, "P 3"],
-                      background: Float[Array, " 3"], height: int, width: int) -> Float[Array, "H W 4"]:
+def composite_patches(
+    frags: PatchFragments,
+    weights: PatchWeights,
+    colors: Float[Array, "P 3"],
+    background: Float[Array, " 3"],
+    height: int,
+    width: int,
+) -> Float[Array, "H W 4"]:
     """The image: Σ_f w_f Σ_i λ'_i c(point_i) + w_bg · background per pixel, alpha channel
     the coverage. Linear in the JAX `colors` (so differentiable in the shading parameters)."""
     lam = jnp.asarray(frags.lam)
     frag_color = jnp.einsum("fi,fic->fc", lam, colors[jnp.asarray(frags.corner_point)])
-    rgb = jax.ops.segment_sum(jnp.asarray(weights.fragment)[:, None] * frag_color,
-                              jnp.asarray(frags.pixel), num_segments=height * width)
+    rgb = jax.ops.segment_sum(
+        jnp.asarray(weights.fragment)[:, None] * frag_color,
+        jnp.asarray(frags.pixel),
+        num_segments=height * width,
+    )
     rgb = rgb + jnp.asarray(weights.background)[:, None] * jnp.asarray(background)[None, :]
     image = jnp.concatenate([rgb, jnp.asarray(weights.coverage)[:, None]], axis=1)
     return image.reshape(height, width, 4)
@@ -230,8 +267,9 @@ def scene_patches(scene) -> Patches:
     tangent = tangents(points, offsets)
     centre = hair_centre(points, offsets)
     normal = strand_normals(points, tangent, centre)
-    return patch_mesh(points, offsets, tangent, normal, scene.patches.width,
-                      scene.patches.opaque_core, centre)
+    return patch_mesh(
+        points, offsets, tangent, normal, scene.patches.width, scene.patches.opaque_core, centre
+    )
 
 
 def scene_point_colors(scene, params=None) -> Float[Array, "P 3"]:
@@ -246,5 +284,11 @@ def render_patches(scene, params=None) -> Float[Array, "H W 4"]:
     view = camera_view(scene.camera)
     frags = patch_fragments(view, scene_patches(scene))
     weights = four_pass_weights(frags, view.width * view.height)
-    return composite_patches(frags, weights, scene_point_colors(scene, params),
-                             jnp.asarray(scene.background), view.height, view.width)
+    return composite_patches(
+        frags,
+        weights,
+        scene_point_colors(scene, params),
+        jnp.asarray(scene.background),
+        view.height,
+        view.width,
+    )

@@ -36,8 +36,7 @@ class Registry(Generic[T]):
         try:
             return self.classes[name]
         except (KeyError, TypeError):  # TypeError: not a string (an unhashable value)
-            raise SceneError(f"{self.table}.{self.key} must be one of {self.names()}, "
-                             f"got {name!r}") from None
+            raise SceneError(f"{self.table}.{self.key} must be one of {self.names()}, got {name!r}") from None
 
     def make(self, name: str, *args: Any, **options: Any) -> T:
         """An instance of the class called `name` from its dataclass fields, in order or
@@ -49,6 +48,7 @@ class Registry(Generic[T]):
         for key in options:
             if key not in keys:
                 takes = ", ".join(keys) if keys else "no options"
-                raise SceneError(f"{self.table}.{key} is not a key of {self.key} = {name!r} "
-                                 f"(it takes {takes})")
+                raise SceneError(
+                    f"{self.table}.{key} is not a key of {self.key} = {name!r} (it takes {takes})"
+                )
         return cls(**options)

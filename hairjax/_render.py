@@ -27,8 +27,9 @@ from ._shading import shading_stage
 __all__ = ["render", "render_profiled"]
 
 
-def render(scene: Scene, params=None,
-           alpha: Float[Array, " S"] | None = None, *, order=None) -> Float[Array, "H W 4"]:
+def render(
+    scene: Scene, params=None, alpha: Float[Array, " S"] | None = None, *, order=None
+) -> Float[Array, "H W 4"]:
     """Render `scene` to linear RGBA `[H, W, 4]`.
 
     Differentiable in `params` (the shading model's parameters, default `scene.params`) and
@@ -60,8 +61,7 @@ def render_profiled(scene: Scene, params=None):
     if scene.patches is not None:  # §18: one stage, the patches' set-up and composite
         t0 = time.perf_counter()
         image = jax.block_until_ready(render(scene, params))
-        return image, {"patches (four passes)": time.perf_counter() - t0,
-                       "total": time.perf_counter() - t0}
+        return image, {"patches (four passes)": time.perf_counter() - t0, "total": time.perf_counter() - t0}
     forget(scene)
     t0 = time.perf_counter()
     setup = prepare(scene)

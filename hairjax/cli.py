@@ -51,8 +51,15 @@ def _animate(args) -> int:
     from ._animate import load_animation, write_frames
 
     animation = load_animation(args.scene)
-    written = write_frames(animation, args.output, frames=args.frames, backend=args.backend,
-                           png=args.png, gif=args.gif, progress=sys.stderr.isatty())
+    written = write_frames(
+        animation,
+        args.output,
+        frames=args.frames,
+        backend=args.backend,
+        png=args.png,
+        gif=args.gif,
+        progress=sys.stderr.isatty(),
+    )
     frames = sum(p.suffix == ".exr" for p in written)
     print(f"wrote {frames} frames ({', '.join(sorted({p.suffix for p in written}))}) to {args.output}")
     return 0
@@ -80,8 +87,10 @@ def _fit(args) -> int:
     from ._scene._file import default_scene_path, load_scene
 
     if len(args.scenes) >= len(args.target):
-        raise FitError(f"{1 + len(args.scenes)} scenes for {len(args.target)} targets: "
-                       "each extra --scene goes with one extra --target")
+        raise FitError(
+            f"{1 + len(args.scenes)} scenes for {len(args.target)} targets: "
+            "each extra --scene goes with one extra --target"
+        )
     # Everything is read and checked before any rendering starts.
     targets = [read_image(t) for t in args.target]
     first = load_scene(args.scene or default_scene_path())
@@ -97,24 +106,24 @@ def _fit(args) -> int:
     def progress(step, loss, elapsed):
         print(f"  step {step:4d}   loss {loss:.6e}   {elapsed:7.2f} s", file=sys.stderr, flush=True)
 
-    print(f"fitting {', '.join(names)} with {args.solver} to {len(targets)} target(s)",
-          file=sys.stderr)
-    result = fit(scenes, targets, fit=names, solver=args.solver, max_steps=args.max_steps,
-                 progress=progress)
+    print(f"fitting {', '.join(names)} with {args.solver} to {len(targets)} target(s)", file=sys.stderr)
+    result = fit(scenes, targets, fit=names, solver=args.solver, max_steps=args.max_steps, progress=progress)
     rows = []
     for name in fittable:
         fmt = lambda v: " ".join(f"{x:.6g}" for x in np.atleast_1d(np.asarray(v, float)))  # noqa: E731
         se = result.std_error.get(name)
-        se_text = ("undetermined" if name in result.undetermined
-                   else "fixed" if name not in names else fmt(se))
+        se_text = "undetermined" if name in result.undetermined else "fixed" if name not in names else fmt(se)
         rows.append((name, fmt(getattr(result.initial, name)), fmt(getattr(result.params, name)), se_text))
-    widths = [max(len(r[i]) for r in rows + [("parameter", "initial", "fitted", "std. error")])
-              for i in range(4)]
+    widths = [
+        max(len(r[i]) for r in rows + [("parameter", "initial", "fitted", "std. error")]) for i in range(4)
+    ]
     for row in [("parameter", "initial", "fitted", "std. error"), *rows]:
         print("  ".join(c.ljust(w) for c, w in zip(row, widths)))
     restarted = f" ({result.restarts} restarts)" if result.restarts else ""
-    print(f"{result.termination} after {result.steps} steps{restarted}, {result.time_s:.2f} s "
-          f"(+ {result.geometry_s:.2f} s geometry); RMSE {result.rmse:.4g}")
+    print(
+        f"{result.termination} after {result.steps} steps{restarted}, {result.time_s:.2f} s "
+        f"(+ {result.geometry_s:.2f} s geometry); RMSE {result.rmse:.4g}"
+    )
     if args.json:
         print(f"wrote {write_json(args.json, result.to_json())}")
     if args.out:
@@ -139,14 +148,23 @@ def _sweep(args) -> int:
         raise SweepError(f"--paths takes a comma list of {', '.join(PATHS)}, got {args.paths!r}")
     scene = load_scene(args.scene or default_scene_path())
     if args.size:
-        scene = scene.replace(camera=dataclasses.replace(scene.camera, width=args.size,
-                                                         height=args.size))
+        scene = scene.replace(camera=dataclasses.replace(scene.camera, width=args.size, height=args.size))
     try:
-        points = run_sweep(scene, args.out, knobs={k: table[k] for k in names}, paths=paths,
-                           repeats=args.repeats, restart=args.restart, progress=sys.stderr.isatty())
+        points = run_sweep(
+            scene,
+            args.out,
+            knobs={k: table[k] for k in names},
+            paths=paths,
+            repeats=args.repeats,
+            restart=args.restart,
+            progress=sys.stderr.isatty(),
+        )
     except KeyboardInterrupt:
-        print(f"interrupted: {len(load_points(args.out))} points kept in {args.out}; "
-              "run the same command again to resume", file=sys.stderr)
+        print(
+            f"interrupted: {len(load_points(args.out))} points kept in {args.out}; "
+            "run the same command again to resume",
+            file=sys.stderr,
+        )
         return 130
     import json
 
@@ -178,21 +196,39 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("render", help="render a scene (default: the built-in fur ball)")
     p.add_argument("scene", nargs="?", type=Path, help="scene TOML file (docs/scenes.md)")
-    p.add_argument("-o", "--output", type=Path, default=Path("out/render.exr"),
-                   help="output image, .exr (float) or .png (default: out/render.exr)")
+    p.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        default=Path("out/render.exr"),
+        help="output image, .exr (float) or .png (default: out/render.exr)",
+    )
     p.add_argument("--png", type=Path, help="also write an 8-bit sRGB PNG here")
     p.add_argument("--profile", action="store_true", help="print the time of each stage")
-    p.add_argument("--backend", choices=["jax", "gl"], default="jax",
-                   help="jax: the differentiable reference; gl: the OpenGL renderer")
+    p.add_argument(
+        "--backend",
+        choices=["jax", "gl"],
+        default="jax",
+        help="jax: the differentiable reference; gl: the OpenGL renderer",
+    )
     p.set_defaults(func=_render)
 
     p = sub.add_parser("animate", help="render the frames of an animated fur ball (wenzel-2002)")
     p.add_argument("scene", type=Path, help="scene TOML file with a fur ball and [animation]")
     p.add_argument("--frames", type=int, help="frames per loop (default: animation.frames)")
-    p.add_argument("-o", "--output", type=Path, default=Path("out/animation"),
-                   help="folder for frame_0000.exr, … (default: out/animation)")
-    p.add_argument("--backend", choices=["jax", "gl"], default="jax",
-                   help="jax: the differentiable reference; gl: the OpenGL renderer")
+    p.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        default=Path("out/animation"),
+        help="folder for frame_0000.exr, … (default: out/animation)",
+    )
+    p.add_argument(
+        "--backend",
+        choices=["jax", "gl"],
+        default="jax",
+        help="jax: the differentiable reference; gl: the OpenGL renderer",
+    )
     p.add_argument("--png", action="store_true", help="also write frame_0000.png, … (8-bit sRGB)")
     p.add_argument("--gif", action="store_true", help="also write animation.gif (Pillow)")
     p.set_defaults(func=_animate)
@@ -205,12 +241,26 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("fit", help="fit Kd, Ks, shininess, kappa to target images")
     p.add_argument("scene", nargs="?", type=Path, help="scene of the first target (default: built-in)")
-    p.add_argument("--target", action="append", type=Path, required=True,
-                   help="target image (.exr linear, or .png sRGB); repeat for several")
-    p.add_argument("--scene", dest="scenes", action="append", type=Path, default=[],
-                   help="scene of the next extra --target (default: the first scene)")
-    p.add_argument("--fit", default=None,
-                   help="parameters to fit (default: kd,ks,shininess,kappa, or all of a Scheuermann scene's)")
+    p.add_argument(
+        "--target",
+        action="append",
+        type=Path,
+        required=True,
+        help="target image (.exr linear, or .png sRGB); repeat for several",
+    )
+    p.add_argument(
+        "--scene",
+        dest="scenes",
+        action="append",
+        type=Path,
+        default=[],
+        help="scene of the next extra --target (default: the first scene)",
+    )
+    p.add_argument(
+        "--fit",
+        default=None,
+        help="parameters to fit (default: kd,ks,shininess,kappa, or all of a Scheuermann scene's)",
+    )
     p.add_argument("--solver", default="lm", help="lm, gauss-newton, dogleg or bfgs")
     p.add_argument("--max-steps", type=int, default=100)
     p.add_argument("--json", type=Path, help="write params, initial, steps, loss, … as JSON")
@@ -219,10 +269,15 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("sweep", help="error against run time, one quality knob at a time")
     p.add_argument("scene", nargs="?", type=Path, help="scene TOML file (default: built-in)")
-    p.add_argument("--out", type=Path, default=Path("out/sweep"),
-                   help="folder for points.jsonl, sweep.csv, pareto.png, summary.md (resumable)")
-    p.add_argument("--knobs", help="comma list among maps, map_resolution, bins, width, "
-                                   "supersampling (default: all)")
+    p.add_argument(
+        "--out",
+        type=Path,
+        default=Path("out/sweep"),
+        help="folder for points.jsonl, sweep.csv, pareto.png, summary.md (resumable)",
+    )
+    p.add_argument(
+        "--knobs", help="comma list among maps, map_resolution, bins, width, supersampling (default: all)"
+    )
     p.add_argument("--paths", default="jax,gl", help="jax, gl or both (default)")
     p.add_argument("--repeats", type=int, default=3, help="timed renders per point (median)")
     p.add_argument("--size", type=int, help="render at SIZE × SIZE instead of the scene's size")
@@ -238,9 +293,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quick", action="store_true", help="small sizes only, for a smoke test")
     p.add_argument("--repeats", type=int, default=5)
     p.add_argument("--json", type=Path, help="also write the figures as JSON")
-    p.add_argument("--backend", choices=["jax", "gl", "both"], default="jax",
-                   help="time the JAX path (default), the GL renderer, or both in the same "
-                        "process with the ratio of their full renders")
+    p.add_argument(
+        "--backend",
+        choices=["jax", "gl", "both"],
+        default="jax",
+        help="time the JAX path (default), the GL renderer, or both in the same "
+        "process with the ratio of their full renders",
+    )
     p.set_defaults(func=_bench)
     return parser
 

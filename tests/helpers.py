@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+import contextlib
+import re
 from pathlib import Path
 
 import numpy as np
+import pytest
+from jaxtyping import TypeCheckError
 
 import hairjax as hj
 from hairjax._disagreement import MAX_BAND, PIXEL_TOL, TAU_TOL, camera_band, shadow_band  # noqa: F401 (tests')
@@ -26,16 +30,17 @@ def load_experiment(name: str):
     return module
 
 
-def small_furball_scene(strands=40, size=48, shadows="opacity-maps", maps=8, resolution=32,
-                        alpha=0.6, **scene_kw) -> hj.Scene:
+def small_furball_scene(
+    strands=40, size=48, shadows="opacity-maps", maps=8, resolution=32, alpha=0.6, **scene_kw
+) -> hj.Scene:
     hair = hj.furball(strands=strands, points=6, seed=3, alpha=alpha)
     return hj.Scene(
         strands=hair,
-        camera=hj.Camera(eye=(0.0, 0.3, 3.5), target=(0.0, 0.0, 0.0), fov=45.0,
-                         width=size, height=size),
+        camera=hj.Camera(eye=(0.0, 0.3, 3.5), target=(0.0, 0.0, 0.0), fov=45.0, width=size, height=size),
         light=hj.Light(direction=(-0.5, -0.7, -0.4)),
-        shading=hj.KajiyaKay(hj.ShadingParams(kd=(0.6, 0.4, 0.3), ks=0.4, shininess=20.0, kappa=0.8,
-                                ambient=0.05)),
+        shading=hj.KajiyaKay(
+            hj.ShadingParams(kd=(0.6, 0.4, 0.3), ks=0.4, shininess=20.0, kappa=0.8, ambient=0.05)
+        ),
         shadows=shadow_method(shadows, maps, resolution),
         **scene_kw,
     )
@@ -44,18 +49,27 @@ def small_furball_scene(strands=40, size=48, shadows="opacity-maps", maps=8, res
 def scheuermann_scene(size=24, strands=30, shadows="opacity-maps", **maps) -> hj.Scene:
     """A small scalp with Scheuermann shading (docs/model.md §17); `maps` go to
     ScheuermannMaps (textures, noise). For its shading tests and its fit's."""
-    hair = hj.scalp(strands=strands, points=6, seed=4, length=0.8, gravity=(0.0, -0.4, 0.0),
-                    alpha=0.6)
+    hair = hj.scalp(strands=strands, points=6, seed=4, length=0.8, gravity=(0.0, -0.4, 0.0), alpha=0.6)
     return hj.Scene(
-        hair, camera=hj.Camera(eye=(1.6, 0.6, 2.4), target=(0.0, 0.0, 0.0), width=size, height=size),
+        hair,
+        camera=hj.Camera(eye=(1.6, 0.6, 2.4), target=(0.0, 0.0, 0.0), width=size, height=size),
         light=hj.Light(direction=(-0.3, -0.6, -0.75)),
         shading=hj.Scheuermann(
-            hj.ScheuermannParams(kd=(0.5, 0.35, 0.2), ambient=0.05, primary_color=0.4,
-                                 primary_exponent=30.0, primary_shift=0.15,
-                                 secondary_color=(0.4, 0.3, 0.2), secondary_exponent=8.0,
-                                 secondary_shift=-0.2, kappa=0.9),
-            hj.ScheuermannMaps(normal_center=(0.0, 0.0, 0.0), **maps)),
-        shadows=shadow_method(shadows, 6, 24))
+            hj.ScheuermannParams(
+                kd=(0.5, 0.35, 0.2),
+                ambient=0.05,
+                primary_color=0.4,
+                primary_exponent=30.0,
+                primary_shift=0.15,
+                secondary_color=(0.4, 0.3, 0.2),
+                secondary_exponent=8.0,
+                secondary_shift=-0.2,
+                kappa=0.9,
+            ),
+            hj.ScheuermannMaps(normal_center=(0.0, 0.0, 0.0), **maps),
+        ),
+        shadows=shadow_method(shadows, 6, 24),
+    )
 
 
 def fit_terms(scene, params, names, target):
@@ -64,8 +78,9 @@ def fit_terms(scene, params, names, target):
 
     h, w = scene.camera.height, scene.camera.width
     model = _shading_fit.fit_model(type(scene.shading))
-    return model.prepare(scene, params, tuple(names), np.asarray(target)[..., :3].reshape(-1, 3),
-                         np.ones((h * w, 1)))
+    return model.prepare(
+        scene, params, tuple(names), np.asarray(target)[..., :3].reshape(-1, 3), np.ones((h * w, 1))
+    )
 
 
 def fit_image(terms, kd, ks, shininess, kappa, ambient, plain=False):
@@ -77,6 +92,20 @@ def fit_image(terms, kd, ks, shininess, kappa, ambient, plain=False):
     return _shading_fit.target_image(terms, params, plain=plain)
 
 
+@contextlib.contextmanager
+def refused(field: str, message: str):
+    """The block is refused a value of the wrong type for `field`: SceneError matching
+    `message`, or the annotation check's TypeCheckError naming the parameter (pytest runs
+    jaxtyping's import hook: a value of the wrong type meets the annotation check before
+    the constructor's own; users without the hook get the SceneError)."""
+    with pytest.raises((hj.SceneError, TypeCheckError)) as info:
+        yield
+    if isinstance(info.value, TypeCheckError):
+        assert f"parameter '{field}'" in str(info.value), str(info.value)
+    else:
+        assert re.search(message, str(info.value)), (message, str(info.value))
+
+
 def cone(model: str):
     """The Kajiya-Kay cone (`seed_cone`, `mirror_cone`) of the registered model `model`."""
     return hj.shading_model_class(model).cone
@@ -84,8 +113,10 @@ def cone(model: str):
 
 def shadow_method(method: str, maps: int = 8, resolution: int = 32):
     """`hj.Shadows(method, …)` with the options that method takes."""
-    options = {"opacity-maps": dict(maps=maps, resolution=resolution),
-               "exact": dict(resolution=resolution)}.get(method, {})
+    options = {
+        "opacity-maps": dict(maps=maps, resolution=resolution),
+        "exact": dict(resolution=resolution),
+    }.get(method, {})
     return hj.Shadows(method, **options)
 
 

@@ -34,7 +34,6 @@ Not audited: hairjax/_fit/ (outside this issue's brief; its guards are tested in
 tests/fit/test_fit.py).
 """
 
-
 from __future__ import annotations
 
 import dataclasses
@@ -69,6 +68,7 @@ def unit_roundoff(dtype) -> float:
 
 
 # --- the model's maximum -------------------------------------------------------------------
+
 
 def channel_bound(scene: hj.Scene, params: hj.ShadingParams, dtype) -> np.ndarray:
     """The largest value each RGB channel can take (`[3]`), with a rounding allowance.
@@ -116,6 +116,7 @@ def assert_in_bounds(image, scene, params, dtype):
 
 # --- running a case ------------------------------------------------------------------------
 
+
 @dataclasses.dataclass
 class Result:
     loss: float
@@ -141,10 +142,10 @@ class Runner:
             aux = (image, geometry.omega, point_colors(geometry, params))
             return jnp.sum((image - target) ** 2), aux
 
-        args = (scene.params, jnp.asarray(scene.strands.alpha),
-                jnp.zeros((cam.height, cam.width, 4)))
-        self._compiled = jax.jit(jax.value_and_grad(loss, argnums=(0, 1), has_aux=True)).lower(
-            *args).compile(FAST_COMPILE)
+        args = (scene.params, jnp.asarray(scene.strands.alpha), jnp.zeros((cam.height, cam.width, 4)))
+        self._compiled = (
+            jax.jit(jax.value_and_grad(loss, argnums=(0, 1), has_aux=True)).lower(*args).compile(FAST_COMPILE)
+        )
         self._target = None
 
     @property
@@ -161,8 +162,14 @@ class Runner:
         cam = self.scene.camera
         target = jnp.zeros((cam.height, cam.width, 4), self.dtype) if target is None else target
         (loss, (image, omega, colors)), (g_params, g_alpha) = self._compiled(params, alpha, target)
-        return Result(float(loss), np.asarray(image), None if omega is None else np.asarray(omega),
-                      np.asarray(colors), g_params, np.asarray(g_alpha))
+        return Result(
+            float(loss),
+            np.asarray(image),
+            None if omega is None else np.asarray(omega),
+            np.asarray(colors),
+            g_params,
+            np.asarray(g_alpha),
+        )
 
 
 def precision(backend: str):
@@ -225,8 +232,11 @@ def assert_matches_finite_differences(run: Runner, params, alpha, target, res: R
         check(float(g if i is None else g[i]), f, x)
     alpha = jnp.broadcast_to(jnp.asarray(alpha), res.g_alpha.shape)
     for j in np.argsort(-np.abs(res.g_alpha))[:3]:
-        check(float(res.g_alpha[j]),
-              lambda v, j=j: run(params, alpha.at[j].set(v), target).loss, float(alpha[j]))
+        check(
+            float(res.g_alpha[j]),
+            lambda v, j=j: run(params, alpha.at[j].set(v), target).loss,
+            float(alpha[j]),
+        )
 
 
 def check_jax(case: str, dtype: str, params_kw: dict | None = None, alpha=None) -> Result:
@@ -242,8 +252,9 @@ def check_jax(case: str, dtype: str, params_kw: dict | None = None, alpha=None) 
     assert np.isfinite(res.colors).all() and (res.omega is None or np.isfinite(res.omega).all())
     assert_in_bounds(res.image, run.scene, params, dtype)
     if dtype == "float64":
-        assert_matches_finite_differences(run, params, run.scene.strands.alpha if alpha is None
-                                          else alpha, run.target, res)
+        assert_matches_finite_differences(
+            run, params, run.scene.strands.alpha if alpha is None else alpha, run.target, res
+        )
     return res
 
 
@@ -322,24 +333,27 @@ def mixed_scene() -> hj.Scene:
     """A small fur ball with, around it, one strand of each extreme kind."""
     fur = hj.furball(FUR, 5, seed=1).transformed(0.5)
     special = [
-        [[-0.7, THIN_Y, 0.0], [0.7, THIN_Y, 0.0]],                      # THIN: width 0.25
-        [[-0.7, WIDE_Y, 0.0], [0.7, WIDE_Y, 0.0]],                      # WIDE: width 8
+        [[-0.7, THIN_Y, 0.0], [0.7, THIN_Y, 0.0]],  # THIN: width 0.25
+        [[-0.7, WIDE_Y, 0.0], [0.7, WIDE_Y, 0.0]],  # WIDE: width 8
         np.stack([np.full(5, -1.1), np.linspace(0.8, -0.8, 5), np.zeros(5)], axis=1),  # T ∥ L
-        [[0.0, 0.0, 1.0], [0.0, 0.0, 1.5], [0.0, 0.0, 2.0]],            # T ∥ V (on the axis)
+        [[0.0, 0.0, 1.0], [0.0, 0.0, 1.5], [0.0, 0.0, 2.0]],  # T ∥ V (on the axis)
         [[1.1, -0.6, 0.0], [1.1, -0.6, 0.0], [1.1, 0.0, 0.2], [1.1, 0.0, 0.2], [1.1, 0.6, 0.0]],
-        [[-1.1, 1.1, 0.0]] * 3,                                          # COINCIDENT points
-        [[1.1, 1.1, 0.0]],                                               # SINGLE point
+        [[-1.1, 1.1, 0.0]] * 3,  # COINCIDENT points
+        [[1.1, 1.1, 0.0]],  # SINGLE point
     ]
-    strands = [fur.points[fur.offsets[i]:fur.offsets[i + 1]] for i in range(FUR)] + special
+    strands = [fur.points[fur.offsets[i] : fur.offsets[i + 1]] for i in range(FUR)] + special
     width = np.ones(len(strands))
     width[THIN], width[WIDE] = 0.25, 8.0
     hair = hj.Strands.from_list(strands, alpha=0.5)
     color = np.random.default_rng(0).uniform(0.0, 1.0, hair.points.shape)
     hair = hair.replace(width=width, color=color)
-    return hj.Scene(hair, camera=camera(), light=hj.Light(direction=(0.0, -1.0, 0.0),
-                                                          color=(1.0, 0.9, 0.7)),
-                    shading=hj.KajiyaKay(hj.ShadingParams(kd=0.6, ks=0.4, shininess=20.0, kappa=0.8, ambient=0.05)),
-                    shadows=hj.Shadows("opacity-maps", 4, SIZE))
+    return hj.Scene(
+        hair,
+        camera=camera(),
+        light=hj.Light(direction=(0.0, -1.0, 0.0), color=(1.0, 0.9, 0.7)),
+        shading=hj.KajiyaKay(hj.ShadingParams(kd=0.6, ks=0.4, shininess=20.0, kappa=0.8, ambient=0.05)),
+        shadows=hj.Shadows("opacity-maps", 4, SIZE),
+    )
 
 
 def stack_scene() -> hj.Scene:
@@ -355,21 +369,26 @@ def stack_scene() -> hj.Scene:
     alpha = np.concatenate([np.random.default_rng(1).uniform(0.85, 1.0, n), [1.0, 1.0]])
     # Width 4: rows 14 … 17 of the map are fully covered around the line at y = 16.
     hair = hj.Strands(pts, offsets, alpha, 4.0)
-    return hj.Scene(hair, camera=camera(), light=hj.Light(direction=(0.0, 0.0, -1.0)),
-                    shading=hj.KajiyaKay(hj.ShadingParams(kd=0.6, ks=0.4, shininess=20.0, kappa=2e-3, ambient=0.05)),
-                    shadows=hj.Shadows("opacity-maps", 4, SIZE))
+    return hj.Scene(
+        hair,
+        camera=camera(),
+        light=hj.Light(direction=(0.0, 0.0, -1.0)),
+        shading=hj.KajiyaKay(hj.ShadingParams(kd=0.6, ks=0.4, shininess=20.0, kappa=2e-3, ambient=0.05)),
+        shadows=hj.Shadows("opacity-maps", 4, SIZE),
+    )
 
 
 def point_light_scene(scale: float = 1.0) -> hj.Scene:
     """A fur ball lit by a point light sitting on one of its strand points."""
     hair = hj.furball(24, 5, seed=2, alpha=0.5).transformed(0.6)
     light = hair.points[LIGHT_POINT]
-    return hj.Scene(hair.transformed(scale),
-                    camera=hj.Camera(eye=tuple(scale * EYE), target=(0.0, 0.0, 0.0), fov=40.0,
-                                     width=SIZE, height=SIZE),
-                    light=hj.Light(kind="point", position=tuple(scale * light)),
-                    shading=hj.KajiyaKay(hj.ShadingParams(kd=0.6, ks=0.4, shininess=20.0, kappa=0.8, ambient=0.05)),
-                    shadows=hj.Shadows("exact", resolution=SIZE))
+    return hj.Scene(
+        hair.transformed(scale),
+        camera=hj.Camera(eye=tuple(scale * EYE), target=(0.0, 0.0, 0.0), fov=40.0, width=SIZE, height=SIZE),
+        light=hj.Light(kind="point", position=tuple(scale * light)),
+        shading=hj.KajiyaKay(hj.ShadingParams(kd=0.6, ks=0.4, shininess=20.0, kappa=0.8, ambient=0.05)),
+        shadows=hj.Shadows("exact", resolution=SIZE),
+    )
 
 
 LIGHT_POINT = 7  # an interior point of strand 1
@@ -381,8 +400,13 @@ def centre_light_scene() -> hj.Scene:
     RuntimeWarning casting to texels before the clip in shadow_setup)."""
     hair = hj.furball(30, 5, seed=6, alpha=0.5).transformed(0.6)
     centre = 0.5 * (hair.points.min(axis=0) + hair.points.max(axis=0))
-    return hj.Scene(hair, camera=camera(), light=hj.Light(kind="point", position=tuple(centre)),
-                    shading=hj.KajiyaKay(hj.ShadingParams(**DEFAULT)), shadows=hj.Shadows("opacity-maps", 4, SIZE))
+    return hj.Scene(
+        hair,
+        camera=camera(),
+        light=hj.Light(kind="point", position=tuple(centre)),
+        shading=hj.KajiyaKay(hj.ShadingParams(**DEFAULT)),
+        shadows=hj.Shadows("opacity-maps", 4, SIZE),
+    )
 
 
 def flat_scene() -> hj.Scene:
@@ -393,20 +417,26 @@ def flat_scene() -> hj.Scene:
     pts = np.concatenate([pts, [[-1.0, -1.0, 0.0], [1.0, 1.0, 0.0]]])
     offsets = np.concatenate([fur.offsets, [fur.offsets[-1] + 1, fur.offsets[-1] + 2]])
     hair = hj.Strands(pts, offsets, 0.6, 1.5)
-    return hj.Scene(hair, camera=camera(), light=hj.Light(kind="point", position=(0.0, 0.0, 3.0)),
-                    shading=hj.KajiyaKay(hj.ShadingParams(kd=0.6, ks=0.4, shininess=20.0, kappa=0.8, ambient=0.05)),
-                    shadows=hj.Shadows("exact", resolution=SIZE))
+    return hj.Scene(
+        hair,
+        camera=camera(),
+        light=hj.Light(kind="point", position=(0.0, 0.0, 3.0)),
+        shading=hj.KajiyaKay(hj.ShadingParams(kd=0.6, ks=0.4, shininess=20.0, kappa=0.8, ambient=0.05)),
+        shadows=hj.Shadows("exact", resolution=SIZE),
+    )
 
 
 def inside_scene() -> hj.Scene:
     """The camera inside the fur ball (wide angle): points behind the eye and at the near
     plane."""
     hair = hj.furball(60, 6, seed=4, alpha=0.5)
-    return hj.Scene(hair, camera=hj.Camera(eye=(0.05, 0.1, 0.02), target=(1.0, 0.2, 0.3), fov=90.0,
-                                           width=SIZE, height=SIZE),
-                    light=hj.Light(direction=(-0.5, -0.7, -0.4)),
-                    shading=hj.KajiyaKay(hj.ShadingParams(kd=0.6, ks=0.4, shininess=20.0, kappa=0.8, ambient=0.05)),
-                    shadows=hj.Shadows("opacity-maps", 4, SIZE))
+    return hj.Scene(
+        hair,
+        camera=hj.Camera(eye=(0.05, 0.1, 0.02), target=(1.0, 0.2, 0.3), fov=90.0, width=SIZE, height=SIZE),
+        light=hj.Light(direction=(-0.5, -0.7, -0.4)),
+        shading=hj.KajiyaKay(hj.ShadingParams(kd=0.6, ks=0.4, shininess=20.0, kappa=0.8, ambient=0.05)),
+        shadows=hj.Shadows("opacity-maps", 4, SIZE),
+    )
 
 
 CASES = {
@@ -480,5 +510,12 @@ def glsl_highlight(gl, t, light, eye, model: str, p: float) -> np.ndarray:
     outp[2u * i] = shade_point(s, T, L, V, vec3(1.0), vec3(1.0), 1.0).x;
     outp[2u * i + 1u] = kajiya_kay_gap(model, dot(T, L), dot(T, V), safe_norm(cross(T, L)),
                                        safe_norm(cross(T, V)));"""
-    return run_glsl(gl, body, np.concatenate([t, light, eye], axis=1), 2,
-                    "uniform int model;\nuniform float p;", model=hj.shading_model_class(model).gl_id, p=p)
+    return run_glsl(
+        gl,
+        body,
+        np.concatenate([t, light, eye], axis=1),
+        2,
+        "uniform int model;\nuniform float p;",
+        model=hj.shading_model_class(model).gl_id,
+        p=p,
+    )

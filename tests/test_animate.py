@@ -52,15 +52,17 @@ def test_acceleration_is_the_paths_second_difference():
     motion = Motion(amplitude=(0.5, 0.2, 0.1), frequency=(1.0, 2.0, 3.0), phase=(0.0, 30.0, 90.0))
     h = 1e-4
     for t in (0.0, 0.13, 0.5, 0.91):
-        fd = (path_position(motion, t + h) - 2 * path_position(motion, t)
-              + path_position(motion, t - h)) / h**2
+        fd = (
+            path_position(motion, t + h) - 2 * path_position(motion, t) + path_position(motion, t - h)
+        ) / h**2
         # Truncation h²/12·|p''''| ≤ 1e-8/12·0.1·(6π)⁴ ≈ 1e-5; roundoff ~4e-16/h² = 4e-8.
         np.testing.assert_allclose(path_acceleration(motion, t), fd, atol=2e-5)
     # The values by hand at t = 0: p'' = −a (2πf)² sin φ.
     expected = -np.array([0.0, 0.2 * (4 * np.pi) ** 2 * 0.5, 0.1 * (6 * np.pi) ** 2])
     np.testing.assert_allclose(path_acceleration(motion, 0.0), expected, rtol=1e-12, atol=1e-12)
-    np.testing.assert_allclose(inertia_vector(Motion(inertia=0.25), 0.3),
-                               -0.25 * path_acceleration(Motion(), 0.3), rtol=1e-15)
+    np.testing.assert_allclose(
+        inertia_vector(Motion(inertia=0.25), 0.3), -0.25 * path_acceleration(Motion(), 0.3), rtol=1e-15
+    )
 
 
 def test_hairs_bend_away_from_the_acceleration(scene_file):
@@ -71,8 +73,11 @@ def test_hairs_bend_away_from_the_acceleration(scene_file):
     for t in (0.1, 0.35, 0.8):
         moving, resting = animation.scene(t).strands, still.scene(t).strands
         roots = moving.points[moving.offsets[:-1]]
-        np.testing.assert_allclose(roots, np.broadcast_to(
-            np.add((0.1, 0.0, 0.0), path_position(animation.motion, t)), roots.shape), atol=1e-12)
+        np.testing.assert_allclose(
+            roots,
+            np.broadcast_to(np.add((0.1, 0.0, 0.0), path_position(animation.motion, t)), roots.shape),
+            atol=1e-12,
+        )
         tips = moving.offsets[1:] - 1
         shift = (moving.points[tips] - resting.points[tips]).mean(axis=0)
         accel = path_acceleration(animation.motion, t)
@@ -84,13 +89,21 @@ def test_frames_are_written_and_numbered(scene_file, tmp_path):
     out = tmp_path / "frames"
     written = write_frames(load_animation(scene_file), out, png=True, gif=True)
     names = sorted(p.name for p in out.iterdir())
-    assert names == ["animation.gif", "frame_0000.exr", "frame_0000.png", "frame_0001.exr",
-                     "frame_0001.png", "frame_0002.exr", "frame_0002.png"]  # no temp files left
+    assert names == [
+        "animation.gif",
+        "frame_0000.exr",
+        "frame_0000.png",
+        "frame_0001.exr",
+        "frame_0001.png",
+        "frame_0002.exr",
+        "frame_0002.png",
+    ]  # no temp files left
     assert sorted(p.name for p in written) == names
     # Frame k is the still scene at t = k/3, rendered.
     scene = load_animation(scene_file).scene(1 / 3)
-    np.testing.assert_allclose(hj.read_image(out / "frame_0001.exr"),
-                               np.asarray(hj.render(scene), np.float32), atol=1e-6)
+    np.testing.assert_allclose(
+        hj.read_image(out / "frame_0001.exr"), np.asarray(hj.render(scene), np.float32), atol=1e-6
+    )
     from PIL import Image
 
     with Image.open(out / "animation.gif") as gif:
@@ -105,8 +118,7 @@ def test_cli_animate_and_its_errors(scene_file, tmp_path, capsys, gl):
     # GL's frame is the JAX renderer's frame (to PIXEL_TOL outside the camera band, as
     # tests/gl/test_renderer.py; this scene has no shadows).
     scene = load_animation(scene_file).scene(1 / 2)
-    bad, _ = unexplained_pixels(scene, hj.read_image(out / "frame_0001.exr"),
-                                np.asarray(hj.render(scene)))
+    bad, _ = unexplained_pixels(scene, hj.read_image(out / "frame_0001.exr"), np.asarray(hj.render(scene)))
     assert bad.size == 0
 
     assert main(["animate", str(scene_file), "--frames", "0", "-o", str(out)]) == 2
@@ -121,12 +133,15 @@ def test_cli_animate_and_its_errors(scene_file, tmp_path, capsys, gl):
     assert "hair.source must be 'furball' to animate" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("text, message", [
-    ("frames = 0", r"animation\.frames must be an integer >= 1, got 0"),
-    ("inertia = -1", r"animation\.inertia must be >= 0, got -1"),
-    ("amplitude = [1, 2]", r"animation\.amplitude must be an array of 3 finite numbers"),
-    ("speed = 2", r"unknown key animation\.speed"),
-])
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("frames = 0", r"animation\.frames must be an integer >= 1, got 0"),
+        ("inertia = -1", r"animation\.inertia must be >= 0, got -1"),
+        ("amplitude = [1, 2]", r"animation\.amplitude must be an array of 3 finite numbers"),
+        ("speed = 2", r"unknown key animation\.speed"),
+    ],
+)
 def test_animation_table_errors_name_the_key(tmp_path, text, message):
     path = tmp_path / "bad.toml"
     path.write_text(f'[hair]\nsource = "furball"\nstrands = 3\n[animation]\n{text}\n')

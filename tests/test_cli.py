@@ -88,8 +88,9 @@ def test_fit_from_the_cli(scene_file, tmp_path, capsys):
     target = tmp_path / "t.exr"
     hj.write_image(target, np.asarray(hj.render(scene, true)))
     out, report = tmp_path / "fitted.exr", tmp_path / "fit.json"
-    assert main(["fit", str(scene_file), "--target", str(target), "--json", str(report),
-                 "--out", str(out)]) == 0
+    assert (
+        main(["fit", str(scene_file), "--target", str(target), "--json", str(report), "--out", str(out)]) == 0
+    )
     captured = capsys.readouterr()
     assert "step" in captured.err and "loss" in captured.err  # the live progress lines
     assert "fitted" in captured.out and "std. error" in captured.out
@@ -101,10 +102,13 @@ def test_fit_from_the_cli(scene_file, tmp_path, capsys):
     assert out.exists()
 
 
-@pytest.mark.parametrize("args, message", [
-    (["--fit", "kd,gloss"], "unknown parameter 'gloss'"),
-    (["--target", "missing.exr"], "no such file"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--fit", "kd,gloss"], "unknown parameter 'gloss'"),
+        (["--target", "missing.exr"], "no such file"),
+    ],
+)
 def test_fit_errors_before_work(scene_file, tmp_path, capsys, args, message):
     target = tmp_path / "t.exr"
     hj.write_image(target, np.zeros((30, 40, 4)))

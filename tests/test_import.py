@@ -16,13 +16,16 @@ HEAVY = ("matplotlib", "rich", "hairjax.tools")
 
 def _loaded_after(module: str) -> list[str]:
     """The modules of HEAVY that `import module` loads, in a fresh interpreter."""
-    code = (f"import json, sys, {module}; "
-            f"print(json.dumps([m for m in sys.modules if m.startswith({HEAVY!r})]))")
+    code = (
+        f"import json, sys, {module}; print(json.dumps([m for m in sys.modules if m.startswith({HEAVY!r})]))"
+    )
     # This checkout's hairjax, installed or not.
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
-        p for p in (str(REPO), os.environ.get("PYTHONPATH")) if p))
-    out = subprocess.run([sys.executable, "-c", code], env=env, cwd=REPO, check=True,
-                         capture_output=True, text=True).stdout
+    env = dict(
+        os.environ, PYTHONPATH=os.pathsep.join(p for p in (str(REPO), os.environ.get("PYTHONPATH")) if p)
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], env=env, cwd=REPO, check=True, capture_output=True, text=True
+    ).stdout
     return json.loads(out.strip().splitlines()[-1])
 
 

@@ -51,15 +51,17 @@ def _quads(specs):
         tris = [(0, 1, 2), (0, 2, 3)] if front else [(0, 2, 1), (0, 3, 2)]
         triangles += [(base + a, base + b, base + c) for a, b, c in tris]
     n = len(specs)
-    return Patches(np.array(vertices, float), np.array(triangles), np.array(us, float),
-                   np.repeat(np.arange(n), 4), 0.0)
+    return Patches(
+        np.array(vertices, float), np.array(triangles), np.array(us, float), np.repeat(np.arange(n), 4), 0.0
+    )
 
 
 def _jax_image(view, patches, colors):
     frags = patch_fragments(view, patches)
     weights = four_pass_weights(frags, view.width * view.height)
-    return np.asarray(composite_patches(frags, weights, jnp.asarray(colors), jnp.asarray(BG),
-                                        view.height, view.width))
+    return np.asarray(
+        composite_patches(frags, weights, jnp.asarray(colors), jnp.asarray(BG), view.height, view.width)
+    )
 
 
 def _centre_pixel(image):
@@ -78,22 +80,29 @@ CASES = {
     # A transparent back face behind the opaque red: pass 3's Z test LESS against Z₁.
     "opaque-over-back": ([(0.5, 0.5, True), (0.0, A_HALF, False)], [RED, GREEN], RED),
     # A transparent green in front of the opaque red: blended over it in pass 4.
-    "transparent-over-opaque": ([(0.0, 0.5, True), (0.5, A_HALF, True)], [RED, GREEN],
-                                over(0.5, GREEN, RED)),
+    "transparent-over-opaque": ([(0.0, 0.5, True), (0.5, A_HALF, True)], [RED, GREEN], over(0.5, GREEN, RED)),
     # Front (green, near) drawn first, back (blue, far) second: pass 3 draws the back face
     # before pass 4 draws the front one, whatever the draw order.
-    "back-then-front": ([(0.5, A_HALF, True), (0.0, A_FIFTH, False)], [GREEN, BLUE],
-                        over(0.5, GREEN, over(0.2, BLUE, BG))),
+    "back-then-front": (
+        [(0.5, A_HALF, True), (0.0, A_FIFTH, False)],
+        [GREEN, BLUE],
+        over(0.5, GREEN, over(0.2, BLUE, BG)),
+    ),
     # Two front faces, the near one drawn first: it writes Z, the far one is rejected.
-    "front-near-first": ([(0.5, A_HALF, True), (0.0, A_FIFTH, True)], [GREEN, BLUE],
-                         over(0.5, GREEN, BG)),
+    "front-near-first": ([(0.5, A_HALF, True), (0.0, A_FIFTH, True)], [GREEN, BLUE], over(0.5, GREEN, BG)),
     # The far one drawn first: both pass, in draw order.
-    "front-far-first": ([(0.0, A_FIFTH, True), (0.5, A_HALF, True)], [BLUE, GREEN],
-                        over(0.5, GREEN, over(0.2, BLUE, BG))),
+    "front-far-first": (
+        [(0.0, A_FIFTH, True), (0.5, A_HALF, True)],
+        [BLUE, GREEN],
+        over(0.5, GREEN, over(0.2, BLUE, BG)),
+    ),
     # Two back faces, near first: Z writes are off in pass 3, so both blend, in draw order
     # (the far one over the near one: the order dependence the static sort keeps small).
-    "back-near-first": ([(0.5, A_HALF, False), (0.0, A_FIFTH, False)], [GREEN, BLUE],
-                        over(0.2, BLUE, over(0.5, GREEN, BG))),
+    "back-near-first": (
+        [(0.5, A_HALF, False), (0.0, A_FIFTH, False)],
+        [GREEN, BLUE],
+        over(0.2, BLUE, over(0.5, GREEN, BG)),
+    ),
     # Two opaque quads at one depth: pass 2's EQUAL passes both, the last drawn stays.
     "opaque-tie": ([(0.0, 0.5, True), (0.0, 0.5, False)], [RED, GREEN], GREEN),
     # Nothing opaque, one back face behind the background only.
@@ -135,8 +144,11 @@ def test_hand_built_gl(gl, name):
 
 def test_alpha_threshold():
     # The profile: 1 on the core |u − ½| ≤ c/2, 0 at the edges, linear between.
-    np.testing.assert_allclose(patch_alpha(np.array([0.0, 0.1, 0.3, 0.5, 0.7, 1.0]), 0.4),
-                               [0.0, 1 / 3, 1.0, 1.0, 1.0, 0.0], atol=1e-15)
+    np.testing.assert_allclose(
+        patch_alpha(np.array([0.0, 0.1, 0.3, 0.5, 0.7, 1.0]), 0.4),
+        [0.0, 1 / 3, 1.0, 1.0, 1.0, 0.0],
+        atol=1e-15,
+    )
     assert np.all(patch_alpha(np.array([0.0, 0.5, 1.0]), 1.0) == 1.0)
     # a = 1 − 1e-3 is transparent (blended at its alpha), a = 1 opaque (written as is).
     view = _view()
@@ -148,11 +160,13 @@ def test_alpha_threshold():
         expected = RED if opaque else over(1 - 1e-3, RED, BG)
         np.testing.assert_allclose(pixel[:3], expected, atol=1e-12)
     with pytest.raises(ValueError, match="opaque core"):
-        patch_mesh(np.zeros((2, 3)), np.array([0, 2]), np.zeros((2, 3)), np.zeros((2, 3)), 1.0, 1.5,
-                   np.zeros(3))
+        patch_mesh(
+            np.zeros((2, 3)), np.array([0, 2]), np.zeros((2, 3)), np.zeros((2, 3)), 1.0, 1.5, np.zeros(3)
+        )
     with pytest.raises(ValueError, match="patch width"):
-        patch_mesh(np.zeros((2, 3)), np.array([0, 2]), np.zeros((2, 3)), np.zeros((2, 3)), 0.0, 0.5,
-                   np.zeros(3))
+        patch_mesh(
+            np.zeros((2, 3)), np.array([0, 2]), np.zeros((2, 3)), np.zeros((2, 3)), 0.0, 0.5, np.zeros(3)
+        )
 
 
 SNAP = 1 / 256  # llvmpipe's sub-pixel precision: vertices snap to 1/256 px (as _occluder's bound)
@@ -252,7 +266,7 @@ def test_jax_matches_gl(gl):
     near_threshold = np.abs(frags.alpha - (1 - PATCH_OPAQUE_EPS)) < 1e-4
     mask[frags.pixel[near_threshold]] = True
     far = 2 * depth.max()
-    same = (frags.pixel[1:] == frags.pixel[:-1])
+    same = frags.pixel[1:] == frags.pixel[:-1]
     order = np.lexsort((frags.depth, frags.pixel))
     d, p = frags.depth[order], frags.pixel[order]
     tie = (p[1:] == p[:-1]) & (np.diff(d) < 1e-5 * far)
@@ -285,8 +299,10 @@ EXAMPLE = EXAMPLES / "patches.toml"
 
 def _small_patch_scene():
     scene = hj.load_scene(EXAMPLE)
-    return scene.replace(strands=furball(strands=60, points=6, seed=1, alpha=0.6),
-                         camera=dataclasses.replace(scene.camera, width=40, height=40))
+    return scene.replace(
+        strands=furball(strands=60, points=6, seed=1, alpha=0.6),
+        camera=dataclasses.replace(scene.camera, width=40, height=40),
+    )
 
 
 def test_scene_file_keys(tmp_path):
@@ -356,8 +372,9 @@ def test_strand_scene_untouched():
     from hairjax import geometry_stage, shading_stage
 
     scene = _small_patch_scene().replace(patches=None)
-    np.testing.assert_array_equal(np.asarray(hj.render(scene)),
-                                  np.asarray(shading_stage(geometry_stage(scene), scene.params)))
+    np.testing.assert_array_equal(
+        np.asarray(hj.render(scene)), np.asarray(shading_stage(geometry_stage(scene), scene.params))
+    )
 
 
 def test_other_entry_points():

@@ -20,12 +20,21 @@ def stacked_hairs(ordering="bins", front_first=False):
     idx = [0, 1, 2] if front_first else [2, 1, 0]
     xs = np.linspace(-1.0, 1.0, 5)
     strands = [np.stack([xs, np.zeros(5), np.full(5, zs[i])], axis=1) for i in idx]
-    hair = hj.Strands(np.concatenate(strands), np.arange(4) * 5, [alphas[i] for i in idx], 1.0,
-                      np.repeat([colors[i] for i in idx], 5, axis=0))
-    return hj.Scene(hair, camera=hj.Camera(eye=(0, 0, 5), target=(0, 0, 0), width=16, height=9),
-                    shading=hj.KajiyaKay(hj.ShadingParams(kd=0.0, ks=0.0, ambient=1.0)),
-                    shadows=hj.Shadows("none"), ordering=hj.Ordering(ordering, 8) if ordering == "bins" else hj.Ordering(ordering),
-                    background=(0.2, 0.2, 0.2))
+    hair = hj.Strands(
+        np.concatenate(strands),
+        np.arange(4) * 5,
+        [alphas[i] for i in idx],
+        1.0,
+        np.repeat([colors[i] for i in idx], 5, axis=0),
+    )
+    return hj.Scene(
+        hair,
+        camera=hj.Camera(eye=(0, 0, 5), target=(0, 0, 0), width=16, height=9),
+        shading=hj.KajiyaKay(hj.ShadingParams(kd=0.0, ks=0.0, ambient=1.0)),
+        shadows=hj.Shadows("none"),
+        ordering=hj.Ordering(ordering, 8) if ordering == "bins" else hj.Ordering(ordering),
+        background=(0.2, 0.2, 0.2),
+    )
 
 
 def test_three_stacked_hairs_composite_by_hand():
@@ -53,8 +62,12 @@ def test_ordering_matters_and_exact_equals_bins_here():
 def test_image_conventions_row_zero_is_top():
     # One hair above the target: it must appear in the upper half of the image.
     hair = hj.Strands.from_list([[[-0.5, 0.6, 0.0], [0.5, 0.6, 0.0]]], alpha=1.0)
-    scene = hj.Scene(hair, camera=hj.Camera(width=32, height=32), shadows=hj.Shadows("none"),
-                     shading=hj.KajiyaKay(hj.ShadingParams(ambient=1.0)))
+    scene = hj.Scene(
+        hair,
+        camera=hj.Camera(width=32, height=32),
+        shadows=hj.Shadows("none"),
+        shading=hj.KajiyaKay(hj.ShadingParams(ambient=1.0)),
+    )
     alpha = np.asarray(hj.render(scene))[..., 3]
     rows = np.flatnonzero(alpha.max(axis=1) > 0)
     assert rows.size and rows.max() < 16
@@ -70,8 +83,9 @@ def loss_fn(scene, target):
 @pytest.mark.parametrize("shadows", ["opacity-maps", "exact"])
 def test_gradients_match_finite_differences(shadows):
     scene = small_furball_scene(shadows=shadows)
-    target = hj.render(scene, hj.ShadingParams(kd=(0.3, 0.5, 0.2), ks=0.1, shininess=8.0,
-                                               kappa=2.0, ambient=0.05))
+    target = hj.render(
+        scene, hj.ShadingParams(kd=(0.3, 0.5, 0.2), ks=0.1, shininess=8.0, kappa=2.0, ambient=0.05)
+    )
     loss = loss_fn(scene, target)
     params, alpha = scene.params, jnp.asarray(scene.strands.alpha)
     g_params, g_alpha = jax.grad(loss, argnums=(0, 1))(params, alpha)
@@ -93,8 +107,7 @@ def test_gradients_match_finite_differences(shadows):
         # Central differences in float64: truncation O(eps²) and roundoff ~1e-16·loss/eps.
         assert g == pytest.approx(fd, rel=1e-5, abs=1e-8), field
     for j in np.argsort(-np.abs(np.asarray(g_alpha)))[:3]:
-        fd = central_difference(lambda x: float(loss(params, alpha.at[j].set(x))),
-                                float(alpha[j]), 1e-6)
+        fd = central_difference(lambda x: float(loss(params, alpha.at[j].set(x))), float(alpha[j]), 1e-6)
         assert float(g_alpha[j]) == pytest.approx(fd, rel=1e-5, abs=1e-8)
     assert np.abs(np.asarray(g_alpha)).max() > 0
 
@@ -113,15 +126,19 @@ def test_extreme_values_stay_finite():
         [[-0.5, 0, 0]],  # a one-point strand
     ]
     hair = hj.Strands.from_list(strands, alpha=1.0)
-    scene = hj.Scene(hair, camera=hj.Camera(eye=(0, 0.3, 3), width=24, height=24),
-                     light=hj.Light(direction=(0, -1, 0)),
-                     shadows=hj.Shadows("opacity-maps", 8, 16))
+    scene = hj.Scene(
+        hair,
+        camera=hj.Camera(eye=(0, 0.3, 3), width=24, height=24),
+        light=hj.Light(direction=(0, -1, 0)),
+        shadows=hj.Shadows("opacity-maps", 8, 16),
+    )
     params = hj.ShadingParams(kd=0.5, ks=1.0, shininess=1e4, kappa=1e3)
     img = hj.render(scene, params)
     assert np.all(np.isfinite(np.asarray(img)))
     assert np.asarray(img)[..., 3].max() > 0
-    g_params, g_alpha = jax.grad(lambda p, a: jnp.sum(hj.render(scene, p, a) ** 2),
-                                 argnums=(0, 1))(params, jnp.asarray(hair.alpha))
+    g_params, g_alpha = jax.grad(lambda p, a: jnp.sum(hj.render(scene, p, a) ** 2), argnums=(0, 1))(
+        params, jnp.asarray(hair.alpha)
+    )
     for leaf in jax.tree_util.tree_leaves((g_params, g_alpha)):
         assert np.all(np.isfinite(np.asarray(leaf)))
 
@@ -132,8 +149,9 @@ def test_geometry_reused_and_unneeded_work_skipped(monkeypatch):
     original = setup_mod._prepare
     monkeypatch.setattr(setup_mod, "_prepare", lambda s: calls.append(s) or original(s))
     original_weights = stage_mod._composite_weights
-    monkeypatch.setattr(stage_mod, "_composite_weights",
-                        lambda *a: opacity_calls.append(1) or original_weights(*a))
+    monkeypatch.setattr(
+        stage_mod, "_composite_weights", lambda *a: opacity_calls.append(1) or original_weights(*a)
+    )
 
     def forbidden(*args, **kwargs):
         raise AssertionError("this stage must not run for this scene")
@@ -158,10 +176,14 @@ def test_occluder_hides_hair_behind_it():
     behind = [[-0.2, 0.0, -2.0], [0.2, 0.0, -2.0]]
     front = [[-0.2, -0.1, 1.5], [0.2, -0.1, 1.5]]
     hair = hj.Strands.from_list([behind, front], alpha=1.0)
-    base = dict(camera=hj.Camera(eye=(0, 0, 5), width=32, height=32), shadows=hj.Shadows("none"),
-                shading=hj.KajiyaKay(hj.ShadingParams(kd=0.0, ks=0.0, ambient=1.0)))
-    with_sphere = hj.Scene(hair, occluder=hj.Occluder(center=(0, 0, 0), radius=1.0,
-                                                      color=(0.0, 0.0, 0.0)), **base)
+    base = dict(
+        camera=hj.Camera(eye=(0, 0, 5), width=32, height=32),
+        shadows=hj.Shadows("none"),
+        shading=hj.KajiyaKay(hj.ShadingParams(kd=0.0, ks=0.0, ambient=1.0)),
+    )
+    with_sphere = hj.Scene(
+        hair, occluder=hj.Occluder(center=(0, 0, 0), radius=1.0, color=(0.0, 0.0, 0.0)), **base
+    )
     img = np.asarray(hj.render(with_sphere))
     without = np.asarray(hj.render(hj.Scene(hair, **base)))
     setup = hj.prepare(with_sphere)
@@ -184,8 +206,10 @@ def test_a_given_draw_order_replaces_the_sort():
     plain = np.asarray(hj.render(scene))
     own = setup_mod.visibility_order(scene)[4]
     np.testing.assert_array_equal(np.asarray(hj.render(scene, order=own)), plain)
-    np.testing.assert_array_equal(np.asarray(hj.geometry_stage(scene, order=own).frag_weight),
-                                  np.asarray(hj.geometry_stage(scene).frag_weight))
+    np.testing.assert_array_equal(
+        np.asarray(hj.geometry_stage(scene, order=own).frag_weight),
+        np.asarray(hj.geometry_stage(scene).frag_weight),
+    )
     assert np.abs(np.asarray(hj.render(scene, order=own[::-1])) - plain).max() > 1e-3
     np.testing.assert_array_equal(np.asarray(hj.render(scene)), plain)  # cache untouched
 
@@ -199,8 +223,7 @@ def test_a_given_draw_order_replaces_the_sort():
     np.testing.assert_allclose(img[4, 8, :3], acc, rtol=1e-12)
     # Segments left out of the order are not drawn: only the red hair's (strand 0's 4).
     red_only = np.asarray(hj.render(scene, order=np.arange(4)))
-    np.testing.assert_allclose(red_only[4, 8, :3], 0.5 * np.array([1.0, 0, 0]) + 0.5 * 0.2,
-                               rtol=1e-12)
+    np.testing.assert_allclose(red_only[4, 8, :3], 0.5 * np.array([1.0, 0, 0]) + 0.5 * 0.2, rtol=1e-12)
 
 
 def test_a_given_draw_order_is_checked():

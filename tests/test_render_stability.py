@@ -30,6 +30,7 @@ import hairjax as hj
 
 # --- compositing ---------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("alpha", [1e-6, 1.0])
 def test_opacity_extremes(request, backend, alpha):
@@ -47,6 +48,7 @@ def test_opacity_extremes(request, backend, alpha):
 
 # --- random scenes -------------------------------------------------------------------------
 
+
 @st.composite
 def random_scenes(draw):
     """A small random scene within the issue's ranges, as keyword arguments (the scene is
@@ -56,20 +58,34 @@ def random_scenes(draw):
     unit = st.tuples(*[st.floats(-1.0, 1.0)] * 3).filter(lambda v: np.linalg.norm(v) > 0.1)
     return dict(
         dtype=draw(st.sampled_from(["float64", "float32"])),
-        hair=dict(strands=draw(st.integers(1, 12)), points=draw(st.integers(2, 5)),
-                  seed=draw(st.integers(0, 2**16)), alpha=10.0 ** draw(st.floats(-6.0, 0.0)),
-                  # widths on a log grid: the rasteriser compiles once per ribbon reach
-                  width=draw(st.sampled_from([0.25, 0.5, 1.0, 2.0, 4.0, 8.0]))),
+        hair=dict(
+            strands=draw(st.integers(1, 12)),
+            points=draw(st.integers(2, 5)),
+            seed=draw(st.integers(0, 2**16)),
+            alpha=10.0 ** draw(st.floats(-6.0, 0.0)),
+            # widths on a log grid: the rasteriser compiles once per ribbon reach
+            width=draw(st.sampled_from([0.25, 0.5, 1.0, 2.0, 4.0, 8.0])),
+        ),
         scale=10.0 ** draw(st.sampled_from([-4, 0, 4])),
-        eye=np.asarray(draw(unit)), distance=draw(st.floats(0.3, 6.0)), fov=draw(st.floats(20.0, 120.0)),
-        light=draw(st.one_of(st.tuples(st.just("directional"), unit),
-                             st.tuples(st.just("point"), st.tuples(*[st.floats(-1.5, 1.5)] * 3)))),
-        shadows=draw(st.sampled_from(["none", "opacity-maps", "exact"])), maps=draw(st.integers(1, 6)),
+        eye=np.asarray(draw(unit)),
+        distance=draw(st.floats(0.3, 6.0)),
+        fov=draw(st.floats(20.0, 120.0)),
+        light=draw(
+            st.one_of(
+                st.tuples(st.just("directional"), unit),
+                st.tuples(st.just("point"), st.tuples(*[st.floats(-1.5, 1.5)] * 3)),
+            )
+        ),
+        shadows=draw(st.sampled_from(["none", "opacity-maps", "exact"])),
+        maps=draw(st.integers(1, 6)),
         model=draw(st.sampled_from(["kajiya-kay", "kajiya-kay-mirror"])),
-        params=dict(kd=draw(st.floats(0.0, 1.0)), ks=draw(st.floats(0.0, 1.0)),
-                    ambient=draw(st.floats(0.0, 1.0)),
-                    shininess=10.0 ** draw(st.floats(np.log10(0.5), 4.0)),
-                    kappa=draw(st.one_of(st.just(0.0), st.floats(-3.0, 3.0).map(lambda e: 10.0**e)))),
+        params=dict(
+            kd=draw(st.floats(0.0, 1.0)),
+            ks=draw(st.floats(0.0, 1.0)),
+            ambient=draw(st.floats(0.0, 1.0)),
+            shininess=10.0 ** draw(st.floats(np.log10(0.5), 4.0)),
+            kappa=draw(st.one_of(st.just(0.0), st.floats(-3.0, 3.0).map(lambda e: 10.0**e))),
+        ),
     )
 
 
@@ -78,14 +94,20 @@ def build_random_scene(spec) -> hj.Scene:
     eye = spec["eye"] / np.linalg.norm(spec["eye"]) * spec["distance"]
     up = (0.0, 1.0, 0.0) if abs(eye[1]) < 0.95 * np.linalg.norm(eye) else (1.0, 0.0, 0.0)
     kind, v = spec["light"]
-    light = (hj.Light(direction=v) if kind == "directional"
-             else hj.Light(kind="point", position=tuple(s * np.asarray(v))))
-    return hj.Scene(hj.furball(**spec["hair"]).transformed(s),
-                    camera=hj.Camera(eye=tuple(s * eye), target=(0.0, 0.0, 0.0), up=up, fov=spec["fov"],
-                                     width=SIZE, height=SIZE),
-                    light=light,
-                    shading=hj.shading_model_class(spec["model"])(hj.ShadingParams(**spec["params"])),
-                    shadows=shadow_method(spec["shadows"], spec["maps"], SIZE))
+    light = (
+        hj.Light(direction=v)
+        if kind == "directional"
+        else hj.Light(kind="point", position=tuple(s * np.asarray(v)))
+    )
+    return hj.Scene(
+        hj.furball(**spec["hair"]).transformed(s),
+        camera=hj.Camera(
+            eye=tuple(s * eye), target=(0.0, 0.0, 0.0), up=up, fov=spec["fov"], width=SIZE, height=SIZE
+        ),
+        light=light,
+        shading=hj.shading_model_class(spec["model"])(hj.ShadingParams(**spec["params"])),
+        shadows=shadow_method(spec["shadows"], spec["maps"], SIZE),
+    )
 
 
 # Each example compiles its own scene (~1 s): few examples, no deadline.

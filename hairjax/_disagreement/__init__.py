@@ -11,14 +11,14 @@ geometry alone, in NumPy (JAX only for the rasteriser's kernel and the geometry 
 independently of both renderers' per-pixel code:
 
 - `camera_band`: pixels a camera-side boundary within rounding can move by > PIXEL_TOL
-  when both renderers use one Ω (tests/test_gl.py's camera pass);
+  when both renderers use one Ω (tests/gl/test_renderer.py's camera pass);
 - `omega_uncertainty`, `shadow_band`: how much, and at which points, a light-side
   boundary within rounding can change Ω; `transmittance_uncertainty`: what that does to τ
   for any κ;
 - `renderer_band`: pixels either can move by > PIXEL_TOL — what a fit to GL-rendered
   targets masks (docs/fitting.md, experiments/01_fit_recovery.py).
 
-Tolerances (tests/test_gl.py gives the measurements behind them):
+Tolerances (tests/gl/test_renderer.py gives the measurements behind them):
 - PIXEL_TOL, TAU_TOL = 1e-4 per pixel / per τ: float32 arithmetic on values ≤ 1 with ~10²
   operations per fragment and up to ~10³ fragments composited per pixel gives errors
   ~10⁻⁵; 1e-4 is the cross-check's bound (docs/model.md §11).
@@ -27,7 +27,6 @@ Tolerances (tests/test_gl.py gives the measurements behind them):
   times N/span.
 - MAX_BAND = 1e-3: the share of pixels the camera band may hold (the cross-check's bound).
 """
-
 
 from . import _exact, _opacity_maps  # noqa: F401 (they register their light bands)
 from ._band import renderer_band as renderer_band

@@ -39,8 +39,9 @@ def _risk(scene: Scene, shadows: bool) -> tuple[np.ndarray, np.ndarray]:
                 cache["always_either"] = cache["always"] | unsure_pixels
             i0, i1 = cache["ends"]
             risk = np.where(cache["near_end"], 0.0, np.maximum(dtau[i0], dtau[i1]))
-            cache["either"] = cache["camera"] + np.bincount(cache["pixel"], cache["weights"] * risk,
-                                                            minlength=cache["camera"].size)
+            cache["either"] = cache["camera"] + np.bincount(
+                cache["pixel"], cache["weights"] * risk, minlength=cache["camera"].size
+            )
     if shadows:
         return cache["either"], cache["always_either"]
     return cache["camera"], cache["always"]
@@ -64,13 +65,13 @@ def renderer_band(scene: Scene, colour_bound: float = 1.0) -> np.ndarray:
     whatever the colours. With shadows "none" only the first kind remains.
 
     `colour_bound`: a bound on the colours and on every point's fully lit colour; the
-    image's brightest value is the practical stand-in (tests/test_gl.py and
+    image's brightest value is the practical stand-in (tests/gl/test_renderer.py and
     experiments/01_fit_recovery.py use it), 1 for images in [0, 1]. The sum is first order:
     weights as drawn, ignoring that a toggled fragment also changes T behind it. Because
     Δτ holds for every κ, a point whose Ω may differ taints every pixel of its two
     segments where they weigh enough, so the band holds more than MAX_BAND where shadows
     differ (2.7 % of the default scene at 224², docs/fitting.md); its camera part alone
-    stays within MAX_BAND (tests/test_gl.py).
+    stays within MAX_BAND (tests/gl/test_renderer.py).
 
     The geometry, JAX's Ω (from `geometry_stage`, which needs no shading parameters)
     included, is cached per scene object: calling this for each target of a scene costs

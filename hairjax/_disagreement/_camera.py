@@ -63,8 +63,14 @@ def _camera_risk(scene) -> dict:
     near_first = order[::-1]
     s0, s1 = segments[near_first, 0], segments[near_first, 1]
     strand = scene.strands.strand_of_point[s0]
-    width = ribbon_widths(scene.strands.width[strand], scene.strands.width_units, depth[s0],
-                          depth[s1], view.focal, view.perspective)
+    width = ribbon_widths(
+        scene.strands.width[strand],
+        scene.strands.width_units,
+        depth[s0],
+        depth[s1],
+        view.focal,
+        view.perspective,
+    )
     frags, near_end = end_band(xy[s0], xy[s1], depth[s0], depth[s1], width, cam.width, cam.height, True)
     sort = np.argsort(frags.pixel, kind="stable")  # front to back within a pixel
     pixel = frags.pixel[sort]
@@ -80,14 +86,19 @@ def _camera_risk(scene) -> dict:
         hit, _, _ = occluder_hits(view, scene.occluder)
         close = np.abs(frags.depth - hit[frags.pixel]) < 1e-5 * np.abs(hit[frags.pixel])
         always[frags.pixel[close]] = True
-    return dict(camera=np.bincount(pixel, np.where(near_end, weights, 0.0), minlength=hw),
-                always=always, pixel=pixel, weights=weights, near_end=near_end,
-                ends=(s0[seg], s1[seg]))
+    return dict(
+        camera=np.bincount(pixel, np.where(near_end, weights, 0.0), minlength=hw),
+        always=always,
+        pixel=pixel,
+        weights=weights,
+        near_end=near_end,
+        ends=(s0[seg], s1[seg]),
+    )
 
 
 def camera_band(scene, colour_bound: float) -> np.ndarray:
     """Pixels (`bool[H·W]`, row-major) a camera-side discontinuity within rounding can move
-    by more than PIXEL_TOL, given the renderers' Ω are the same (as tests/test_gl.py's
+    by more than PIXEL_TOL, given the renderers' Ω are the same (as tests/gl/test_renderer.py's
     camera pass, which hands JAX's Ω to GL). See `renderer_band` for the bound."""
     risk = camera_risk(scene)
     camera, always = risk["camera"], risk["always"]

@@ -15,9 +15,11 @@ def exact_terms(shadows, frame, frags, near_end, opacity, r):
     # 16 float32 ulps of the largest depth: GL's perspective-correct depths from a
     # point light were measured 5 ulps off (point_light.toml, exact, 128²).
     dz = 16 * float(np.spacing(np.float32(np.abs(z[frame.seen]).max(initial=0.0))))
+
     # One key per (texel, depth): the texel plus the depth mapped into [0, ½].
     def key(texel, depth):
         return texel + 0.5 * np.clip((depth - frame.zmin + 2 * dz) / (frame.span + 4 * dz), 0.0, 1.0)
+
     ends = WindowSums(key, frags.pixel[near_end], frags.depth[near_end], opacity[near_end], r)
     every = WindowSums(key, frags.pixel, frags.depth, opacity, r)
 
@@ -26,7 +28,6 @@ def exact_terms(shadows, frame, frags, near_end, opacity, r):
 
     def omega_at(x, y, i):
         return every(x, y, -np.inf, z[i])
-
 
     return uncertain, omega_at
 

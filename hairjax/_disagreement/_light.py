@@ -16,8 +16,15 @@ from .._geometry._raster import ribbon_widths
 from .._geometry._shadows import light_frame
 from ._camera import end_band, segment_opacity
 
-__all__ = ["WindowSums", "LightBand", "register_light_band", "light_band", "omega_uncertainty",
-           "shadow_band", "transmittance_uncertainty"]
+__all__ = [
+    "WindowSums",
+    "LightBand",
+    "register_light_band",
+    "light_band",
+    "omega_uncertainty",
+    "shadow_band",
+    "transmittance_uncertainty",
+]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -43,8 +50,9 @@ def light_band(shadows) -> LightBand:
     try:
         return _LIGHT_BANDS[shadows.method]
     except KeyError:
-        raise NotImplementedError(f"no float32 disagreement band for shadows method "
-                                  f"{shadows.method!r}") from None
+        raise NotImplementedError(
+            f"no float32 disagreement band for shadows method {shadows.method!r}"
+        ) from None
 
 
 class WindowSums:
@@ -68,8 +76,10 @@ class WindowSums:
                 nx, ny = tx + ox, ty + oy
                 valid = (nx >= 0) & (nx < r) & (ny >= 0) & (ny < r)
                 t = np.where(valid, ny * r + nx, 0)
-                sums = (self.prefix[np.searchsorted(self.keys, self.key(t, hi), "right")]
-                        - self.prefix[np.searchsorted(self.keys, self.key(t, lo), "left")])
+                sums = (
+                    self.prefix[np.searchsorted(self.keys, self.key(t, hi), "right")]
+                    - self.prefix[np.searchsorted(self.keys, self.key(t, lo), "left")]
+                )
                 total += np.where(valid, sums, 0.0)
         return total / (2 * k + 1) ** 2
 
@@ -99,16 +109,16 @@ def omega_uncertainty(scene) -> np.ndarray:
     ids = frame.drawable
     a, b = segs[ids, 0], segs[ids, 1]
     xy, z = frame.xy, frame.depth
-    width = ribbon_widths(s.width[s.strand_of_point[a]], s.width_units, z[a], z[b],
-                          frame.view.focal, frame.view.perspective)
+    width = ribbon_widths(
+        s.width[s.strand_of_point[a]], s.width_units, z[a], z[b], frame.view.focal, frame.view.perspective
+    )
     frags, near_end = end_band(xy[a], xy[b], z[a], z[b], width, r, r, frame.view.perspective)
     opacity = segment_opacity(scene)[ids[frags.segment]] * frags.coverage
     # Clipped before the cast: unseen points of a light at the hair's centre lie at ~1e300.
     tx = np.floor(np.clip(xy[:, 0], -1, r)).astype(np.int64)
     ty = np.floor(np.clip(xy[:, 1], -1, r)).astype(np.int64)
 
-    uncertain, omega_at = light_band(scene.shadows).terms(scene.shadows, frame, frags, near_end,
-                                                          opacity, r)
+    uncertain, omega_at = light_band(scene.shadows).terms(scene.shadows, frame, frags, near_end, opacity, r)
     everyone = np.arange(len(z))
     bound = uncertain(tx, ty, everyone)
     # A point within rounding of a texel edge may land in the neighbour (−1 or +1 per axis,

@@ -50,14 +50,15 @@ def occluder_light_uncertainty(scene) -> tuple[np.ndarray, np.ndarray]:
     # Fires where the texel holds no occluder (∞): no threshold to be near.
     gap = np.where(np.isfinite(blocker), z - blocker - shadow_bias(view, z), np.inf)
     unsure = near_edge(xy) | outline[texel] | (np.abs(gap) < 1e-5 * np.maximum(np.abs(z), 1e-300))
-    frame = with_receivers(light_frame(s.points, s.segments(), s.width, scene.light, r, s.width_units),
-                           surface)
+    frame = with_receivers(
+        light_frame(s.points, s.segments(), s.width, scene.light, r, s.width_units), surface
+    )
     receiver = slice(s.num_points, None)
     unsure[receiver] |= near_edge(frame.xy[receiver])
     planes = light_band(scene.shadows).planes(scene.shadows)
     if planes is not None:  # a receiver's depth near a slice plane may fall on either side
         u = frame.slice_coordinate(frame.depth[receiver], planes)
         unsure[receiver] |= np.abs(u - np.round(u)) < SLICE_DELTA
-    points_out[:] = unsure[:s.num_points]
+    points_out[:] = unsure[: s.num_points]
     pixels_out[setup.occluder_pixel] = unsure[receiver]
     return points_out, pixels_out

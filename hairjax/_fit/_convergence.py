@@ -14,8 +14,17 @@ import numpy as np
 from ._solvers import NULL_RATIO
 from ._space import entries
 
-__all__ = ["MAX_RESTARTS", "STALL_STEPS", "stationarity", "half_square", "plateau_exit", "solve",
-           "init", "step", "terminate"]
+__all__ = [
+    "MAX_RESTARTS",
+    "STALL_STEPS",
+    "stationarity",
+    "half_square",
+    "plateau_exit",
+    "solve",
+    "init",
+    "step",
+    "terminate",
+]
 
 # How often `fit` starts a solver afresh when its tolerance test passed but the convergence
 # test (`stationarity`) did not; and after how many steps without a lower loss it
@@ -57,7 +66,7 @@ def plateau_exit(residuals: Callable, z, problem, effect, loss: float, rtol: flo
     plateau = problem.model.plateau
     if plateau is None or plateau.gain not in problem.linear or plateau.exponent not in problem.solved:
         return None
-    before = problem.solved[:problem.solved.index(plateau.exponent)]
+    before = problem.solved[: problem.solved.index(plateau.exponent)]
     i = sum(entries(n, problem.model.colours, problem.scalar) for n in before)
     if not effect[i] <= NULL_RATIO * effect.max():
         return None
@@ -87,8 +96,20 @@ def terminate(opt, fn, z, problem, state):
     return opt.terminate(fn, z, problem, {}, state, frozenset())
 
 
-def solve(opt, fn, residuals: Callable, z, problem, losses: list, *, max_steps: int, rtol: float,
-          atol: float, report: Callable[[int, float], None], plateau: Callable | None = None):
+def solve(
+    opt,
+    fn,
+    residuals: Callable,
+    z,
+    problem,
+    losses: list,
+    *,
+    max_steps: int,
+    rtol: float,
+    atol: float,
+    report: Callable[[int, float], None],
+    plateau: Callable | None = None,
+):
     """Step the optimistix solver `opt` (on `fn`, whose residuals are `residuals(z,
     problem)`) from z until the convergence test confirms a stationary point, or it stops
     for a stated reason. Appends each step's loss to `losses` and calls `report(step,
@@ -114,8 +135,11 @@ def solve(opt, fn, residuals: Callable, z, problem, losses: list, *, max_steps: 
             loss = float(half_square(residuals, z, problem))
             if float(decrease) <= rtol * loss + atol:
                 # A stationary point, unless a parameter has no effect there (`plateau`).
-                lower = None if restarts == MAX_RESTARTS or plateau is None else plateau(
-                    z, np.asarray(effect), loss)
+                lower = (
+                    None
+                    if restarts == MAX_RESTARTS or plateau is None
+                    else plateau(z, np.asarray(effect), loss)
+                )
                 if lower is None:
                     confirmed = True
                     break
@@ -146,16 +170,17 @@ def solve(opt, fn, residuals: Callable, z, problem, losses: list, *, max_steps: 
         done, result = terminate(opt, fn, z, problem, state)
         # No lower loss in STALL_STEPS steps (a trust region at the float32 floor rejects
         # every step): converged if the test above finds nothing left to gain.
-        recent = losses[-STALL_STEPS - 1:]
-        stalled = (steps % STALL_STEPS == 0 and len(recent) > STALL_STEPS
-                   and min(recent[1:]) >= recent[0])
+        recent = losses[-STALL_STEPS - 1 :]
+        stalled = steps % STALL_STEPS == 0 and len(recent) > STALL_STEPS and min(recent[1:]) >= recent[0]
     if diverged:
         termination = "stopped: diverged (the loss became non-finite); kept the last finite point"
     elif confirmed:
         termination = "converged"
     elif unconfirmed:
-        termination = (f"stopped: the solver's tolerance test passed {restarts + 1} times where "
-                       "Gauss-Newton still predicts a decrease beyond the tolerances")
+        termination = (
+            f"stopped: the solver's tolerance test passed {restarts + 1} times where "
+            "Gauss-Newton still predicts a decrease beyond the tolerances"
+        )
     elif bool(done):
         termination = f"stopped: {optx.RESULTS[result]}"  # type: ignore[misc]  # equinox's enumeration: indexable at run time
     else:

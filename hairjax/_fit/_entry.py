@@ -100,8 +100,9 @@ def fit(
     init = scenes[0].params if init is None else init
     arrays = [target_arrays(s, t, m, w) for s, t, m, w in zip(scenes, target_list, mask_list, weight_list)]
     if not isinstance(init, model.params_type):
-        raise FitError(f"a {model.label} scene is fitted from {model.params_type.__name__}, "
-                       f"got {type(init).__name__}")
+        raise FitError(
+            f"a {model.label} scene is fitted from {model.params_type.__name__}, got {type(init).__name__}"
+        )
 
     start = time.perf_counter()
     data = [model.prepare(s, init, names, t, sw) for s, (t, sw) in zip(scenes, arrays)]
@@ -128,9 +129,18 @@ def fit(
         report(steps, losses[-1])
     else:
         z, steps, termination, restarts, diverged = solve(
-            opt, fn, residuals, z, problem, losses, max_steps=max_steps, rtol=rtol, atol=atol,
-            report=report, plateau=lambda z, effect, loss: plateau_exit(
-                residuals, z, problem, effect, loss, rtol, atol))
+            opt,
+            fn,
+            residuals,
+            z,
+            problem,
+            losses,
+            max_steps=max_steps,
+            rtol=rtol,
+            atol=atol,
+            report=report,
+            plateau=lambda z, effect, loss: plateau_exit(residuals, z, problem, effect, loss, rtol, atol),
+        )
     fitted = jit_point(z, problem)[0]
     elapsed = time.perf_counter() - start - geometry_s
 
@@ -139,15 +149,27 @@ def fit(
     # At the returned point (a diverged fit's last loss is not).
     final_loss = float(half_square(residuals, z, problem)) if diverged else losses[-1]
     rmse = float(np.sqrt(2 * final_loss / max(n_pixels, 1.0)))
-    return FitResult(params=fitted, initial=init, fitted=names, loss=losses, steps=steps,
-                     time_s=elapsed, geometry_s=geometry_s, termination=termination,
-                     std_error=std_error, undetermined=undetermined, rmse=rmse, restarts=restarts)
+    return FitResult(
+        params=fitted,
+        initial=init,
+        fitted=names,
+        loss=losses,
+        steps=steps,
+        time_s=elapsed,
+        geometry_s=geometry_s,
+        termination=termination,
+        std_error=std_error,
+        undetermined=undetermined,
+        rmse=rmse,
+        restarts=restarts,
+    )
 
 
 def _model_of(scenes) -> FitModel:
     """The fit of the scenes' shading model (`fit_model`); FitError where they differ."""
     classes: list[type[AbstractShadingModel]] = list(dict.fromkeys(type(s.shading) for s in scenes))
     if len(classes) > 1:
-        raise FitError("scenes of one fit share a shading model; got "
-                       + " and ".join(c.name for c in classes))
+        raise FitError(
+            "scenes of one fit share a shading model; got " + " and ".join(c.name for c in classes)
+        )
     return fit_model(classes[0])  # a class: hashable, cached by identity

@@ -12,7 +12,8 @@ __all__ = ["nnls"]
 
 
 def nnls(phi: jax.Array, rhs: jax.Array) -> jax.Array:
-    """argmin ‖Φc − rhs‖ over c ≥ 0 for a few columns (n ≤ 9: three RGB gains; 2ⁿ supports), differentiable in Φ, rhs.
+    """argmin ‖Φc − rhs‖ over c ≥ 0 for a few columns (n ≤ 9: three RGB gains; 2ⁿ
+    supports), differentiable in Φ, rhs.
 
     The optimum is the unconstrained least-squares solution on its own support, and it
     is feasible; every other feasible support solution is a feasible point and costs no

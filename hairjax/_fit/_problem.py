@@ -16,8 +16,19 @@ from ._result import FitError
 from ._space import from_flat
 from ._varpro import project
 
-__all__ = ["check_names", "target_arrays", "visible_fragments", "Problem", "residuals_at",
-           "point", "jit_point", "residuals", "residual_fn", "loss_fn", "params_loss"]
+__all__ = [
+    "check_names",
+    "target_arrays",
+    "visible_fragments",
+    "Problem",
+    "residuals_at",
+    "point",
+    "jit_point",
+    "residuals",
+    "residual_fn",
+    "loss_fn",
+    "params_loss",
+]
 
 
 def check_names(names, scalar, model: FitModel) -> tuple[str, ...]:
@@ -26,14 +37,14 @@ def check_names(names, scalar, model: FitModel) -> tuple[str, ...]:
     names = tuple(names)
     for n in (*names, *scalar):
         if n not in model.fittable:
-            raise FitError(f"unknown parameter {n!r} for a {model.label} scene; fittable: "
-                           f"{', '.join(model.fittable)}")
+            raise FitError(
+                f"unknown parameter {n!r} for a {model.label} scene; fittable: {', '.join(model.fittable)}"
+            )
     if len(set(names)) != len(names) or not names:
         raise FitError(f"fit needs distinct parameter names, got {names!r}")
     for n in scalar:
         if n not in model.colours:
-            raise FitError(f"only {', '.join(model.colours)} can be fitted as one grey value, "
-                           f"not {n!r}")
+            raise FitError(f"only {', '.join(model.colours)} can be fitted as one grey value, not {n!r}")
     return names
 
 
@@ -45,8 +56,9 @@ def target_arrays(scene: Scene, target, mask, weight):
     if image.ndim != 3 or image.shape[2] < 3:
         raise FitError(f"target for {scene.name!r} must be [H, W, 3 or 4], got {image.shape}")
     if image.shape[:2] != (h, w):
-        raise FitError(f"target is {image.shape[1]}x{image.shape[0]} but scene {scene.name!r} "
-                       f"renders {w}x{h}")
+        raise FitError(
+            f"target is {image.shape[1]}x{image.shape[0]} but scene {scene.name!r} renders {w}x{h}"
+        )
     if not np.all(np.isfinite(image[..., :3])):
         raise FitError(f"target for {scene.name!r} has NaN or infinite pixels")
     wt = np.ones((h, w)) if weight is None else np.broadcast_to(np.asarray(weight, float), (h, w))
@@ -65,10 +77,14 @@ def visible_fragments(geom):
     # carries nothing and is dropped as well.
     alpha = np.asarray(geom.frag_alpha)
     keep = np.flatnonzero(weight >= FIT_TRANSMITTANCE_CUTOFF * alpha)
-    return eqx.tree_at(lambda g: (g.frag_pixel, g.frag_i0, g.frag_t, g.frag_weight, g.frag_alpha),
-                       geom, tuple(jnp.asarray(np.asarray(x)[keep]) for x in (
-                           geom.frag_pixel, geom.frag_i0, geom.frag_t, geom.frag_weight,
-                           geom.frag_alpha)))
+    return eqx.tree_at(
+        lambda g: (g.frag_pixel, g.frag_i0, g.frag_t, g.frag_weight, g.frag_alpha),
+        geom,
+        tuple(
+            jnp.asarray(np.asarray(x)[keep])
+            for x in (geom.frag_pixel, geom.frag_i0, geom.frag_t, geom.frag_weight, geom.frag_alpha)
+        ),
+    )
 
 
 class Problem(eqx.Module):

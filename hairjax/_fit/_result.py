@@ -7,7 +7,6 @@ from typing import Any
 
 import numpy as np
 
-
 __all__ = ["FitResult", "FitError"]
 
 
@@ -53,10 +52,15 @@ class FitResult:
             "params": {n: value(self.params, n) for n in names},
             "initial": {n: value(self.initial, n) for n in names},
             "fitted": list(self.fitted),
-            "std_error": {k: (None if v is None else np.asarray(v, float).tolist())
-                          for k, v in self.std_error.items()},
+            "std_error": {
+                k: (None if v is None else np.asarray(v, float).tolist()) for k, v in self.std_error.items()
+            },
             "undetermined": list(self.undetermined),
-            "steps": self.steps, "time_s": self.time_s, "geometry_s": self.geometry_s,
-            "loss": [float(x) for x in self.loss], "rmse": self.rmse,
-            "termination": self.termination, "restarts": self.restarts,
+            "steps": self.steps,
+            "time_s": self.time_s,
+            "geometry_s": self.geometry_s,
+            "loss": [float(x) for x in self.loss],
+            "rmse": self.rmse,
+            "termination": self.termination,
+            "restarts": self.restarts,
         }

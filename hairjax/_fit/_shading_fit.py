@@ -35,8 +35,16 @@ from ._model import FitModel, Plateau
 from ._problem import visible_fragments
 from ._space import SOFTPLUS, with_values
 
-__all__ = ["fit_model", "TargetTerms", "prepare_terms", "gain_images", "gain_images_plain",
-           "target_image", "fixed_image", "SHININESS_SCAN"]
+__all__ = [
+    "fit_model",
+    "TargetTerms",
+    "prepare_terms",
+    "gain_images",
+    "gain_images_plain",
+    "target_image",
+    "fixed_image",
+    "SHININESS_SCAN",
+]
 
 # Where `fit` looks for a lower loss when it stops on a model's plateau (a gain solved to 0,
 # its exponent without effect): the exponent on a log grid over the range we support,
@@ -89,8 +97,7 @@ def _columns(terms: TargetTerms, params, gains, reflectance=None) -> jax.Array:
         lit_scale = lit_scale * transmittance(params.kappa, g.omega)[:, None]
     if g.light_visibility is not None:
         lit_scale = lit_scale * g.light_visibility[:, None]
-    columns = [ambient[n] * terms.ambient_scale if n in ambient else lit[n] * lit_scale
-               for n in gains]
+    columns = [ambient[n] * terms.ambient_scale if n in ambient else lit[n] * lit_scale for n in gains]
     return jnp.concatenate(columns, axis=1)
 
 
@@ -104,8 +111,11 @@ def gain_images_plain(terms: TargetTerms, params, reflectance=None) -> dict:
 
 
 def _searched_values(terms: TargetTerms, params) -> jax.Array:
-    return jnp.stack([jnp.reshape(getattr(params, n), ()) for n in terms.searched]) \
-        if terms.searched else jnp.zeros(0, dtype=jnp.result_type(float))
+    return (
+        jnp.stack([jnp.reshape(getattr(params, n), ()) for n in terms.searched])
+        if terms.searched
+        else jnp.zeros(0, dtype=jnp.result_type(float))
+    )
 
 
 @jax.custom_jvp
@@ -126,6 +136,7 @@ def _gain_images_jvp(primals, tangents):
     images = dict(terms.fixed)
     d_images = {n: jnp.zeros_like(v) for n, v in terms.fixed.items()}
     if terms.varying:
+
         def columns(v):
             return _columns(terms, with_values(params, dict(zip(terms.searched, v)), ()), terms.varying)
 
@@ -136,17 +147,17 @@ def _gain_images_jvp(primals, tangents):
             for i, p in enumerate(terms.searched):
                 for j, g in enumerate(terms.varying):
                     if (g, p) in terms.pairs:
-                        parts.append(jac[:, 3 * j:3 * j + 3, i])
+                        parts.append(jac[:, 3 * j : 3 * j + 3, i])
                         layout.append((i, j))
         stacked = composite(terms.geometry, jnp.concatenate(parts, axis=1))
         k = len(terms.varying)
-        values_image, derivatives = stacked[:, :3 * k], stacked[:, 3 * k:]
+        values_image, derivatives = stacked[:, : 3 * k], stacked[:, 3 * k :]
         images.update(zip(terms.varying, jnp.split(values_image, k, axis=1)))
         for j, g in enumerate(terms.varying):
             d = jnp.zeros_like(values_image[:, :3])
             for b, (i, jj) in enumerate(layout):
                 if jj == j:
-                    d = d + derivatives[:, 3 * b:3 * b + 3] * d_values[i]
+                    d = d + derivatives[:, 3 * b : 3 * b + 3] * d_values[i]
             d_images[g] = d
     return images, d_images
 
@@ -183,8 +194,11 @@ def prepare_terms(gains: tuple[str, ...], scene, params, names, target, sqrt_wei
     model: AbstractShadingModel = geom.shading
     searched = tuple(n for n in model.searched if n in names)
     # §16: the streak factor scales a point's whole colour: it rides on both scales.
-    streak = jnp.ones((geom.tangent.shape[0], 1), geom.tangent.dtype) if geom.streak is None \
+    streak = (
+        jnp.ones((geom.tangent.shape[0], 1), geom.tangent.dtype)
+        if geom.streak is None
         else geom.streak[:, None]
+    )
     light = geom.light_rgb[None, :] * streak
     points = shading_points(geom)
     reached, lit = _reaches(model, points, params, searched)
@@ -193,17 +207,39 @@ def prepare_terms(gains: tuple[str, ...], scene, params, names, target, sqrt_wei
     by_searched = {n: bool(p - {"kappa"}) for n, p in reached.items()}
     varying = tuple(n for n in gains if reached[n])
     pairs = tuple((n, p) for n in varying for p in searched if p in reached[n])
-    fixed_terms = TargetTerms(full, streak, light, {}, {}, jnp.zeros(()), jnp.asarray(target),
-                              jnp.asarray(sqrt_weight), tuple(n for n in gains if n not in varying), (),
-                              lit)
+    fixed_terms = TargetTerms(
+        full,
+        streak,
+        light,
+        {},
+        {},
+        jnp.zeros(()),
+        jnp.asarray(target),
+        jnp.asarray(sqrt_weight),
+        tuple(n for n in gains if n not in varying),
+        (),
+        lit,
+    )
     reflectance = model.reflectance(points, params)  # at the start: the fixed terms' values
     fixed = gain_images_plain(fixed_terms, params, reflectance) if fixed_terms.varying else {}
     bases = {}
     if varying and not any(by_searched[n] for n in varying):
         bases = {n: {**reflectance.ambient, **reflectance.lit}[n] for n in varying}
     constant = full.transmittance[:, None] * full.backdrop
-    return TargetTerms(geom, streak, light, fixed, bases, constant, jnp.asarray(target),
-                       jnp.asarray(sqrt_weight), varying, searched, lit, pairs)
+    return TargetTerms(
+        geom,
+        streak,
+        light,
+        fixed,
+        bases,
+        constant,
+        jnp.asarray(target),
+        jnp.asarray(sqrt_weight),
+        varying,
+        searched,
+        lit,
+        pairs,
+    )
 
 
 def _reaches(model: AbstractShadingModel, points, params, searched):
@@ -240,10 +276,19 @@ def fit_model(cls: type[AbstractShadingModel]) -> FitModel:
         found = gain_images(terms, params)
         return fixed_image(terms, params), tuple((n, found[n]) for n in all_gains)
 
-    return FitModel(label=cls.name, model_class=cls, params_type=cls.params_type,
-                    fittable=cls.fittable, colours=all_gains, transforms=transforms,
-                    prepare=functools.partial(prepare_terms, all_gains), image=image,
-                    linear=gains, gain_images=images, plateau=plateau)
+    return FitModel(
+        label=cls.name,
+        model_class=cls,
+        params_type=cls.params_type,
+        fittable=cls.fittable,
+        colours=all_gains,
+        transforms=transforms,
+        prepare=functools.partial(prepare_terms, all_gains),
+        image=image,
+        linear=gains,
+        gain_images=images,
+        plateau=plateau,
+    )
 
 
 def target_image(terms: TargetTerms, params, plain: bool = False) -> jax.Array:

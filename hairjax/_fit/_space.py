@@ -17,8 +17,22 @@ import jax.numpy as jnp
 
 from .._shading._transforms import IDENTITY, LOG, SOFTPLUS, Transform, identity, softplus, softplus_inv
 
-__all__ = ["Transform", "SOFTPLUS", "LOG", "IDENTITY", "START_FLOOR", "softplus", "softplus_inv",
-           "identity", "error_space", "entries", "to_flat", "unflatten", "from_flat", "with_values"]
+__all__ = [
+    "Transform",
+    "SOFTPLUS",
+    "LOG",
+    "IDENTITY",
+    "START_FLOOR",
+    "softplus",
+    "softplus_inv",
+    "identity",
+    "error_space",
+    "entries",
+    "to_flat",
+    "unflatten",
+    "from_flat",
+    "with_values",
+]
 
 
 # Smallest value a parameter starts from, and the smallest at which a log-space standard
@@ -58,20 +72,20 @@ def unflatten(z: jax.Array, names, colours, scalar) -> dict:
     out, i = {}, 0
     for n in names:
         k = entries(n, colours, scalar)
-        out[n], i = z[i:i + k], i + k
+        out[n], i = z[i : i + k], i + k
     return out
 
 
 def from_flat(z: jax.Array, base, names, colours, scalar, space: Mapping[str, Transform]):
     """`base` with the parameters in `names` taken from z through `space`."""
-    return with_values(base, {n: space[n].forward(v) for n, v in unflatten(z, names, colours,
-                                                                           scalar).items()}, colours)
+    return with_values(
+        base, {n: space[n].forward(v) for n, v in unflatten(z, names, colours, scalar).items()}, colours
+    )
 
 
 def with_values(base, values: dict, colours):
     """`base` (a model's parameters, built through their own constructor, whose checks
     pass traced values) with some parameters replaced; a single value of an RGB one
     broadcasts."""
-    shaped = {n: jnp.broadcast_to(x, (3,)) if n in colours else jnp.reshape(x, ())
-              for n, x in values.items()}
+    shaped = {n: jnp.broadcast_to(x, (3,)) if n in colours else jnp.reshape(x, ()) for n, x in values.items()}
     return dataclasses.replace(base, **shaped)

@@ -36,7 +36,7 @@ def unpack_linear(c: jax.Array, linear, scalar) -> dict:
     out, i = {}, 0
     for name in linear:
         k = 1 if name in scalar else 3
-        out[name] = jnp.broadcast_to(c[i:i + k], (3,))
+        out[name] = jnp.broadcast_to(c[i : i + k], (3,))
         i += k
     return out
 

@@ -28,9 +28,19 @@ import numpy as np
 from .._constants import OCCLUDER_SHADOW_BIAS
 from ._projection import View, light_view
 
-__all__ = ["occluder_hits", "sphere_hits", "mesh_hits", "vertex_normals", "occluder_extent",
-           "occluder_light_view", "occluder_visibility", "shadow_bias", "silhouette_pixels",
-           "interpolation_bound", "corner_nudges"]
+__all__ = [
+    "occluder_hits",
+    "sphere_hits",
+    "mesh_hits",
+    "vertex_normals",
+    "occluder_extent",
+    "occluder_light_view",
+    "occluder_visibility",
+    "shadow_bias",
+    "silhouette_pixels",
+    "interpolation_bound",
+    "corner_nudges",
+]
 
 _CHUNK = 1 << 22  # (triangle, pixel) candidates per batch: bounds memory to ~1 GB
 
@@ -157,7 +167,7 @@ def pixel_fragments(view: View, xy: np.ndarray, depth: np.ndarray, tri: np.ndarr
     tri_of = np.repeat(np.arange(len(tri)), count)
     within = np.arange(tri_of.size) - np.repeat(np.cumsum(count) - count, count)
     for lo in range(0, tri_of.size, _CHUNK):
-        k, r = tri_of[lo:lo + _CHUNK], within[lo:lo + _CHUNK]
+        k, r = tri_of[lo : lo + _CHUNK], within[lo : lo + _CHUNK]
         px = x0[k] + r % nx[k]
         py = y0[k] + r // nx[k]
         cx, cy = px + 0.5, py + 0.5
@@ -272,7 +282,6 @@ def _near_segments(p0: np.ndarray, p1: np.ndarray, delta: float, w: int, h: int)
     near = np.linalg.norm(c - (p0[k] + t[:, None] * d), axis=1) <= delta
     out[(py[near] * w + px[near]).astype(np.int64)] = True
     return out
-
 
 
 def interpolation_bound(view: View, occluder, light, step: float) -> np.ndarray:

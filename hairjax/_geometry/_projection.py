@@ -52,7 +52,7 @@ class View:
 
     def pixel_rays(self) -> tuple[np.ndarray, np.ndarray]:
         """Per pixel centre: (ray origin `[H*W, 3]`, unit ray direction `[H*W, 3]`), row-major."""
-        j, i = np.mgrid[0:self.height, 0:self.width]
+        j, i = np.mgrid[0 : self.height, 0 : self.width]
         x = (i.ravel() + 0.5 - self.cx) / self.focal
         y = -(j.ravel() + 0.5 - self.cy) / self.focal
         if self.perspective:
@@ -86,9 +86,19 @@ def camera_view(camera) -> View:
     forward /= np.linalg.norm(forward)
     right, up = _basis(forward, np.asarray(camera.up, dtype=np.float64))
     focal = 0.5 * camera.height / np.tan(np.radians(camera.fov) / 2)
-    return View(eye, forward, right, up, camera.width, camera.height, float(focal),
-                camera.width / 2 + camera.offset[0], camera.height / 2 + camera.offset[1], True,
-                camera.near)
+    return View(
+        eye,
+        forward,
+        right,
+        up,
+        camera.width,
+        camera.height,
+        float(focal),
+        camera.width / 2 + camera.offset[0],
+        camera.height / 2 + camera.offset[1],
+        True,
+        camera.near,
+    )
 
 
 def light_view(light, points: np.ndarray, resolution: int, margin: int) -> View:
@@ -111,8 +121,19 @@ def light_view(light, points: np.ndarray, resolution: int, margin: int) -> View:
         extent = 2 * max(float(np.abs(rel @ right).max()), float(np.abs(rel @ up).max()))
         # Fires when all points coincide seen from the light: any scale frames one point.
         focal = usable / extent if extent > 0 else 1.0
-        return View(centre, forward, right, up, resolution, resolution, float(focal),
-                    resolution / 2, resolution / 2, False, -np.inf)
+        return View(
+            centre,
+            forward,
+            right,
+            up,
+            resolution,
+            resolution,
+            float(focal),
+            resolution / 2,
+            resolution / 2,
+            False,
+            -np.inf,
+        )
     origin = np.asarray(light.position, dtype=np.float64)
     axis = centre - origin
     scale = float(np.linalg.norm(hi - lo) + np.linalg.norm(axis))
@@ -134,5 +155,16 @@ def light_view(light, points: np.ndarray, resolution: int, margin: int) -> View:
     else:
         tan_half = tan_max  # fires when no point is in front of the light
     focal = (usable / 2) / tan_half
-    return View(origin, forward, right, up, resolution, resolution, float(focal),
-                resolution / 2, resolution / 2, True, float(near))
+    return View(
+        origin,
+        forward,
+        right,
+        up,
+        resolution,
+        resolution,
+        float(focal),
+        resolution / 2,
+        resolution / 2,
+        True,
+        float(near),
+    )

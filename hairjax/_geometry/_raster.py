@@ -37,12 +37,14 @@ def ribbon_coverage(d, width):
     """Coverage of a unit box at distance `d` from the ribbon axis by a ribbon of `width`
     (docs/model.md §5). The rasteriser's kernel calls this, so the tests check what renders."""
     half = 0.5 * width
-    return jnp.clip(jnp.minimum(d + PIXEL_HALF_EXTENT, half) - jnp.maximum(d - PIXEL_HALF_EXTENT, -half),
-                    0.0, 1.0)
+    return jnp.clip(
+        jnp.minimum(d + PIXEL_HALF_EXTENT, half) - jnp.maximum(d - PIXEL_HALF_EXTENT, -half), 0.0, 1.0
+    )
 
 
-def ribbon_widths(width: np.ndarray, units: str, depth0: np.ndarray, depth1: np.ndarray,
-                  focal: float, perspective: bool) -> np.ndarray:
+def ribbon_widths(
+    width: np.ndarray, units: str, depth0: np.ndarray, depth1: np.ndarray, focal: float, perspective: bool
+) -> np.ndarray:
     """Each segment's ribbon width in the view's pixels at its two ends (`[E, 2]`,
     docs/model.md §5).
 
@@ -59,8 +61,10 @@ def ribbon_widths(width: np.ndarray, units: str, depth0: np.ndarray, depth1: np.
     if not perspective:
         return np.stack([width * focal, width * focal], axis=1)
     # Drawn segments lie beyond the near plane (D > 0); the caller culls the others.
-    return np.stack([width * focal / np.asarray(depth0, np.float64),
-                     width * focal / np.asarray(depth1, np.float64)], axis=1)
+    return np.stack(
+        [width * focal / np.asarray(depth0, np.float64), width * focal / np.asarray(depth1, np.float64)],
+        axis=1,
+    )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -87,9 +91,16 @@ class Fragments:
         return self.pixel.shape[0]
 
 
-def rasterize(xy0: np.ndarray, xy1: np.ndarray, z0: np.ndarray, z1: np.ndarray,
-              width: np.ndarray, image_width: int, image_height: int,
-              perspective: bool) -> Fragments:
+def rasterize(
+    xy0: np.ndarray,
+    xy1: np.ndarray,
+    z0: np.ndarray,
+    z1: np.ndarray,
+    width: np.ndarray,
+    image_width: int,
+    image_height: int,
+    perspective: bool,
+) -> Fragments:
     """All (segment, pixel) pairs with positive coverage, segment after segment.
 
     **Arguments:** per segment `xy0`, `xy1` (`[E, 2]` pixel coordinates), depths `z0`, `z1`
@@ -127,8 +138,23 @@ def rasterize(xy0: np.ndarray, xy1: np.ndarray, z0: np.ndarray, z1: np.ndarray,
     rows = int(np.ceil(2 * float(reach.max(initial=0.0)) * np.sqrt(2))) + 1  # initial: no segments
 
     # Per segment, what the kernel needs (float64 here; the kernel casts).
-    seg_data = np.stack([xy0[:, 0], xy0[:, 1], delta[:, 0], delta[:, 1], length, widths[:, 0],
-                         z0, z1, lo, x_major.astype(np.float64), reach, widths[:, 1]], axis=1)
+    seg_data = np.stack(
+        [
+            xy0[:, 0],
+            xy0[:, 1],
+            delta[:, 0],
+            delta[:, 1],
+            length,
+            widths[:, 0],
+            z0,
+            z1,
+            lo,
+            x_major.astype(np.float64),
+            reach,
+            widths[:, 1],
+        ],
+        axis=1,
+    )
     # Columns are independent once they carry their segment's data, so they are cut into
     # chunks of exactly _CHUNK (only the last is padded): the kernel compiles for one size.
     seg_of_col = np.repeat(np.arange(n, dtype=np.int32), columns)
@@ -136,16 +162,16 @@ def rasterize(xy0: np.ndarray, xy1: np.ndarray, z0: np.ndarray, z1: np.ndarray,
     total = seg_of_col.size
     parts = []
     for c_lo in range(0, total, _CHUNK):
-        seg = seg_of_col[c_lo:c_lo + _CHUNK]
+        seg = seg_of_col[c_lo : c_lo + _CHUNK]
         data = seg_data[seg]
         data[:, 8] += np.arange(c_lo, c_lo + seg.size) - first_col[seg]  # lo → this column
         size = _CHUNK if total > _CHUNK else _bucket(seg.size)
-        out = _candidates(np.pad(data, ((0, size - seg.size), (0, 0))), rows, image_width,
-                          image_height, perspective)
+        out = _candidates(
+            np.pad(data, ((0, size - seg.size), (0, 0))), rows, image_width, image_height, perspective
+        )
         pixel, cov, t, depth = (np.asarray(o)[: seg.size * rows] for o in out)
         keep = np.flatnonzero(cov > 0)
-        parts.append((pixel[keep], seg[keep // rows].astype(np.int32), cov[keep], t[keep],
-                      depth[keep]))
+        parts.append((pixel[keep], seg[keep // rows].astype(np.int32), cov[keep], t[keep], depth[keep]))
     if not parts:  # fires when no segment has a column (none, all zero-length or off-screen)
         empty_i, empty_f = np.zeros(0, np.int32), np.zeros(0, jnp.result_type(float))
         return Fragments(empty_i, empty_i, empty_f, empty_f, empty_f)

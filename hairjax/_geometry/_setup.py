@@ -34,30 +34,30 @@ class GeometrySetup:
     parameters (NumPy arrays)."""
 
     view: View
-    tangent: np.ndarray          # [P, 3]
-    to_light: np.ndarray         # [P, 3]
-    to_eye: np.ndarray           # [P, 3]
-    base_color: np.ndarray       # [P, 3] per-point colour (ones when the hair has none)
-    light_rgb: np.ndarray        # [3]
+    tangent: np.ndarray  # [P, 3]
+    to_light: np.ndarray  # [P, 3]
+    to_eye: np.ndarray  # [P, 3]
+    base_color: np.ndarray  # [P, 3] per-point colour (ones when the hair has none)
+    light_rgb: np.ndarray  # [3]
     # Camera fragments, sorted by pixel, front to back within a pixel:
-    frag_pixel: np.ndarray       # [F]
-    frag_i0: np.ndarray          # [F] first point of the fragment's segment (the second is i0 + 1)
-    frag_t: np.ndarray           # [F] screen-space position along the segment
-    frag_strand: np.ndarray      # [F]
-    frag_coverage: np.ndarray    # [F]
-    frag_first: np.ndarray       # [F] first fragment of its pixel
-    frag_last: np.ndarray        # [F] last fragment of its pixel
-    backdrop: np.ndarray         # [H*W, 3] the background behind the hair (0 on the occluder)
-    opaque: np.ndarray           # [H*W] the occluder covers the pixel centre
-    shadow: Any                  # the shadow method's plan (None without shadows); with an
+    frag_pixel: np.ndarray  # [F]
+    frag_i0: np.ndarray  # [F] first point of the fragment's segment (the second is i0 + 1)
+    frag_t: np.ndarray  # [F] screen-space position along the segment
+    frag_strand: np.ndarray  # [F]
+    frag_coverage: np.ndarray  # [F]
+    frag_first: np.ndarray  # [F] first fragment of its pixel
+    frag_last: np.ndarray  # [F] last fragment of its pixel
+    backdrop: np.ndarray  # [H*W, 3] the background behind the hair (0 on the occluder)
+    opaque: np.ndarray  # [H*W] the occluder covers the pixel centre
+    shadow: Any  # the shadow method's plan (None without shadows); with an
     #                              occluder, its surface points follow the strands'
     timings: dict
     shading_inputs: PointInputs  # the shading model's per-point inputs (§17's, or none)
     # The occluder (§9, §13); None without one:
-    occluder_pixel: np.ndarray | None = None    # [Q] the pixels it covers
-    occluder_direct: np.ndarray | None = None   # [Q, 3] k·light·max(N·L, 0) at them
+    occluder_pixel: np.ndarray | None = None  # [Q] the pixels it covers
+    occluder_direct: np.ndarray | None = None  # [Q, 3] k·light·max(N·L, 0) at them
     occluder_visibility: np.ndarray | None = None  # [Q] V there: 0 where it shadows itself
-    occluder_color: np.ndarray | None = None    # [3] k
+    occluder_color: np.ndarray | None = None  # [3] k
     light_visibility: np.ndarray | None = None  # [P] V: 0 where the occluder shadows a strand point
 
 
@@ -100,8 +100,9 @@ def visibility_order(scene: Scene, order=None):
     if order is not None:
         order = _given_order(order, len(segments))
         return view, xy, depth, segments, order[drawable_mask[order]]
-    order = scene.ordering.order(scene.strands, segments, segment_depth(depth, segments),
-                                 np.flatnonzero(drawable_mask))
+    order = scene.ordering.order(
+        scene.strands, segments, segment_depth(depth, segments), np.flatnonzero(drawable_mask)
+    )
     return view, xy, depth, segments, order
 
 
@@ -109,8 +110,9 @@ def _given_order(order, n_segments: int) -> np.ndarray:
     """`order` checked: a 1-D array of distinct segment indices in [0, n_segments)."""
     order = np.asarray(order)
     if order.ndim != 1 or (order.size and not np.issubdtype(order.dtype, np.integer)):
-        raise ValueError(f"order must be a 1-D array of segment indices, got shape {order.shape} "
-                         f"and dtype {order.dtype}")
+        raise ValueError(
+            f"order must be a 1-D array of segment indices, got shape {order.shape} and dtype {order.dtype}"
+        )
     order = order.astype(np.int64)
     if order.size and (order.min() < 0 or order.max() >= n_segments):
         raise ValueError(f"order has segment indices outside [0, {n_segments})")
@@ -155,8 +157,14 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
     # Rasterise nearest-first, then a stable sort by pixel gives front-to-back per pixel.
     near_first = order[::-1]
     s0, s1 = segments[near_first, 0], segments[near_first, 1]
-    widths = ribbon_widths(strands.width[seg_strand[near_first]], strands.width_units, depth[s0],
-                           depth[s1], view.focal, view.perspective)
+    widths = ribbon_widths(
+        strands.width[seg_strand[near_first]],
+        strands.width_units,
+        depth[s0],
+        depth[s1],
+        view.focal,
+        view.perspective,
+    )
     frags = rasterize(xy[s0], xy[s1], depth[s0], depth[s1], widths, cam.width, cam.height, True)
     lap("rasterize")
 
@@ -175,8 +183,11 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
         # Lambert's max(N·L, 0) (§9): the clip fires on the occluder's unlit side.
         lambert = np.clip(np.sum(normal[occ_pixel] * to_l, axis=1), 0.0, None)
         color = np.asarray(scene.occluder.color, np.float64)
-        occluder = dict(occluder_pixel=occ_pixel, occluder_color=color,
-                        occluder_direct=color * light_rgb * lambert[:, None])
+        occluder = dict(
+            occluder_pixel=occ_pixel,
+            occluder_color=color,
+            occluder_direct=color * light_rgb * lambert[:, None],
+        )
         backdrop[opaque] = 0.0  # the shading stage adds the occluder's colour (§13)
         # kim-2003 §3: depth test on, hair does not write depth.
         visible = np.flatnonzero(frags.depth < hit_depth[frags.pixel])
@@ -199,24 +210,43 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
     shadow = None
     if scene.shadows.casts:
         receivers = surface if occluder else None
-        shadow = scene.shadows.setup(points, segments, seg_strand, strands.width, light,
-                                     receivers=receivers, segment_alpha=segment_alpha,
-                                     width_units=strands.width_units)
+        shadow = scene.shadows.setup(
+            points,
+            segments,
+            seg_strand,
+            strands.width,
+            light,
+            receivers=receivers,
+            segment_alpha=segment_alpha,
+            width_units=strands.width_units,
+        )
         lap("shadow set-up")
         if occluder:
             # §13: the occluder's shadow, a depth test in the light's view.
-            light_view = occluder_light_view(light, points, scene.occluder,
-                                             scene.shadows.resolution)
+            light_view = occluder_light_view(light, points, scene.occluder, scene.shadows.resolution)
             depth_map, _, _ = occluder_hits(light_view, scene.occluder)
             occluder["light_visibility"] = occluder_visibility(light_view, depth_map, points)
             occluder["occluder_visibility"] = occluder_visibility(light_view, depth_map, surface)
             lap("occluder shadow")
 
     return GeometrySetup(
-        view=view, tangent=tangent, to_light=to_light(light, points),
-        to_eye=unit_rows(view.origin - points), base_color=base_color, light_rgb=light_rgb,
-        frag_pixel=pixel, frag_i0=segments[seg, 0].astype(np.int32), frag_t=frag_t,
-        frag_strand=seg_strand[seg].astype(np.int32), frag_coverage=frag_coverage,
-        frag_first=first, frag_last=last, backdrop=backdrop, opaque=opaque, shadow=shadow,
-        timings=timings, shading_inputs=inputs, **occluder,
+        view=view,
+        tangent=tangent,
+        to_light=to_light(light, points),
+        to_eye=unit_rows(view.origin - points),
+        base_color=base_color,
+        light_rgb=light_rgb,
+        frag_pixel=pixel,
+        frag_i0=segments[seg, 0].astype(np.int32),
+        frag_t=frag_t,
+        frag_strand=seg_strand[seg].astype(np.int32),
+        frag_coverage=frag_coverage,
+        frag_first=first,
+        frag_last=last,
+        backdrop=backdrop,
+        opaque=opaque,
+        shadow=shadow,
+        timings=timings,
+        shading_inputs=inputs,
+        **occluder,
     )

@@ -59,20 +59,17 @@ class Geometry(eqx.Module):
 
 
 @eqx.filter_jit
-def _composite_weights(alpha, frag_strand, frag_coverage, frag_first, frag_last, last_pixel,
-                       opaque):
+def _composite_weights(alpha, frag_strand, frag_coverage, frag_first, frag_last, last_pixel, opaque):
     frag_alpha = alpha[frag_strand] * frag_coverage
     weights, inclusive = over_weights(frag_alpha, frag_first, frag_last)
     # Pixels without fragments keep T = 1; each covered pixel's last fragment sets its T
     # (`last_pixel` points every other fragment past the end, where it is dropped).
-    transmittance = jnp.ones(opaque.shape[0], weights.dtype).at[last_pixel].set(
-        inclusive, mode="drop")
+    transmittance = jnp.ones(opaque.shape[0], weights.dtype).at[last_pixel].set(inclusive, mode="drop")
     alpha_channel = 1.0 - transmittance * (1.0 - opaque)
     return weights, frag_alpha, transmittance, alpha_channel
 
 
-def geometry_stage(scene: Scene, alpha: Float[Array, " S"] | None = None, *,
-                   order=None) -> Geometry:
+def geometry_stage(scene: Scene, alpha: Float[Array, " S"] | None = None, *, order=None) -> Geometry:
     """Compositing weights and Ω for `scene`, differentiable in the per-strand `alpha`.
 
     **Arguments:** `scene`; `alpha` (`[S]`, default the scene's strand opacities) — may be
@@ -81,6 +78,7 @@ def geometry_stage(scene: Scene, alpha: Float[Array, " S"] | None = None, *,
     order to use instead of the scene's (`visibility_order`); then nothing is cached.
     """
     if alpha is None:
+
         def compute():
             with jax.ensure_compile_time_eval():
                 return _geometry_stage(scene, scene.strands.alpha, order)
@@ -96,8 +94,14 @@ def _geometry_stage(scene: Scene, alpha, order=None) -> Geometry:
     hw = scene.camera.width * scene.camera.height
     last_pixel = np.where(setup.frag_last, setup.frag_pixel, hw)
     weights, frag_alpha, transmittance, alpha_channel = _composite_weights(
-        alpha, setup.frag_strand, jnp.asarray(setup.frag_coverage, dtype), setup.frag_first,
-        setup.frag_last, last_pixel, jnp.asarray(setup.opaque, dtype))
+        alpha,
+        setup.frag_strand,
+        jnp.asarray(setup.frag_coverage, dtype),
+        setup.frag_first,
+        setup.frag_last,
+        last_pixel,
+        jnp.asarray(setup.opaque, dtype),
+    )
     omega = occluder_omega = None
     if setup.shadow is not None:
         omega = scene.shadows.omega(setup.shadow, alpha)
@@ -108,19 +112,29 @@ def _geometry_stage(scene: Scene, alpha, order=None) -> Geometry:
     maybe = lambda x, t=dtype: None if x is None else jnp.asarray(x, t)  # noqa: E731
     extra = setup.shading_inputs.extra
     return Geometry(
-        tangent=jnp.asarray(setup.tangent, dtype), to_light=jnp.asarray(setup.to_light, dtype),
-        to_eye=jnp.asarray(setup.to_eye, dtype), base_color=jnp.asarray(setup.base_color, dtype),
-        light_rgb=jnp.asarray(setup.light_rgb, dtype), omega=omega,
+        tangent=jnp.asarray(setup.tangent, dtype),
+        to_light=jnp.asarray(setup.to_light, dtype),
+        to_eye=jnp.asarray(setup.to_eye, dtype),
+        base_color=jnp.asarray(setup.base_color, dtype),
+        light_rgb=jnp.asarray(setup.light_rgb, dtype),
+        omega=omega,
         light_visibility=maybe(setup.light_visibility),
         occluder_pixel=maybe(setup.occluder_pixel, jnp.int32),
-        occluder_direct=maybe(setup.occluder_direct), occluder_color=maybe(setup.occluder_color),
-        occluder_omega=occluder_omega, occluder_visibility=maybe(setup.occluder_visibility),
+        occluder_direct=maybe(setup.occluder_direct),
+        occluder_color=maybe(setup.occluder_color),
+        occluder_omega=occluder_omega,
+        occluder_visibility=maybe(setup.occluder_visibility),
         frag_pixel=jnp.asarray(setup.frag_pixel, jnp.int32),
         frag_i0=jnp.asarray(setup.frag_i0, jnp.int32),
-        frag_t=jnp.asarray(setup.frag_t, dtype), frag_weight=weights, frag_alpha=frag_alpha,
-        transmittance=transmittance, backdrop=jnp.asarray(setup.backdrop, dtype),
-        alpha_channel=alpha_channel, shading=scene.shading,
-        height=scene.camera.height, width=scene.camera.width,
+        frag_t=jnp.asarray(setup.frag_t, dtype),
+        frag_weight=weights,
+        frag_alpha=frag_alpha,
+        transmittance=transmittance,
+        backdrop=jnp.asarray(setup.backdrop, dtype),
+        alpha_channel=alpha_channel,
+        shading=scene.shading,
+        height=scene.camera.height,
+        width=scene.camera.width,
         streak=None if scene.streaks is None else streak_factors(scene.streaks, scene.strands, dtype),
         shading_inputs=None if extra is None else jax.tree.map(lambda x: jnp.asarray(x, dtype), extra),
     )

@@ -93,18 +93,13 @@ def parse_hair(data: bytes, path) -> dict:
         )
     if offset < size:
         # The arrays are back to back with no padding; extra bytes mean the counts are wrong.
-        fail(
-            f"{size - offset} unexpected bytes after the last array (counts do not match the data)"
-        )
+        fail(f"{size - offset} unexpected bytes after the last array (counts do not match the data)")
 
     if flags & _SEGMENTS:
         segments = np.frombuffer(data, "<u2", n_strands, layout["segments"]).astype(np.int64)
     else:
         if n_points != n_strands * (default_segments + 1):
-            fail(
-                f"point count {n_points} != {n_strands} strands x "
-                f"({default_segments} default segments + 1)"
-            )
+            fail(f"point count {n_points} != {n_strands} strands x ({default_segments} default segments + 1)")
         segments = np.full(n_strands, default_segments, dtype=np.int64)
     counts = segments + 1
     if int(counts.sum()) != n_points:

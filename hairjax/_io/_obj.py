@@ -47,23 +47,27 @@ def parse_obj(text: str, path) -> tuple[np.ndarray, np.ndarray]:
             continue
         if words[0] == "v":
             if len(words) not in (4, 5):
-                raise MeshFormatError(path, number, f"'v' needs 3 coordinates (and an optional w), "
-                                      f"got {len(words) - 1}: {raw.strip()!r}")
+                raise MeshFormatError(
+                    path,
+                    number,
+                    f"'v' needs 3 coordinates (and an optional w), got {len(words) - 1}: {raw.strip()!r}",
+                )
             try:
                 xyz = (float(words[1]), float(words[2]), float(words[3]))
             except ValueError:
-                raise MeshFormatError(path, number, f"'v' coordinates must be numbers: "
-                                      f"{raw.strip()!r}") from None
+                raise MeshFormatError(
+                    path, number, f"'v' coordinates must be numbers: {raw.strip()!r}"
+                ) from None
             if not all(math.isfinite(c) for c in xyz):
                 raise MeshFormatError(path, number, f"'v' coordinates must be finite: {raw.strip()!r}")
             vertices.append(xyz)
         elif words[0] == "f":
             if len(words) < 4:
-                raise MeshFormatError(path, number, f"'f' needs at least 3 vertices, got "
-                                      f"{len(words) - 1}: {raw.strip()!r}")
+                raise MeshFormatError(
+                    path, number, f"'f' needs at least 3 vertices, got {len(words) - 1}: {raw.strip()!r}"
+                )
             corners = [_vertex_index(w, len(vertices), path, number) for w in words[1:]]
-            triangles.extend((corners[0], corners[k], corners[k + 1])
-                             for k in range(1, len(corners) - 1))
+            triangles.extend((corners[0], corners[k], corners[k + 1]) for k in range(1, len(corners) - 1))
     if not vertices:
         raise MeshFormatError(path, None, "no vertices ('v' lines)")
     if not triangles:
@@ -87,6 +91,9 @@ def _vertex_index(word: str, count: int, path, line: int) -> int:
         raise MeshFormatError(path, line, f"face vertex {word!r}: indices start at 1 (0 is not allowed)")
     resolved = index - 1 if index > 0 else count + index  # −1 is the last vertex read so far
     if not 0 <= resolved < count:
-        raise MeshFormatError(path, line, f"face vertex {word!r} refers to vertex {index}, but "
-                              f"{count} vertices are defined so far")
+        raise MeshFormatError(
+            path,
+            line,
+            f"face vertex {word!r} refers to vertex {index}, but {count} vertices are defined so far",
+        )
     return resolved

@@ -193,9 +193,7 @@ def _read_ascii(data: bytes, start: int, elements, fail) -> dict:
                 ok = np.isfinite(column) & (column == np.round(column))
                 ok &= (column >= info.min) & (column <= info.max)
                 if not np.all(ok):
-                    fail(
-                        f"element {name!r} property {prop!r}: values must be {dtype.name} integers"
-                    )
+                    fail(f"element {name!r} property {prop!r}: values must be {dtype.name} integers")
                 column = column.astype(np.int64)
             columns[prop] = column
         values[name] = columns
@@ -236,9 +234,7 @@ def _strands_from(values: dict, elements, fail) -> dict:
         if not np.all(np.isfinite(color)):
             fail("the vertex colours contain NaN or infinite values")
     attributes = {
-        prop: np.array(vertex[prop])
-        for prop in vprops
-        if prop not in ("x", "y", "z", "red", "green", "blue")
+        prop: np.array(vertex[prop]) for prop in vprops if prop not in ("x", "y", "z", "red", "green", "blue")
     }
 
     if "strand" not in props_of or "nsegs" not in props_of["strand"]:

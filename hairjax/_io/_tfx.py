@@ -120,10 +120,7 @@ def parse_tfx(data: bytes, path) -> dict:
         if start >= size:
             fail(f"{name} offset {start} points outside the file ({size} bytes)")
         if end > size:
-            fail(
-                f"truncated {name} array: {count} {per}s need bytes {start}..{end}, "
-                f"but the file has {size}"
-            )
+            fail(f"truncated {name} array: {count} {per}s need bytes {start}..{end}, but the file has {size}")
         spans[name] = (start, end)
     if "positions" not in spans:
         fail("the positions array is missing (its offset is 0)")

@@ -63,7 +63,14 @@ class Camera:
             offset = np.full(1, np.nan)  # not numbers: refused below
         if offset.shape != (2,) or not np.all(np.abs(offset) <= 0.5):
             raise SceneError(f"camera.offset must be two numbers in [-0.5, 0.5], got {self.offset!r}")
-        for key, v in (("eye", eye), ("target", target), ("up", up), ("fov", float(self.fov)),
-                       ("width", int(self.width)), ("height", int(self.height)),
-                       ("near", float(near)), ("offset", (float(offset[0]), float(offset[1])))):
+        for key, v in (
+            ("eye", eye),
+            ("target", target),
+            ("up", up),
+            ("fov", float(self.fov)),
+            ("width", int(self.width)),
+            ("height", int(self.height)),
+            ("near", float(near)),
+            ("offset", (float(offset[0]), float(offset[1]))),
+        ):
             object.__setattr__(self, key, v)

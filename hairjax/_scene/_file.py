@@ -29,34 +29,19 @@ from .._geometry._ordering import ordering_class, ordering_names
 from .._geometry._shadows import shadow_method_class, shadow_method_names
 from .._shading import Streaks, shading_model_class, shading_model_names
 from ._camera import Camera
+from ._hair_table import HAIR_KEYS, read_hair, read_patches
 from ._light import Light
 from ._occluder import OCCLUDER_KINDS, Occluder
-from ._procedural import furball, scalp
-from ._scene import PatchGeometry, Scene
-from ._strands import WIDTH_UNITS, Strands
+from ._scene import Scene
 from ._table import Table, build, describe, given
 
 __all__ = ["load_scene", "scene_from_dict", "default_scene_path", "scene_tables"]
 
-PROCEDURAL_SOURCES = ("furball", "scalp")
-HAIR_FILE_SUFFIXES = (".hair", ".tfx", ".ply")
 LIGHT_KINDS = ("directional", "point")
 MESH_FILE_SUFFIXES = (".obj",)
 
-# Defaults that belong to the file format rather than to a dataclass: a scene's hair is
-# semi-transparent unless the file says otherwise, whatever its source.
-DEFAULT_HAIR_ALPHA = 0.5
-DEFAULT_HAIR_WIDTH = 1.0
-
-# [hair] keys by the sources that accept them.
-_HAIR_COMMON = ("source", "alpha", "width", "width_units", "scale", "translate", "color",
-                "geometry", "patch_width", "opaque_core")
-HAIR_GEOMETRIES = ("strands", "patches")
-_HAIR_PROCEDURAL = ("strands", "points", "seed", "length", "gravity")
-_HAIR_ONLY_FOR = {"inertia": "furball", "radius": "scalp", "coverage": "scalp"}
-
 _FIXED_TABLES: dict[str, tuple[str, ...]] = {
-    "hair": _HAIR_COMMON + _HAIR_PROCEDURAL + tuple(_HAIR_ONLY_FOR),
+    "hair": HAIR_KEYS,
     "camera": ("eye", "target", "up", "fov", "width", "height", "near"),
     "light": ("kind", "direction", "position", "color"),
     "occluder": ("kind", "center", "radius", "color", "path"),
@@ -78,14 +63,25 @@ def scene_tables() -> dict[str, tuple[str, ...]]:
     import dataclasses
 
     tables = dict(_FIXED_TABLES)
-    tables["shading"] = ("model",) + _union(shading_model_class(n).table_keys
-                                            for n in shading_model_names())
-    tables["shadows"] = ("method",) + _union(tuple(f.name for f in dataclasses.fields(shadow_method_class(n)))
-                                             for n in shadow_method_names())
-    tables["ordering"] = ("method",) + _union(tuple(f.name for f in dataclasses.fields(ordering_class(n)))
-                                              for n in ordering_names())
-    order = ("hair", "camera", "light", "shading", "shadows", "ordering", "occluder", "background",
-             "streaks", "animation")
+    tables["shading"] = ("model",) + _union(shading_model_class(n).table_keys for n in shading_model_names())
+    tables["shadows"] = ("method",) + _union(
+        tuple(f.name for f in dataclasses.fields(shadow_method_class(n))) for n in shadow_method_names()
+    )
+    tables["ordering"] = ("method",) + _union(
+        tuple(f.name for f in dataclasses.fields(ordering_class(n))) for n in ordering_names()
+    )
+    order = (
+        "hair",
+        "camera",
+        "light",
+        "shading",
+        "shadows",
+        "ordering",
+        "occluder",
+        "background",
+        "streaks",
+        "animation",
+    )
     return {name: tables[name] for name in order}
 
 
@@ -136,14 +132,14 @@ def scene_from_dict(
     if "name" in data:
         scene_name = data["name"]
         if not isinstance(scene_name, str) or not scene_name:
-            raise SceneError(
-                f"{where}: name must be a non-empty string, got {describe(scene_name)}")
+            raise SceneError(f"{where}: name must be a non-empty string, got {describe(scene_name)}")
 
     camera = build(where, Camera, **_read_camera(tables["camera"]))
     light = build(where, Light, **_read_light(tables["light"]))
     shading = _read_shading(where, tables["shading"])
-    shadows = _read_method(where, tables["shadows"], "opacity-maps", shadow_method_names(),
-                           shadow_method_class)
+    shadows = _read_method(
+        where, tables["shadows"], "opacity-maps", shadow_method_names(), shadow_method_class
+    )
     ordering = _read_method(where, tables["ordering"], "bins", ordering_names(), ordering_class)
     occluder = None
     if "occluder" in data:  # The table's presence, even empty, asks for an occluder.
@@ -154,13 +150,23 @@ def scene_from_dict(
         streaks = build(where, Streaks, **_read_streaks(tables["streaks"]))
     # Hair last: generating or reading it is the only slow step, so the cheap checks of
     # the other tables fail first.
-    patches = _read_patches(tables["hair"])
-    strands = _read_hair(tables["hair"], Path(base_dir))
+    patches = read_patches(tables["hair"])
+    strands = read_hair(tables["hair"], Path(base_dir))
 
     scene_args = given(background=background, streaks=streaks, patches=patches)
-    return build(where, Scene, strands=strands, camera=camera, light=light, shading=shading,
-                 shadows=shadows, ordering=ordering, occluder=occluder, name=scene_name,
-                 **scene_args)
+    return build(
+        where,
+        Scene,
+        strands=strands,
+        camera=camera,
+        light=light,
+        shading=shading,
+        shadows=shadows,
+        ordering=ordering,
+        occluder=occluder,
+        name=scene_name,
+        **scene_args,
+    )
 
 
 # --------------------------------------------------------------------------- tables
@@ -175,8 +181,10 @@ def _split_tables(data: Mapping[str, Any], where: str) -> dict[str, Table]:
             continue
         if key not in known:
             tables = ", ".join(f"[{t}]" for t in known)
-            raise SceneError(f"{where}: unknown table or key {key!r}; allowed tables: {tables}; "
-                             f"top-level keys: {', '.join(TOP_LEVEL_KEYS)}")
+            raise SceneError(
+                f"{where}: unknown table or key {key!r}; allowed tables: {tables}; "
+                f"top-level keys: {', '.join(TOP_LEVEL_KEYS)}"
+            )
         if not isinstance(value, Mapping):
             raise SceneError(f"{where}: {key} must be a table ([{key}]), got {describe(value)}")
     return {name: Table(name, data.get(name, {}), where, keys) for name, keys in known.items()}
@@ -185,113 +193,17 @@ def _split_tables(data: Mapping[str, Any], where: str) -> dict[str, Table]:
 # --------------------------------------------------------------------------- readers
 
 
-def _read_hair(table: Table, base_dir: Path) -> Strands:
-    """[hair]: a procedural generator or a hair file, then scale/translate/color."""
-    where = table.where
-    source = table.string("source")
-    if source is None:
-        raise SceneError(f"{where}: hair.source is required: 'furball', 'scalp', or a path "
-                         f"to a {'/'.join(HAIR_FILE_SUFFIXES)} file")
-    is_file = source not in PROCEDURAL_SOURCES
-    if is_file and Path(source).suffix.lower() not in HAIR_FILE_SUFFIXES:
-        raise table.error("source", "'furball', 'scalp', or a path to a "
-                          f"{'/'.join(HAIR_FILE_SUFFIXES)} file", source)
-    _check_hair_keys(table, source, is_file)
-
-    alpha = table.number("alpha", lo=0, hi=1, lo_open=True)
-    width = table.number("width", lo=0, lo_open=True)
-    scale = table.number("scale", lo=0, lo_open=True)
-    translate = table.vec3("translate")
-    color = table.rgb("color")
-    alpha = DEFAULT_HAIR_ALPHA if alpha is None else alpha
-    width = DEFAULT_HAIR_WIDTH if width is None else width
-
-    if is_file:
-        strands = _load_hair_file(table, source, base_dir, alpha, width)
-    else:
-        strands = _generate_hair(table, source, alpha, width)
-
-    if scale is not None or translate is not None:
-        strands = strands.transformed(1.0 if scale is None else scale,
-                                      (0.0, 0.0, 0.0) if translate is None else translate)
-    if color is not None:
-        strands = strands.replace(color=color)  # Strands broadcasts it to every point.
-    units = table.choice("width_units", WIDTH_UNITS)
-    if units is not None:  # `width` is then in the scene's units, after `scale`
-        strands = strands.replace(width_units=units)
-    return strands
-
-
-def _read_patches(table: Table) -> PatchGeometry | None:
-    """[hair] geometry = "patches" with patch_width (required) and opaque_core (§18)."""
-    geometry = table.choice("geometry", HAIR_GEOMETRIES)
-    width = table.number("patch_width", lo=0, lo_open=True)
-    core = table.number("opaque_core", lo=0, hi=1)
-    if geometry != "patches":
-        for key in ("patch_width", "opaque_core"):
-            if key in table:
-                raise SceneError(f"{table.where}: hair.{key} applies only to geometry = 'patches'")
-        return None
-    if width is None:
-        raise SceneError(f"{table.where}: hair.patch_width (world units) is required with "
-                         "geometry = 'patches'")
-    return PatchGeometry(width, **given(opaque_core=core))
-
-
-def _check_hair_keys(table: Table, source: str, is_file: bool) -> None:
-    """Reject keys that the chosen source would silently ignore."""
-    for key in table.data:
-        if is_file and (key in _HAIR_PROCEDURAL or key in _HAIR_ONLY_FOR):
-            raise SceneError(
-                f"{table.where}: hair.{key} applies only to procedural sources "
-                f"({', '.join(repr(s) for s in PROCEDURAL_SOURCES)}), not to the hair file "
-                f"{source!r}; allowed keys for a file: {', '.join(_HAIR_COMMON)}")
-        only_for = _HAIR_ONLY_FOR.get(key)
-        if not is_file and only_for is not None and only_for != source:
-            raise SceneError(f"{table.where}: hair.{key} applies only to source = "
-                             f"{only_for!r}, not {source!r}")
-
-
-def _generate_hair(table: Table, source: str, alpha: float, width: float) -> Strands:
-    """Call `furball` or `scalp` with the keys given (their own defaults for the rest)."""
-    kwargs = given(
-        strands=table.integer("strands", lo=1),
-        points=table.integer("points", lo=2),
-        seed=table.integer("seed", lo=0),
-        length=table.number("length", lo=0, lo_open=True),
-        gravity=table.vec3("gravity"),
-    )
-    if source == "furball":
-        kwargs.update(given(inertia=table.vec3("inertia")))
-        return furball(**kwargs, alpha=alpha, width=width)
-    kwargs.update(given(radius=table.number("radius", lo=0, lo_open=True),
-                         coverage=table.number("coverage", lo=0, hi=1, lo_open=True)))
-    return scalp(**kwargs, alpha=alpha, width=width)
-
-
-def _load_hair_file(table: Table, source: str, base_dir: Path, alpha: float,
-                    width: float) -> Strands:
-    """Read a .hair/.tfx/.ply file; a relative path is relative to the scene's directory."""
-    path = Path(source)
-    if not path.is_absolute():
-        path = base_dir / path
-    if not path.is_file():
-        raise SceneError(f"{table.where}: hair.source file not found: {path} (from "
-                         f"{source!r}; relative paths are resolved against the scene "
-                         "file's directory)")
-    from .._io import load_hair  # Lazy: only file sources need the readers.
-
-    try:
-        return load_hair(path, alpha=alpha, width=width)
-    except (OSError, ValueError) as e:  # ValueError includes HairFormatError.
-        raise SceneError(f"{table.where}: hair.source could not be loaded: {e}") from e
-
-
 def _read_camera(table: Table) -> dict[str, Any]:
     # Ranges (fov, sizes, near, eye != target, up) are Camera's checks.
-    return given(eye=table.vec3("eye"), target=table.vec3("target"), up=table.vec3("up"),
-                  fov=table.number("fov"), width=table.integer("width"),
-                  height=table.integer("height"), near=table.number("near"))
+    return given(
+        eye=table.vec3("eye"),
+        target=table.vec3("target"),
+        up=table.vec3("up"),
+        fov=table.number("fov"),
+        width=table.integer("width"),
+        height=table.integer("height"),
+        near=table.number("near"),
+    )
 
 
 def _read_light(table: Table) -> dict[str, Any]:
@@ -299,10 +211,16 @@ def _read_light(table: Table) -> dict[str, Any]:
     # Light would silently drop the key that does not match its kind; say so instead.
     wrong, right = ("position", "direction") if kind == "directional" else ("direction", "position")
     if wrong in table:
-        raise SceneError(f"{table.where}: light.{wrong} is not allowed for kind = {kind!r}; "
-                         f"a {kind} light takes light.{right}")
-    return given(kind=kind, direction=table.vec3("direction"),
-                  position=table.vec3("position"), color=table.rgb("color"))
+        raise SceneError(
+            f"{table.where}: light.{wrong} is not allowed for kind = {kind!r}; "
+            f"a {kind} light takes light.{right}"
+        )
+    return given(
+        kind=kind,
+        direction=table.vec3("direction"),
+        position=table.vec3("position"),
+        color=table.rgb("color"),
+    )
 
 
 def _read_shading(where: str, table: Table):
@@ -329,8 +247,12 @@ def _field_names(cls) -> tuple[str, ...]:
 
 def _read_streaks(table: Table) -> dict[str, Any]:
     # Ranges are Streaks' checks.
-    return given(texels=table.integer("texels"), width=table.number("width"),
-                  contrast=table.number("contrast"), seed=table.integer("seed"))
+    return given(
+        texels=table.integer("texels"),
+        width=table.number("width"),
+        contrast=table.number("contrast"),
+        seed=table.integer("seed"),
+    )
 
 
 def _read_occluder(table: Table, base_dir: Path) -> dict[str, Any]:
@@ -338,23 +260,30 @@ def _read_occluder(table: Table, base_dir: Path) -> dict[str, Any]:
     # Occluder would refuse the keys of the other kind; say which kind takes them.
     for key, owner in (("center", "sphere"), ("radius", "sphere"), ("path", "mesh")):
         if key in table and kind != owner:
-            raise SceneError(f"{table.where}: occluder.{key} is only for kind = {owner!r}, "
-                             f"not {kind!r}")
+            raise SceneError(f"{table.where}: occluder.{key} is only for kind = {owner!r}, not {kind!r}")
     path = table.string("path")
     if kind == "mesh":
         if path is None:
-            raise SceneError(f"{table.where}: occluder.path is required for kind = 'mesh': "
-                             f"a {'/'.join(MESH_FILE_SUFFIXES)} file")
+            raise SceneError(
+                f"{table.where}: occluder.path is required for kind = 'mesh': "
+                f"a {'/'.join(MESH_FILE_SUFFIXES)} file"
+            )
         if Path(path).suffix.lower() not in MESH_FILE_SUFFIXES:
             raise table.error("path", f"a path to a {'/'.join(MESH_FILE_SUFFIXES)} file", path)
         full = Path(path) if Path(path).is_absolute() else base_dir / path
         if not full.is_file():
-            raise SceneError(f"{table.where}: occluder.path file not found: {full} (from {path!r}; "
-                             "relative paths are resolved against the scene file's directory)")
+            raise SceneError(
+                f"{table.where}: occluder.path file not found: {full} (from {path!r}; "
+                "relative paths are resolved against the scene file's directory)"
+            )
         path = str(full.resolve())
-    return given(kind=kind, center=table.vec3("center"),
-                  radius=table.number("radius", lo=0, lo_open=True), color=table.rgb("color"),
-                  path=path)
+    return given(
+        kind=kind,
+        center=table.vec3("center"),
+        radius=table.number("radius", lo=0, lo_open=True),
+        color=table.rgb("color"),
+        path=path,
+    )
 
 
 # --------------------------------------------------------------------------- helpers

@@ -52,8 +52,7 @@ class Light:
         if self.kind == "directional":
             if self.direction is None:
                 raise SceneError("light.direction is required for a directional light")
-            object.__setattr__(self, "direction",
-                               vec3("light.direction", self.direction, nonzero=True))
+            object.__setattr__(self, "direction", vec3("light.direction", self.direction, nonzero=True))
             object.__setattr__(self, "position", None)
         elif self.kind == "point":
             if self.position is None:

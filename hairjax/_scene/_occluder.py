@@ -66,10 +66,16 @@ class Occluder:
         triangles = np.array(triangles)
         if vertices.ndim != 2 or vertices.shape[1] != 3 or not np.all(np.isfinite(vertices)):
             raise SceneError(f"occluder.vertices must be finite [V, 3], got shape {vertices.shape}")
-        if (triangles.ndim != 2 or triangles.shape[1] != 3 or len(triangles) == 0
-                or not np.issubdtype(triangles.dtype, np.integer)):
-            raise SceneError(f"occluder.triangles must be integer [F, 3] with F ≥ 1, got "
-                             f"shape {triangles.shape} and dtype {triangles.dtype}")
+        if (
+            triangles.ndim != 2
+            or triangles.shape[1] != 3
+            or len(triangles) == 0
+            or not np.issubdtype(triangles.dtype, np.integer)
+        ):
+            raise SceneError(
+                f"occluder.triangles must be integer [F, 3] with F ≥ 1, got "
+                f"shape {triangles.shape} and dtype {triangles.dtype}"
+            )
         if triangles.min() < 0 or triangles.max() >= len(vertices):
             raise SceneError(f"occluder.triangles index outside [0, {len(vertices)})")
         vertices.setflags(write=False)
@@ -82,8 +88,14 @@ class Occluder:
         if not isinstance(other, Occluder):
             return NotImplemented
         same = (self.kind, self.center, self.radius, self.color, self.path) == (
-            other.kind, other.center, other.radius, other.color, other.path)
+            other.kind,
+            other.center,
+            other.radius,
+            other.color,
+            other.path,
+        )
         if not same or self.kind == "sphere":
             return same
-        return (np.array_equal(self.vertices, other.vertices)
-                and np.array_equal(self.triangles, other.triangles))
+        return np.array_equal(self.vertices, other.vertices) and np.array_equal(
+            self.triangles, other.triangles
+        )

@@ -70,12 +70,18 @@ class Scene:
     patches: PatchGeometry | None = None
 
     def __post_init__(self):
-        for key, kind in (("strands", Strands), ("camera", Camera), ("light", Light),
-                          ("shading", AbstractShadingModel), ("shadows", AbstractShadowMethod),
-                          ("ordering", AbstractOrdering)):
+        for key, kind in (
+            ("strands", Strands),
+            ("camera", Camera),
+            ("light", Light),
+            ("shading", AbstractShadingModel),
+            ("shadows", AbstractShadowMethod),
+            ("ordering", AbstractOrdering),
+        ):
             if not isinstance(getattr(self, key), kind):
-                raise SceneError(f"scene.{key} must be a {kind.__name__}, "
-                                 f"got {type(getattr(self, key)).__name__}")
+                raise SceneError(
+                    f"scene.{key} must be a {kind.__name__}, got {type(getattr(self, key)).__name__}"
+                )
         if self.streaks is not None and not isinstance(self.streaks, Streaks):
             raise SceneError("scene.streaks must be a Streaks or None")
         object.__setattr__(self, "background", rgb("background.color", self.background))
@@ -83,8 +89,10 @@ class Scene:
             if not isinstance(self.patches, PatchGeometry):
                 raise SceneError("scene.patches must be a PatchGeometry or None")
             if self.occluder is not None:
-                raise SceneError("hair.geometry = 'patches' does not draw an occluder: "
-                                 "remove [occluder] or use geometry = 'strands'")
+                raise SceneError(
+                    "hair.geometry = 'patches' does not draw an occluder: "
+                    "remove [occluder] or use geometry = 'strands'"
+                )
 
     @property
     def params(self):

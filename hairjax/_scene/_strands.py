@@ -49,9 +49,16 @@ class Strands:
     attributes: Mapping[str, np.ndarray] = dataclasses.field(default_factory=dict)
     width_units: str = "pixels"
 
-    def __init__(self, points: ArrayInput, offsets: ArrayInput, alpha: ArrayInput,
-                 width: ArrayInput, color: ArrayInput | None = None,
-                 attributes: Mapping[str, np.ndarray] | None = None, width_units: str = "pixels"):
+    def __init__(
+        self,
+        points: ArrayInput,
+        offsets: ArrayInput,
+        alpha: ArrayInput,
+        width: ArrayInput,
+        color: ArrayInput | None = None,
+        attributes: Mapping[str, np.ndarray] | None = None,
+        width_units: str = "pixels",
+    ):
         # Written out (not the dataclass's): it takes array-likes (a number broadcasts to
         # every strand) and stores the float64/int64 arrays the fields name.
         if width_units not in WIDTH_UNITS:
@@ -77,8 +84,13 @@ class Strands:
             color = np.broadcast_to(np.asarray(color, dtype=np.float64), points.shape).copy()
             if not np.all(np.isfinite(color)):
                 raise ValueError("color contains NaN or infinite values")
-        for name, value in (("points", points), ("offsets", offsets), ("alpha", alpha),
-                            ("width", width), ("color", color)):
+        for name, value in (
+            ("points", points),
+            ("offsets", offsets),
+            ("alpha", alpha),
+            ("width", width),
+            ("color", color),
+        ):
             if value is not None:
                 value.setflags(write=False)
             object.__setattr__(self, name, value)

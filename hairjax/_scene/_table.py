@@ -25,15 +25,15 @@ class Table:
     otherwise a checked Python value; every failure is a `SceneError` naming `table.key`.
     """
 
-    def __init__(self, name: str, data: Mapping[str, Any], where: str,
-                 allowed: tuple[str, ...]):
+    def __init__(self, name: str, data: Mapping[str, Any], where: str, allowed: tuple[str, ...]):
         self.name = name
         self.data = data
         self.where = where
         for key in data:
             if key not in allowed:
-                raise SceneError(f"{where}: unknown key {name}.{key}; allowed keys in "
-                                 f"[{name}]: {', '.join(allowed)}")
+                raise SceneError(
+                    f"{where}: unknown key {name}.{key}; allowed keys in [{name}]: {', '.join(allowed)}"
+                )
 
     @staticmethod
     def given(**kwargs) -> dict[str, Any]:
@@ -44,11 +44,17 @@ class Table:
         return key in self.data
 
     def error(self, key: str, requirement: str, value: Any) -> SceneError:
-        return SceneError(f"{self.where}: {self.name}.{key} must be {requirement}, "
-                          f"got {describe(value)}")
+        return SceneError(f"{self.where}: {self.name}.{key} must be {requirement}, got {describe(value)}")
 
-    def number(self, key: str, *, lo: float | int | None = None, hi: float | int | None = None,
-               lo_open: bool = False, hi_open: bool = False) -> float | None:
+    def number(
+        self,
+        key: str,
+        *,
+        lo: float | int | None = None,
+        hi: float | int | None = None,
+        lo_open: bool = False,
+        hi_open: bool = False,
+    ) -> float | None:
         """A finite number (TOML integer or float, not boolean), optionally in a range."""
         if key not in self.data:
             return None
@@ -94,8 +100,11 @@ class Table:
         if key not in self.data:
             return None
         value = self.data[key]
-        if not (isinstance(value, list) and len(value) == 3
-                and all(is_number(x) and math.isfinite(x) for x in value)):
+        if not (
+            isinstance(value, list)
+            and len(value) == 3
+            and all(is_number(x) and math.isfinite(x) for x in value)
+        ):
             raise self.error(key, "an array of 3 finite numbers", value)
         x, y, z = (float(v) for v in value)
         return x, y, z
@@ -106,8 +115,9 @@ class Table:
         if key not in self.data:
             return None
         value = self.data[key]
-        allowed = "a number >= 0 or an array of 3 numbers >= 0" if scalar \
-            else "an array of 3 numbers >= 0 (RGB)"
+        allowed = (
+            "a number >= 0 or an array of 3 numbers >= 0" if scalar else "an array of 3 numbers >= 0 (RGB)"
+        )
         if scalar and is_number(value):
             items = [value]
         elif isinstance(value, list) and len(value) == 3:
@@ -120,7 +130,6 @@ class Table:
             return tuple(float(x) for x in value)
         return float(value)
 
-
     def texture(self, key: str, *, rgb: bool) -> list | None:
         """A 1-D texture: a non-empty array of numbers, or (with `rgb`) of [r, g, b]
         arrays (types here; value ranges are the consumer's)."""
@@ -129,10 +138,14 @@ class Table:
             return None
         rows = value if isinstance(value, list) else []
         items = [x for row in rows for x in (row if isinstance(row, list) else [None])] if rgb else rows
-        if not rows or not all(is_number(x) for x in items) \
-                or (rgb and not all(len(row) == 3 for row in rows)):
-            raise self.error(key, "a non-empty array of [r, g, b] arrays" if rgb
-                             else "a non-empty array of numbers", value)
+        if (
+            not rows
+            or not all(is_number(x) for x in items)
+            or (rgb and not all(len(row) == 3 for row in rows))
+        ):
+            raise self.error(
+                key, "a non-empty array of [r, g, b] arrays" if rgb else "a non-empty array of numbers", value
+            )
         return value
 
     def options(self, cls, skip: tuple[str, ...] = ()) -> dict[str, Any]:
@@ -144,8 +157,12 @@ class Table:
         for f in dataclasses.fields(cls):
             if f.name in skip or f.name not in self.data:
                 continue
-            readers: dict[type, Callable[[str], Any]] = {bool: self.boolean, int: self.integer,
-                                                         float: self.number, str: self.string}
+            readers: dict[type, Callable[[str], Any]] = {
+                bool: self.boolean,
+                int: self.integer,
+                float: self.number,
+                str: self.string,
+            }
             reader = readers.get(type(f.default), self.number)
             out[f.name] = reader(f.name)
         return out
@@ -163,8 +180,7 @@ class Table:
         'kajiya-kay') does not read: it would be silently ignored otherwise."""
         for key in self.data:
             if key != kind and key not in keys:
-                raise SceneError(f"{self.where}: {self.name}.{key} is not a key of "
-                                 f"{kind} = {choice!r}")
+                raise SceneError(f"{self.where}: {self.name}.{key} is not a key of {kind} = {choice!r}")
 
 
 def build(where: str, factory, **kwargs):

@@ -29,8 +29,16 @@ from ._model import (
 )
 from ._transforms import LOG
 
-__all__ = ["ShadingParams", "KajiyaKay", "Cone", "seed_cone", "kajiya_kay", "kajiya_kay_terms",
-           "specular_power", "read_kajiya_kay_params"]
+__all__ = [
+    "ShadingParams",
+    "KajiyaKay",
+    "Cone",
+    "seed_cone",
+    "kajiya_kay",
+    "kajiya_kay_terms",
+    "specular_power",
+    "read_kajiya_kay_params",
+]
 
 
 def _rgb(x) -> Float[Array, 3]:
@@ -53,8 +61,14 @@ class ShadingParams(eqx.Module):
     kappa: Float[Array, ""]
     ambient: Float[Array, 3]
 
-    def __init__(self, kd: RGBLike = 0.6, ks: RGBLike = 0.3, shininess: ArrayLike = 40.0,
-                 kappa: ArrayLike = 1.0, ambient: RGBLike = 0.0):
+    def __init__(
+        self,
+        kd: RGBLike = 0.6,
+        ks: RGBLike = 0.3,
+        shininess: ArrayLike = 40.0,
+        kappa: ArrayLike = 1.0,
+        ambient: RGBLike = 0.0,
+    ):
         self.kd = _rgb(kd)
         self.ks = _rgb(ks)
         self.shininess = jnp.asarray(shininess, dtype=jnp.result_type(float))
@@ -62,8 +76,7 @@ class ShadingParams(eqx.Module):
         self.ambient = _rgb(ambient)
 
     def __check_init__(self):
-        check_params(self, colors=("kd", "ks", "ambient"), positive=("shininess",),
-                     non_negative=("kappa",))
+        check_params(self, colors=("kd", "ks", "ambient"), positive=("shininess",), non_negative=("kappa",))
 
 
 def specular_power(gap: Float[ArrayLike, "*shape"], p: Float[ArrayLike, ""]) -> Float[Array, "*shape"]:
@@ -88,7 +101,9 @@ def seed_cone(tl, tv, sin_tl, sin_tv):
 
 
 def kajiya_kay_terms(
-    tangent: Float[Array, 3], to_light: Float[Array, 3], to_eye: Float[Array, 3],
+    tangent: Float[Array, 3],
+    to_light: Float[Array, 3],
+    to_eye: Float[Array, 3],
     cone: Cone = seed_cone,
 ) -> tuple[Float[Array, ""], Float[Array, ""]]:
     """The geometric part of Kajiya-Kay at one point: (sin(T, L), gap), gap = 1 − b for the
@@ -142,13 +157,15 @@ def kajiya_kay(
 
 def read_kajiya_kay_params(table) -> ShadingParams:
     """[shading]'s Kajiya-Kay parameters (types here; ranges are ShadingParams' checks)."""
-    return ShadingParams(**table.given(
-        kd=table.rgb("kd", scalar=True),
-        ks=table.rgb("ks", scalar=True),
-        shininess=table.number("shininess"),
-        kappa=table.number("kappa"),
-        ambient=table.rgb("ambient", scalar=True),
-    ))
+    return ShadingParams(
+        **table.given(
+            kd=table.rgb("kd", scalar=True),
+            ks=table.rgb("ks", scalar=True),
+            shininess=table.number("shininess"),
+            kappa=table.number("kappa"),
+            ambient=table.rgb("ambient", scalar=True),
+        )
+    )
 
 
 @register_shading_model
@@ -170,15 +187,24 @@ class KajiyaKay(AbstractShadingModel):
 
     def reflectance(self, points: ShadingPoints, params: ShadingParams) -> Reflectance:
         sin_tl, gap = jax.vmap(kajiya_kay_terms, in_axes=(0, 0, 0, None))(
-            points.tangent, points.to_light, points.to_eye, type(self).cone)
+            points.tangent, points.to_light, points.to_eye, type(self).cone
+        )
         spec = specular_power(gap, params.shininess)
-        return Reflectance(ambient={"ambient": points.base_color},
-                           lit={"kd": sin_tl[:, None] * points.base_color,
-                                "ks": jnp.broadcast_to(spec[:, None], points.base_color.shape)})
+        return Reflectance(
+            ambient={"ambient": points.base_color},
+            lit={
+                "kd": sin_tl[:, None] * points.base_color,
+                "ks": jnp.broadcast_to(spec[:, None], points.base_color.shape),
+            },
+        )
 
     def gl_uniforms(self, params: ShadingParams) -> dict:
-        return {"shading.kd": _vec(params.kd), "shading.ks": _vec(params.ks),
-                "shading.ambient": _vec(params.ambient), "shading.shininess": float(params.shininess)}
+        return {
+            "shading.kd": _vec(params.kd),
+            "shading.ks": _vec(params.ks),
+            "shading.ambient": _vec(params.ambient),
+            "shading.shininess": float(params.shininess),
+        }
 
     @classmethod
     def from_table(cls, table) -> KajiyaKay:

@@ -36,15 +36,23 @@ from ._kajiya_kay import (
 )
 from ._model import Reflectance, ShadingPoints, register_shading_model
 
-__all__ = ["KajiyaKayLookup", "kajiya_kay_table", "bilinear", "lookup_coordinates", "lookup_terms",
-           "kajiya_kay_lookup", "LOOKUP_SIZE_RANGE"]
+__all__ = [
+    "KajiyaKayLookup",
+    "kajiya_kay_table",
+    "bilinear",
+    "lookup_coordinates",
+    "lookup_terms",
+    "kajiya_kay_lookup",
+    "LOOKUP_SIZE_RANGE",
+]
 
 # The table sizes a scene may ask for: 2 texels already interpolate; 4096² RG32F is 128 MiB.
 LOOKUP_SIZE_RANGE = (2, 4096)
 
 
-def kajiya_kay_table(shininess: Float[Array, ""], size: int,
-                     cone: Cone = seed_cone) -> Float[Array, "size size 2"]:
+def kajiya_kay_table(
+    shininess: Float[Array, ""], size: int, cone: Cone = seed_cone
+) -> Float[Array, "size size 2"]:
     """The lookup table: `table[j, i] = (sin θ_L, max(b, 0)^p)` at L·T = 2u_i − 1,
     V·T = 2v_j − 1, u_i = (i + ½)/size, v_j = (j + ½)/size (texel centres).
 
@@ -67,8 +75,7 @@ def kajiya_kay_table(shininess: Float[Array, ""], size: int,
     return jax.vmap(jax.vmap(entry, in_axes=(0, None)), in_axes=(None, 0))(dirs, dirs)
 
 
-def bilinear(table: Float[Array, "n n C"], u: Float[Array, ""],
-             v: Float[Array, ""]) -> Float[Array, " C"]:
+def bilinear(table: Float[Array, "n n C"], u: Float[Array, ""], v: Float[Array, ""]) -> Float[Array, " C"]:
     """`table` sampled at (u, v) like GL's `texture()` with LINEAR filtering and
     CLAMP_TO_EDGE: u indexes columns, v rows, texel centres at (k + ½)/n."""
     n = table.shape[0]
@@ -90,7 +97,9 @@ def bilinear(table: Float[Array, "n n C"], u: Float[Array, ""],
 
 
 def lookup_coordinates(
-    tangent: Float[Array, "P 3"], to_light: Float[Array, "P 3"], to_eye: Float[Array, "P 3"],
+    tangent: Float[Array, "P 3"],
+    to_light: Float[Array, "P 3"],
+    to_eye: Float[Array, "P 3"],
 ) -> tuple[Float[Array, "P 2"], Bool[Array, " P"], Bool[Array, " P"]]:
     """Per point: (u, v) = ((L·T + 1)/2, (V·T + 1)/2), and where the diffuse and the
     specular term may be read from the table at all (geometry only, no parameter)."""
@@ -107,9 +116,14 @@ def lookup_coordinates(
     return jnp.stack([0.5 * (1 + tl), 0.5 * (1 + tv)], axis=1), lit, lit & nonzero(to_eye)
 
 
-def lookup_terms(shininess: Float[Array, ""], uv: Float[Array, "P 2"], lit: Bool[Array, " P"],
-                 lit_specular: Bool[Array, " P"], size: int, cone: Cone = seed_cone,
-                 ) -> tuple[Float[Array, " P"], Float[Array, " P"]]:
+def lookup_terms(
+    shininess: Float[Array, ""],
+    uv: Float[Array, "P 2"],
+    lit: Bool[Array, " P"],
+    lit_specular: Bool[Array, " P"],
+    size: int,
+    cone: Cone = seed_cone,
+) -> tuple[Float[Array, " P"], Float[Array, " P"]]:
     """(sin θ_L, max(b, 0)^p) per point from the table, built once for all points."""
     table = kajiya_kay_table(shininess, size, cone)
     terms = jax.vmap(bilinear, in_axes=(None, 0, 0))(table, uv[:, 0], uv[:, 1])
@@ -117,8 +131,12 @@ def lookup_terms(shininess: Float[Array, ""], uv: Float[Array, "P 2"], lit: Bool
 
 
 def kajiya_kay_lookup(
-    tangent: Float[Array, "P 3"], to_light: Float[Array, "P 3"], to_eye: Float[Array, "P 3"],
-    params: ShadingParams, size: int, cone: Cone = seed_cone,
+    tangent: Float[Array, "P 3"],
+    to_light: Float[Array, "P 3"],
+    to_eye: Float[Array, "P 3"],
+    params: ShadingParams,
+    size: int,
+    cone: Cone = seed_cone,
 ) -> tuple[Float[Array, "P 3"], Float[Array, "P 3"]]:
     """Unshadowed Kajiya-Kay terms at all points from the lookup table (docs/model.md §14).
 
@@ -126,8 +144,7 @@ def kajiya_kay_lookup(
     `(sin, spec) = bilinear(table, u, v)`, and the result is `(Kd·sin, Ks·spec)` like
     `kajiya_kay`'s.
     """
-    sin_tl, spec = lookup_terms(params.shininess, *lookup_coordinates(tangent, to_light, to_eye),
-                                size, cone)
+    sin_tl, spec = lookup_terms(params.shininess, *lookup_coordinates(tangent, to_light, to_eye), size, cone)
     return sin_tl[:, None] * params.kd[None, :], spec[:, None] * params.ks[None, :]
 
 
@@ -150,11 +167,19 @@ class KajiyaKayLookup(KajiyaKay):
             raise SceneError(f"shading.lookup_size must be an integer in [{lo}, {hi}], got {n!r}")
 
     def reflectance(self, points: ShadingPoints, params: ShadingParams) -> Reflectance:
-        sin_tl, spec = lookup_terms(params.shininess, *lookup_coordinates(
-            points.tangent, points.to_light, points.to_eye), int(self.size), type(self).cone)
-        return Reflectance(ambient={"ambient": points.base_color},
-                           lit={"kd": sin_tl[:, None] * points.base_color,
-                                "ks": jnp.broadcast_to(spec[:, None], points.base_color.shape)})
+        sin_tl, spec = lookup_terms(
+            params.shininess,
+            *lookup_coordinates(points.tangent, points.to_light, points.to_eye),
+            int(self.size),
+            type(self).cone,
+        )
+        return Reflectance(
+            ambient={"ambient": points.base_color},
+            lit={
+                "kd": sin_tl[:, None] * points.base_color,
+                "ks": jnp.broadcast_to(spec[:, None], points.base_color.shape),
+            },
+        )
 
     def gl_table(self, params: ShadingParams):
         return kajiya_kay_table(params.shininess, int(self.size), type(self).cone)

@@ -38,9 +38,18 @@ from ._transforms import Transform
 if TYPE_CHECKING:  # types only: the scene reader imports the registry, not the reverse
     from .._scene._file import Table
 
-__all__ = ["AbstractShadingModel", "PointInputs", "ShadingPoints", "Reflectance", "Transform",
-           "register_shading_model", "shading_model_class", "shading_model_names",
-           "check_params", "RGBLike"]
+__all__ = [
+    "AbstractShadingModel",
+    "PointInputs",
+    "ShadingPoints",
+    "Reflectance",
+    "Transform",
+    "register_shading_model",
+    "shading_model_class",
+    "shading_model_names",
+    "check_params",
+    "RGBLike",
+]
 
 # What a parameter class takes for an RGB gain: an array or one number (it broadcasts), or
 # a tuple or list of 3 numbers (`ShadingParams(kd=(0.3, 0.5, 0.2))`); it stores `[3]`.
@@ -87,21 +96,26 @@ class Reflectance(eqx.Module):
     lit: dict[str, Float[Array, "P 3"]]
 
 
-
-
-def check_params(params: eqx.Module, *, colors: tuple[str, ...] = (),
-                 positive: tuple[str, ...] = (), non_negative: tuple[str, ...] = (),
-                 finite: tuple[str, ...] = ()) -> None:
+def check_params(
+    params: eqx.Module,
+    *,
+    colors: tuple[str, ...] = (),
+    positive: tuple[str, ...] = (),
+    non_negative: tuple[str, ...] = (),
+    finite: tuple[str, ...] = (),
+) -> None:
     """Raise `SceneError` naming `shading.<field>` unless the parameters' concrete values
     are in range: `colors` finite and ≥ 0 (RGB), `positive` finite and > 0, `non_negative`
     finite and ≥ 0, `finite` finite. Traced parameters (inside `jax.grad`, `jit`, a fit's
     step) have no values yet and pass: the check is for values a user gives."""
     if any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(params)):
         return
-    for names, ok, text in ((colors, lambda v: v >= 0, ">= 0"),
-                            (positive, lambda v: v > 0, "> 0"),
-                            (non_negative, lambda v: v >= 0, ">= 0"),
-                            (finite, lambda v: True, "finite")):
+    for names, ok, text in (
+        (colors, lambda v: v >= 0, ">= 0"),
+        (positive, lambda v: v > 0, "> 0"),
+        (non_negative, lambda v: v >= 0, ">= 0"),
+        (finite, lambda v: True, "finite"),
+    ):
         for name in names:
             v = np.asarray(getattr(params, name), dtype=np.float64)
             if not (np.all(np.isfinite(v)) and np.all(ok(v))):
@@ -144,8 +158,9 @@ class AbstractShadingModel(eqx.Module):
     def replace_params(self, params) -> AbstractShadingModel:
         """This model with other parameters (of `params_type`)."""
         if not isinstance(params, self.params_type):
-            raise TypeError(f"shading model {self.name!r} takes {self.params_type.__name__}, "
-                            f"got {type(params).__name__}")
+            raise TypeError(
+                f"shading model {self.name!r} takes {self.params_type.__name__}, got {type(params).__name__}"
+            )
         return eqx.tree_at(lambda m: m.params, self, params)
 
     @property

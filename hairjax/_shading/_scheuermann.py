@@ -30,8 +30,16 @@ from ._model import (
 from ._scheuermann_inputs import ScheuermannMaps, ScheuermannPoints, scheuermann_inputs
 from ._transforms import IDENTITY, LOG
 
-__all__ = ["ScheuermannParams", "Scheuermann", "scheuermann", "scheuermann_terms",
-           "shift_tangent", "strand_specular", "smoothstep_attenuation", "scheuermann_diffuse"]
+__all__ = [
+    "ScheuermannParams",
+    "Scheuermann",
+    "scheuermann",
+    "scheuermann_terms",
+    "shift_tangent",
+    "strand_specular",
+    "smoothstep_attenuation",
+    "scheuermann_diffuse",
+]
 
 
 def _rgb(x) -> Float[Array, 3]:
@@ -63,11 +71,18 @@ class ScheuermannParams(eqx.Module):
     secondary_shift: Float[Array, ""]
     kappa: Float[Array, ""]
 
-    def __init__(self, kd: RGBLike = 0.6, ambient: RGBLike = 0.0,
-                 primary_color: RGBLike = 0.3, primary_exponent: ArrayLike = 80.0,
-                 primary_shift: ArrayLike = 0.1, secondary_color: RGBLike = 0.2,
-                 secondary_exponent: ArrayLike = 20.0, secondary_shift: ArrayLike = -0.1,
-                 kappa: ArrayLike = 1.0):
+    def __init__(
+        self,
+        kd: RGBLike = 0.6,
+        ambient: RGBLike = 0.0,
+        primary_color: RGBLike = 0.3,
+        primary_exponent: ArrayLike = 80.0,
+        primary_shift: ArrayLike = 0.1,
+        secondary_color: RGBLike = 0.2,
+        secondary_exponent: ArrayLike = 20.0,
+        secondary_shift: ArrayLike = -0.1,
+        kappa: ArrayLike = 1.0,
+    ):
         self.kd = _rgb(kd)
         self.ambient = _rgb(ambient)
         self.primary_color = _rgb(primary_color)
@@ -79,9 +94,13 @@ class ScheuermannParams(eqx.Module):
         self.kappa = _scalar(kappa)
 
     def __check_init__(self):
-        check_params(self, colors=("kd", "ambient", "primary_color", "secondary_color"),
-                     positive=("primary_exponent", "secondary_exponent"),
-                     finite=("primary_shift", "secondary_shift"), non_negative=("kappa",))
+        check_params(
+            self,
+            colors=("kd", "ambient", "primary_color", "secondary_color"),
+            positive=("primary_exponent", "secondary_exponent"),
+            finite=("primary_shift", "secondary_shift"),
+            non_negative=("kappa",),
+        )
 
 
 # --------------------------------------------------------------------------- per point (JAX)
@@ -90,14 +109,16 @@ class ScheuermannParams(eqx.Module):
 def scheuermann_diffuse(normal: Float[Array, 3], to_light: Float[Array, 3]) -> Float[Array, ""]:
     """saturate(lerp(0.25, 1, N·L)) (slide 12); 0 for a point without normal (N = 0, §1's
     points without tangent: ambient only)."""
-    wrapped = jnp.clip(SCHEUERMANN_DIFFUSE_FLOOR + (1 - SCHEUERMANN_DIFFUSE_FLOOR)
-                       * jnp.dot(normal, to_light), 0.0, 1.0)
+    wrapped = jnp.clip(
+        SCHEUERMANN_DIFFUSE_FLOOR + (1 - SCHEUERMANN_DIFFUSE_FLOOR) * jnp.dot(normal, to_light), 0.0, 1.0
+    )
     # Fires at points without tangent (N = 0 there by construction): no lit terms.
     return jnp.where(jnp.dot(normal, normal) > 0.5, wrapped, 0.0)
 
 
-def shift_tangent(tangent: Float[Array, 3], normal: Float[Array, 3],
-                  shift: Float[ArrayLike, ""]) -> Float[Array, 3]:
+def shift_tangent(
+    tangent: Float[Array, 3], normal: Float[Array, 3], shift: Float[ArrayLike, ""]
+) -> Float[Array, 3]:
     """normalize(T + shift·N) (slide 10). N ⟂ T and both unit (or both 0) by construction
     (`strand_normals`), so |T + shift·N| = √(1 + shift²) and no guard is needed: a point
     without tangent keeps T' = 0."""
@@ -112,8 +133,9 @@ def smoothstep_attenuation(x: Float[Array, ""]) -> Float[Array, ""]:
     return t * t * (3.0 - 2.0 * t)
 
 
-def strand_specular(tangent: Float[Array, 3], half: Float[Array, 3],
-                    exponent: Float[ArrayLike, ""]) -> Float[Array, ""]:
+def strand_specular(
+    tangent: Float[Array, 3], half: Float[Array, 3], exponent: Float[ArrayLike, ""]
+) -> Float[Array, ""]:
     """smoothstep(−1, 0, T·H) · sin(T, H)^p (slide 11) for unit T and H; 0 when either is
     the zero vector.
 
@@ -148,8 +170,11 @@ def scheuermann_terms(
     half = safe_normalize(to_light + to_eye)
     t1 = shift_tangent(tangent, normal, params.primary_shift + shift)
     t2 = shift_tangent(tangent, normal, params.secondary_shift + shift)
-    return (scheuermann_diffuse(normal, to_light), strand_specular(t1, half, params.primary_exponent),
-            jnp.asarray(mask) * strand_specular(t2, half, params.secondary_exponent))
+    return (
+        scheuermann_diffuse(normal, to_light),
+        strand_specular(t1, half, params.primary_exponent),
+        jnp.asarray(mask) * strand_specular(t2, half, params.secondary_exponent),
+    )
 
 
 def scheuermann(
@@ -175,10 +200,27 @@ def scheuermann(
     return params.kd * diffuse, params.primary_color * s1 + params.secondary_color * s2
 
 
-_SCHEUERMANN_PARAMS = ("kd", "ambient", "kappa", "primary_color", "primary_exponent", "primary_shift",
-                       "secondary_color", "secondary_exponent", "secondary_shift")
-_SCHEUERMANN_MAPS = ("normal_center", "texture_seed", "shift_noise", "mask_noise", "base_texture",
-                     "alpha_texture", "occlusion", "hair_occlusion")
+_SCHEUERMANN_PARAMS = (
+    "kd",
+    "ambient",
+    "kappa",
+    "primary_color",
+    "primary_exponent",
+    "primary_shift",
+    "secondary_color",
+    "secondary_exponent",
+    "secondary_shift",
+)
+_SCHEUERMANN_MAPS = (
+    "normal_center",
+    "texture_seed",
+    "shift_noise",
+    "mask_noise",
+    "base_texture",
+    "alpha_texture",
+    "occlusion",
+    "hair_occlusion",
+)
 
 
 @register_shading_model
@@ -193,12 +235,23 @@ class Scheuermann(AbstractShadingModel):
     name: ClassVar[str] = "scheuermann"
     params_type: ClassVar[type] = ScheuermannParams
     table_keys: ClassVar[tuple[str, ...]] = _SCHEUERMANN_PARAMS + _SCHEUERMANN_MAPS
-    fittable: ClassVar[tuple[str, ...]] = ("kd", "primary_color", "primary_exponent", "primary_shift",
-                                           "secondary_color", "secondary_exponent", "secondary_shift",
-                                           "kappa")
-    searched: ClassVar[Mapping] = {"primary_exponent": LOG, "primary_shift": IDENTITY,
-                                   "secondary_exponent": LOG, "secondary_shift": IDENTITY,
-                                   "kappa": LOG}
+    fittable: ClassVar[tuple[str, ...]] = (
+        "kd",
+        "primary_color",
+        "primary_exponent",
+        "primary_shift",
+        "secondary_color",
+        "secondary_exponent",
+        "secondary_shift",
+        "kappa",
+    )
+    searched: ClassVar[Mapping] = {
+        "primary_exponent": LOG,
+        "primary_shift": IDENTITY,
+        "secondary_exponent": LOG,
+        "secondary_shift": IDENTITY,
+        "kappa": LOG,
+    }
     gl_id: ClassVar[int | None] = 3
 
     def point_inputs(self, strands, tangent: np.ndarray) -> PointInputs:
@@ -209,15 +262,23 @@ class Scheuermann(AbstractShadingModel):
         pts: ScheuermannPoints = points.extra  # as JAX arrays here (the geometry stage's)
         normal, shift, mask = jnp.asarray(pts.normal), jnp.asarray(pts.shift), jnp.asarray(pts.mask)
         diffuse, s1, s2 = jax.vmap(scheuermann_terms, in_axes=(0, 0, 0, 0, 0, 0, None))(
-            points.tangent, normal, points.to_light, points.to_eye, shift, mask, params)
+            points.tangent, normal, points.to_light, points.to_eye, shift, mask, params
+        )
         c = points.base_color
-        return Reflectance(ambient={"ambient": c},
-                           lit={"kd": diffuse[:, None] * c, "primary_color": s1[:, None] * c,
-                                "secondary_color": s2[:, None] * c})
+        return Reflectance(
+            ambient={"ambient": c},
+            lit={
+                "kd": diffuse[:, None] * c,
+                "primary_color": s1[:, None] * c,
+                "secondary_color": s2[:, None] * c,
+            },
+        )
 
     def gl_uniforms(self, params: ScheuermannParams) -> dict:
-        uniforms: dict[str, Any] = {f"scheuermann.{n}": _vec(getattr(params, n))
-                    for n in ("kd", "ambient", "primary_color", "secondary_color")}
+        uniforms: dict[str, Any] = {
+            f"scheuermann.{n}": _vec(getattr(params, n))
+            for n in ("kd", "ambient", "primary_color", "secondary_color")
+        }
         for n in ("primary_exponent", "secondary_exponent", "primary_shift", "secondary_shift"):
             uniforms[f"scheuermann.{n}"] = float(getattr(params, n))
         return uniforms
@@ -230,10 +291,24 @@ class Scheuermann(AbstractShadingModel):
     def from_table(cls, table) -> Scheuermann:
         """[shading] with model = "scheuermann": types here, ranges in ScheuermannParams
         and ScheuermannMaps."""
-        params = ScheuermannParams(**table.given(
-            **{n: table.rgb(n, scalar=True) for n in ("kd", "ambient", "primary_color", "secondary_color")},
-            **{n: table.number(n) for n in ("kappa", "primary_exponent", "primary_shift",
-                                            "secondary_exponent", "secondary_shift")}))
+        params = ScheuermannParams(
+            **table.given(
+                **{
+                    n: table.rgb(n, scalar=True)
+                    for n in ("kd", "ambient", "primary_color", "secondary_color")
+                },
+                **{
+                    n: table.number(n)
+                    for n in (
+                        "kappa",
+                        "primary_exponent",
+                        "primary_shift",
+                        "secondary_exponent",
+                        "secondary_shift",
+                    )
+                },
+            )
+        )
         for key, rgb in (("base_texture", True), ("alpha_texture", False), ("occlusion", False)):
             table.texture(key, rgb=rgb)
         maps = table.given(

@@ -19,9 +19,19 @@ from .._geometry._ordering import hair_centre
 from .._geometry._shadows import ExactShadows
 from .._scene._light import Light, Vec3Like
 
-__all__ = ["ScheuermannMaps", "ScheuermannPoints", "strand_normals", "strand_position",
-           "scheuermann_inputs", "segment_alpha", "hair_occlusion", "sphere_directions",
-           "exact_omega_numpy", "HAIR_OCCLUSION_RESOLUTION", "HAIR_OCCLUSION_DIRECTIONS"]
+__all__ = [
+    "ScheuermannMaps",
+    "ScheuermannPoints",
+    "strand_normals",
+    "strand_position",
+    "scheuermann_inputs",
+    "segment_alpha",
+    "hair_occlusion",
+    "sphere_directions",
+    "exact_omega_numpy",
+    "HAIR_OCCLUSION_RESOLUTION",
+    "HAIR_OCCLUSION_DIRECTIONS",
+]
 
 # The light rasters of `hair_occlusion`: a strand of width w covers w texels of this many
 # across the hair, i.e. occludes as in a render of the hair at this resolution. Coarse on
@@ -49,8 +59,13 @@ def _table(name: str, value, width: int | None) -> tuple:
     except (TypeError, ValueError):
         arr = np.full((0,), np.nan)
     shape_ok = arr.ndim == 1 if width is None else (arr.ndim == 2 and arr.shape[1] == width)
-    if not shape_ok or len(arr) < 1 or not np.all(np.isfinite(arr)) or np.any(arr < 0) \
-            or (width is None and np.any(arr > 1)):
+    if (
+        not shape_ok
+        or len(arr) < 1
+        or not np.all(np.isfinite(arr))
+        or np.any(arr < 0)
+        or (width is None and np.any(arr > 1))
+    ):
         what = "numbers in [0, 1]" if width is None else "RGB triples of numbers ≥ 0"
         raise SceneError(f"shading.{name} must be a non-empty list of {what}, got {value!r}")
     return tuple(tuple(float(x) for x in row) for row in arr) if width else tuple(float(x) for x in arr)
@@ -89,8 +104,9 @@ class ScheuermannMaps:
         if self.normal_center is not None:
             c = np.asarray(self.normal_center, dtype=np.float64)
             if c.shape != (3,) or not np.all(np.isfinite(c)):
-                raise SceneError("shading.normal_center must be 3 finite numbers, "
-                                 f"got {self.normal_center!r}")
+                raise SceneError(
+                    f"shading.normal_center must be 3 finite numbers, got {self.normal_center!r}"
+                )
             object.__setattr__(self, "normal_center", tuple(float(x) for x in c))
         seed = self.texture_seed
         if isinstance(seed, bool) or int(seed) != seed or seed < 0:
@@ -205,9 +221,15 @@ def hair_occlusion(strands, density: float, seg_alpha: np.ndarray | None = None)
     total = np.zeros(strands.num_points)
     exact = ExactShadows(resolution=HAIR_OCCLUSION_RESOLUTION)
     for d in sphere_directions(HAIR_OCCLUSION_DIRECTIONS):
-        setup = exact.setup(strands.points, segments, seg_strand, strands.width,
-                            Light(direction=tuple(-d)), segment_alpha=seg_alpha,
-                            width_units=strands.width_units)
+        setup = exact.setup(
+            strands.points,
+            segments,
+            seg_strand,
+            strands.width,
+            Light(direction=tuple(-d)),
+            segment_alpha=seg_alpha,
+            width_units=strands.width_units,
+        )
         omega = exact_omega_numpy(setup, strands.alpha[setup.frag_strand] * setup.frag_coverage)
         total += np.exp(-density * omega)
     return total / HAIR_OCCLUSION_DIRECTIONS

@@ -23,15 +23,18 @@ from ._transmittance import transmittance
 if TYPE_CHECKING:
     from .._geometry._stage import Geometry
 
-__all__ = ["shading_points", "light_factor", "combine", "point_colors", "occluder_colors",
-           "shading_stage"]
+__all__ = ["shading_points", "light_factor", "combine", "point_colors", "occluder_colors", "shading_stage"]
 
 
 def shading_points(geometry: Geometry) -> ShadingPoints:
     """The per-point inputs every model reads, from the geometry stage."""
-    return ShadingPoints(tangent=geometry.tangent, to_light=geometry.to_light,
-                         to_eye=geometry.to_eye, base_color=geometry.base_color,
-                         extra=geometry.shading_inputs)
+    return ShadingPoints(
+        tangent=geometry.tangent,
+        to_light=geometry.to_light,
+        to_eye=geometry.to_eye,
+        base_color=geometry.base_color,
+        extra=geometry.shading_inputs,
+    )
 
 
 def light_factor(geometry: Geometry, kappa) -> Float[Array, "P 3"]:
@@ -46,6 +49,7 @@ def light_factor(geometry: Geometry, kappa) -> Float[Array, "P 3"]:
 
 def combine(reflectance: Reflectance, params, light: Float[Array, "P 3"]) -> Float[Array, "P 3"]:
     """Σ_g params.g ⊙ ambient_g + light ⊙ Σ_g params.g ⊙ lit_g."""
+
     def weighted(terms: dict):
         return sum(getattr(params, g)[None, :] * term for g, term in terms.items())
 
@@ -57,10 +61,12 @@ def point_colors(geometry: Geometry, params) -> Float[Array, "P 3"]:
     lit by `light_factor`, times the streak factor (§16) where the scene has streaks."""
     model = geometry.shading
     if not isinstance(params, model.params_type):
-        raise TypeError(f"shading model {model.name!r} takes {model.params_type.__name__}, "
-                        f"got {type(params).__name__}")
-    colors = combine(model.reflectance(shading_points(geometry), params), params,
-                     light_factor(geometry, params.kappa))
+        raise TypeError(
+            f"shading model {model.name!r} takes {model.params_type.__name__}, got {type(params).__name__}"
+        )
+    colors = combine(
+        model.reflectance(shading_points(geometry), params), params, light_factor(geometry, params.kappa)
+    )
     if geometry.streak is not None:  # §16: the streak texture modulates the whole colour
         colors = colors * geometry.streak[:, None]
     return colors

@@ -20,8 +20,14 @@ from jaxtyping import Array, Float
 
 from .._errors import SceneError
 
-__all__ = ["Streaks", "streak_texture", "strand_coordinates", "streak_prefix", "streak_factor",
-           "streak_factors"]
+__all__ = [
+    "Streaks",
+    "streak_texture",
+    "strand_coordinates",
+    "streak_prefix",
+    "streak_factor",
+    "streak_factors",
+]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -85,8 +91,9 @@ def _antiderivative(texture, prefix, y):
     return q * prefix[m] + prefix[r] + f * n0 + 0.5 * f * f * (n1 - n0)
 
 
-def streak_factor(texture: Float[Array, " m"], prefix: Float[Array, " m1"], u: Float[Array, ""],
-                  width: float) -> Float[Array, ""]:
+def streak_factor(
+    texture: Float[Array, " m"], prefix: Float[Array, " m1"], u: Float[Array, ""], width: float
+) -> Float[Array, ""]:
     """The mean of the streak texture over [u, u + width] (one point; vmap over points):
     (H(b) − H(a))/(width·m), a = u·m − ½, b = (u + width)·m − ½ (texel units)."""
     m = texture.shape[0]
@@ -102,5 +109,8 @@ def streak_factors(streaks: Streaks, strands, dtype) -> Float[Array, " P"]:
     texture = streak_texture(streaks)
     u = strand_coordinates(streaks, strands.num_strands)[strands.strand_of_point]
     return jax.vmap(streak_factor, in_axes=(None, None, 0, None))(
-        jnp.asarray(texture, dtype), jnp.asarray(streak_prefix(texture), dtype),
-        jnp.asarray(u, dtype), streaks.width)
+        jnp.asarray(texture, dtype),
+        jnp.asarray(streak_prefix(texture), dtype),
+        jnp.asarray(u, dtype),
+        streaks.width,
+    )

@@ -37,12 +37,22 @@ class Strands:
         self.visibility = f4(np.ones(s.num_points))
 
     def vertex_array(self, prog, index_buffer):
-        return self.ctx.vertex_array(prog, [
-            (self.position, "3f", "in_position"), (self.tangent, "3f", "in_tangent"),
-            (self.color, "3f", "in_color"), (self.alpha, "f", "in_alpha"),
-            (self.width, "f", "in_width"), (self.omega, "f", "in_omega"),
-            (self.visibility, "f", "in_visibility"), *self.extra,
-        ], index_buffer=index_buffer, index_element_size=4, skip_errors=True)
+        return self.ctx.vertex_array(
+            prog,
+            [
+                (self.position, "3f", "in_position"),
+                (self.tangent, "3f", "in_tangent"),
+                (self.color, "3f", "in_color"),
+                (self.alpha, "f", "in_alpha"),
+                (self.width, "f", "in_width"),
+                (self.omega, "f", "in_omega"),
+                (self.visibility, "f", "in_visibility"),
+                *self.extra,
+            ],
+            index_buffer=index_buffer,
+            index_element_size=4,
+            skip_errors=True,
+        )
 
     def index_buffer(self, segment_ids: np.ndarray):
         """Endpoints of the given segments, in order, for GL_LINES."""
@@ -50,8 +60,16 @@ class Strands:
         return self.ctx.buffer(pairs.tobytes() if pairs.size else b"\0" * 8)  # no segments: GL needs ≥ 1 byte
 
     def release(self):
-        for b in (self.position, self.tangent, self.color, self.alpha, self.width, self.omega,
-                  self.visibility, *(buffer for buffer, _, _ in self.extra)):
+        for b in (
+            self.position,
+            self.tangent,
+            self.color,
+            self.alpha,
+            self.width,
+            self.omega,
+            self.visibility,
+            *(buffer for buffer, _, _ in self.extra),
+        ):
             b.release()
 
 

@@ -35,9 +35,18 @@ def camera_depth_far(scene: Scene, view: View, depth: np.ndarray) -> float:
     return far
 
 
-def camera_pass(ctx, progs, scene: Scene, params, strands: Strands, view: View, order: np.ndarray,
-                depth_far: float, surface: OccluderSurface | None,
-                occluder: OccluderLight | None) -> np.ndarray:
+def camera_pass(
+    ctx,
+    progs,
+    scene: Scene,
+    params,
+    strands: Strands,
+    view: View,
+    order: np.ndarray,
+    depth_far: float,
+    surface: OccluderSurface | None,
+    occluder: OccluderLight | None,
+) -> np.ndarray:
     """The image (`float32[H, W, 4]`, row 0 at the top): the occluder's colour where
     `surface` covers the pixel (§13, lit by `occluder`), then the segments `order` far to near
     as ribbons shaded at their points (§5, §6, §8), depths in (near, `depth_far`)."""
@@ -61,9 +70,13 @@ def camera_pass(ctx, progs, scene: Scene, params, strands: Strands, view: View, 
         bg = vec(scene.background)
         fbo.depth_mask = surface is None  # keep the occluder's depths
         fbo.clear(*bg, 0.0, depth=1.0)
-        common = dict(raster_size=(float(w), float(h)), depth_far=depth_far,
-                      world_width=scene.strands.width_units == "world",
-                      **view_uniforms("view", view), **light_uniforms(scene))
+        common = dict(
+            raster_size=(float(w), float(h)),
+            depth_far=depth_far,
+            world_width=scene.strands.width_units == "world",
+            **view_uniforms("view", view),
+            **light_uniforms(scene),
+        )
         if surface is not None:
             # §13: the occluder's colour where its surface pass covered the pixel centre.
             ctx.disable(moderngl.BLEND | moderngl.DEPTH_TEST)
@@ -77,8 +90,12 @@ def camera_pass(ctx, progs, scene: Scene, params, strands: Strands, view: View, 
         # writes; "over" for colour, and 1 − Π(1 − α) for alpha.
         fbo.depth_mask = False
         ctx.enable(moderngl.BLEND)
-        ctx.blend_func = (moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA,
-                          moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA)
+        ctx.blend_func = (
+            moderngl.SRC_ALPHA,
+            moderngl.ONE_MINUS_SRC_ALPHA,
+            moderngl.ONE,
+            moderngl.ONE_MINUS_SRC_ALPHA,
+        )
         ctx.blend_equation = moderngl.FUNC_ADD
         prog = progs["camera"]
         set_uniforms(prog, shade=True, eye=vec(view.origin), **shading_uniforms(scene, params), **common)

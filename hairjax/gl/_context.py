@@ -36,13 +36,15 @@ def get_context():
         raise GLUnavailable(
             f"cannot create a headless OpenGL context through EGL ({err}). On Debian/Ubuntu "
             f"install the system packages: apt-get install {SYSTEM_PACKAGES}. The JAX "
-            "renderer (--backend jax) works without OpenGL.") from err
+            "renderer (--backend jax) works without OpenGL."
+        ) from err
     if ctx.version_code < MIN_GL_VERSION:
         version = ctx.info.get("GL_VERSION", ctx.version_code)
         ctx.release()
         raise GLUnavailable(
             f"OpenGL {MIN_GL_VERSION // 100}.{MIN_GL_VERSION // 10 % 10} is needed, this "
-            f"driver offers {version}. Mesa's llvmpipe ({SYSTEM_PACKAGES}) provides 4.5.")
+            f"driver offers {version}. Mesa's llvmpipe ({SYSTEM_PACKAGES}) provides 4.5."
+        )
     check(ctx, "context creation")
     return ctx
 

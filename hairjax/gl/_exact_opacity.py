@@ -17,8 +17,9 @@ __all__ = ["exact_opacity"]
 
 
 @register_gl_shadow_pass("exact")
-def exact_opacity(ctx, progs, scene: Scene, strands: Strands, frame: LightFrame, points: Points, *,
-                  clip_slices: bool = True) -> np.ndarray:
+def exact_opacity(
+    ctx, progs, scene: Scene, strands: Strands, frame: LightFrame, points: Points, *, clip_slices: bool = True
+) -> np.ndarray:
     """Ω without slicing: per-texel fragment lists (count, prefix sum, fill), then each
     point sums the alpha strictly nearer the light in its 3 × 3 texels. (No slices:
     `clip_slices` does not apply.)"""

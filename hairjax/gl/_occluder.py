@@ -42,8 +42,11 @@ def occluder_light(scene: Scene, geometry) -> OccluderLight | None:
     omega[pixel] = np.asarray(geometry.occluder_omega)
     surface = np.ones(cam.width * cam.height)
     surface[pixel] = np.asarray(geometry.occluder_visibility)
-    return OccluderLight(np.asarray(geometry.light_visibility, np.float64),
-                         omega.reshape(cam.height, cam.width), surface.reshape(cam.height, cam.width))
+    return OccluderLight(
+        np.asarray(geometry.light_visibility, np.float64),
+        omega.reshape(cam.height, cam.width),
+        surface.reshape(cam.height, cam.width),
+    )
 
 
 class OccluderSurface:
@@ -58,8 +61,7 @@ class OccluderSurface:
         self.position = ctx.texture((w, h), 4, dtype="f4")
         self.normal = ctx.texture((w, h), 4, dtype="f4")
         self.depth = ctx.depth_texture((w, h))
-        fbo = ctx.framebuffer(color_attachments=[self.position, self.normal],
-                              depth_attachment=self.depth)
+        fbo = ctx.framebuffer(color_attachments=[self.position, self.normal], depth_attachment=self.depth)
         buffers = [fbo]
         try:
             fbo.use()
@@ -69,8 +71,9 @@ class OccluderSurface:
             ctx.enable(moderngl.DEPTH_TEST)
             ctx.depth_func = "<"
             fbo.depth_mask = True
-            uniforms = dict(raster_size=(float(w), float(h)), depth_range=depth_range,
-                            **view_uniforms("view", view))
+            uniforms = dict(
+                raster_size=(float(w), float(h)), depth_range=depth_range, **view_uniforms("view", view)
+            )
             if occluder.kind == "sphere":
                 prog = progs["occluder_sphere"]
                 set_uniforms(prog, center=vec(occluder.center), radius=float(occluder.radius), **uniforms)
@@ -86,8 +89,12 @@ class OccluderSurface:
                     vbo = f4(occluder.vertices)
                     nbo = f4(vertex_normals(occluder.vertices, occluder.triangles))
                     ibo = ctx.buffer(np.ascontiguousarray(tri, "u4").tobytes())
-                    vao = ctx.vertex_array(prog, [(vbo, "3f", "in_position"), (nbo, "3f", "in_normal")],
-                                           index_buffer=ibo, index_element_size=4)
+                    vao = ctx.vertex_array(
+                        prog,
+                        [(vbo, "3f", "in_position"), (nbo, "3f", "in_normal")],
+                        index_buffer=ibo,
+                        index_element_size=4,
+                    )
                     buffers += [vao, vbo, nbo, ibo]
                     vao.render(moderngl.TRIANGLES, vertices=tri.size)
             check(ctx, "occluder surface pass")
@@ -108,8 +115,15 @@ class OccluderSurface:
         release(self.ctx, self.position, self.normal, self.depth)
 
 
-def occluder_shadow(ctx, progs, scene: Scene, strands: Strands, points: Points,
-                    surface: OccluderSurface, receiver_omega: np.ndarray) -> OccluderLight:
+def occluder_shadow(
+    ctx,
+    progs,
+    scene: Scene,
+    strands: Strands,
+    points: Points,
+    surface: OccluderSurface,
+    receiver_omega: np.ndarray,
+) -> OccluderLight:
     """§13: the occluder drawn in its light view (`occluder_light_view`), then V at the
     strand points and at the occluder's surface points by the depth test."""
     r = scene.shadows.resolution
@@ -125,12 +139,13 @@ def occluder_shadow(ctx, progs, scene: Scene, strands: Strands, points: Points,
         light_surface.position.use(0)
         points.buffer.bind_to_storage_buffer(0)
         out.bind_to_storage_buffer(1)
-        set_uniforms(comp, light_position_map=0, count=points.count, resolution=r,
-                     **view_uniforms("light", view))
+        set_uniforms(
+            comp, light_position_map=0, count=points.count, resolution=r, **view_uniforms("light", view)
+        )
         comp.run(group_x=workgroups(points.count))
         ctx.memory_barrier()
         check(ctx, "occluder shadow")
-        v = np.frombuffer(out.read(), "f4")[:points.count].astype(np.float64)
+        v = np.frombuffer(out.read(), "f4")[: points.count].astype(np.float64)
     finally:
         release(ctx, out)
         light_surface.release()
@@ -141,8 +156,9 @@ def occluder_shadow(ctx, progs, scene: Scene, strands: Strands, points: Points,
     return OccluderLight(v[:p], omega.reshape(h, w), vis.reshape(h, w))
 
 
-def draw_occluder_color(ctx, progs, scene: Scene, params, surface: OccluderSurface,
-                        occluder: OccluderLight | None, owned: list) -> None:
+def draw_occluder_color(
+    ctx, progs, scene: Scene, params, surface: OccluderSurface, occluder: OccluderLight | None, owned: list
+) -> None:
     """§13: the occluder's colour k·ambient + τ·k·light·max(N·L, 0)·V where `surface` (the
     camera's) covers the pixel centre, into the bound framebuffer (blending and depth test
     off); Ω and V from `occluder`, Ω = 0 and V = 1 without it. The GL objects it creates
@@ -164,9 +180,17 @@ def draw_occluder_color(ctx, progs, scene: Scene, params, surface: OccluderSurfa
     prog = progs["occluder_color"]
     for unit, tex in enumerate((surface.position, surface.normal, omega_tex, vis_tex)):
         tex.use(unit)
-    set_uniforms(prog, position_map=0, normal_map=1, omega_map=2, visibility_map=3,
-                 albedo=vec(scene.occluder.color), ambient=vec(params.ambient),
-                 kappa=float(params.kappa), **light_uniforms(scene))
+    set_uniforms(
+        prog,
+        position_map=0,
+        normal_map=1,
+        omega_map=2,
+        visibility_map=3,
+        albedo=vec(scene.occluder.color),
+        ambient=vec(params.ambient),
+        kappa=float(params.kappa),
+        **light_uniforms(scene),
+    )
     occ_vao = ctx.vertex_array(prog, [])
     owned.append(occ_vao)
     occ_vao.render(moderngl.TRIANGLES, vertices=3)

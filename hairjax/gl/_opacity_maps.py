@@ -18,8 +18,9 @@ __all__ = ["opacity_maps"]
 
 
 @register_gl_shadow_pass("opacity-maps")
-def opacity_maps(ctx, progs, scene: Scene, strands: Strands, frame: LightFrame, points: Points, *,
-                 clip_slices: bool = True) -> np.ndarray:
+def opacity_maps(
+    ctx, progs, scene: Scene, strands: Strands, frame: LightFrame, points: Points, *, clip_slices: bool = True
+) -> np.ndarray:
     """kim-2003 Routine 2: B_current accumulates slice after slice (GL_ONE, GL_ONE), the
     points of slice i are evaluated between B_prev = Ω(D_i) and B_current = Ω(D_{i+1})."""
     import moderngl
@@ -72,10 +73,19 @@ def opacity_maps(ctx, progs, scene: Scene, strands: Strands, frame: LightFrame, 
         ctx.disable(moderngl.DEPTH_TEST)
         ctx.enable(moderngl.BLEND)
         ctx.blend_func = moderngl.ONE, moderngl.ONE
-        set_uniforms(prog, zmin=float(frame.zmin), span=float(frame.span), maps=n,
-                     **light_pass_uniforms(scene, frame))
-        set_uniforms(comp, zmin=float(frame.zmin), span=float(frame.span), maps=n, resolution=r,
-                     prev_map=0, cur_map=1, **view_uniforms("light", frame.view))
+        set_uniforms(
+            prog, zmin=float(frame.zmin), span=float(frame.span), maps=n, **light_pass_uniforms(scene, frame)
+        )
+        set_uniforms(
+            comp,
+            zmin=float(frame.zmin),
+            span=float(frame.span),
+            maps=n,
+            resolution=r,
+            prev_map=0,
+            cur_map=1,
+            **view_uniforms("light", frame.view),
+        )
         points.buffer.bind_to_storage_buffer(0)
         id_buf.bind_to_storage_buffer(1)
         omega_buf.bind_to_storage_buffer(2)

@@ -25,8 +25,7 @@ from ._uniforms import set_uniforms, view_uniforms
 __all__ = ["render_patches_gl"]
 
 
-def render_patches_gl(ctx, view: View, patches: Patches, point_colors: np.ndarray,
-                      background) -> np.ndarray:
+def render_patches_gl(ctx, view: View, patches: Patches, point_colors: np.ndarray, background) -> np.ndarray:
     """The patches drawn at `view` with the per-point colours `point_colors` `[P, 3]`
     (each vertex carries its strand point's colour) over `background` (RGB, alpha 0).
     Returns `float32[H, W, 4]` linear RGBA, row 0 at the top."""
@@ -52,19 +51,27 @@ def render_patches_gl(ctx, view: View, patches: Patches, point_colors: np.ndarra
             vbo, ubo = f4(patches.vertices), f4(patches.u)
             cbo = f4(np.asarray(point_colors, np.float64)[patches.point])
             ibo = ctx.buffer(np.ascontiguousarray(tri, "u4").tobytes())
-            vao = ctx.vertex_array(prog, [(vbo, "3f", "in_position"), (ubo, "1f", "in_u"),
-                                          (cbo, "3f", "in_color")],
-                                   index_buffer=ibo, index_element_size=4)
+            vao = ctx.vertex_array(
+                prog,
+                [(vbo, "3f", "in_position"), (ubo, "1f", "in_u"), (cbo, "3f", "in_color")],
+                index_buffer=ibo,
+                index_element_size=4,
+            )
             objects += [vao, vbo, ubo, cbo, ibo]
-            set_uniforms(prog, raster_size=(float(w), float(h)), depth_range=(0.0, far),
-                         core=float(patches.core), **view_uniforms("view", view))
+            set_uniforms(
+                prog,
+                raster_size=(float(w), float(h)),
+                depth_range=(0.0, far),
+                core=float(patches.core),
+                **view_uniforms("view", view),
+            )
             ctx.enable(moderngl.DEPTH_TEST)
             ctx.front_face = "ccw"
             passes = [  # (opaque fragments?, culled faces, Z writes, Z test, colour writes, blend)
-                (True, None, True, "<", False, False),      # 1. prime Z
-                (True, None, False, "==", True, False),     # 2. opaque parts
-                (False, "front", False, "<", True, True),   # 3. transparent back faces
-                (False, "back", True, "<", True, True),     # 4. transparent front faces
+                (True, None, True, "<", False, False),  # 1. prime Z
+                (True, None, False, "==", True, False),  # 2. opaque parts
+                (False, "front", False, "<", True, True),  # 3. transparent back faces
+                (False, "back", True, "<", True, True),  # 4. transparent front faces
             ]
             for opaque, cull, z_write, z_test, colour, blend in passes:
                 set_uniforms(prog, opaque_pass=opaque)
@@ -79,8 +86,12 @@ def render_patches_gl(ctx, view: View, patches: Patches, point_colors: np.ndarra
                 if blend:
                     ctx.enable(moderngl.BLEND)
                     # "over": C ← a c + (1 − a) C, A ← a + (1 − a) A.
-                    ctx.blend_func = (moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA,
-                                      moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA)
+                    ctx.blend_func = (
+                        moderngl.SRC_ALPHA,
+                        moderngl.ONE_MINUS_SRC_ALPHA,
+                        moderngl.ONE,
+                        moderngl.ONE_MINUS_SRC_ALPHA,
+                    )
                 else:
                     ctx.disable(moderngl.BLEND)
                 vao.render(moderngl.TRIANGLES, vertices=tri.size)

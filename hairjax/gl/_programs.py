@@ -46,19 +46,23 @@ def shader_source(name: str) -> str:
 
 
 _PROGRAMS = {
-    "camera": dict(vertex_shader="strand.vert", geometry_shader="ribbon.geom",
-                   fragment_shader="camera.frag"),
-    "light_slice": dict(vertex_shader="strand.vert", geometry_shader="ribbon.geom",
-                        fragment_shader="light_slice.frag"),
-    "light_list": dict(vertex_shader="strand.vert", geometry_shader="ribbon.geom",
-                       fragment_shader="light_list.frag"),
+    "camera": dict(vertex_shader="strand.vert", geometry_shader="ribbon.geom", fragment_shader="camera.frag"),
+    "light_slice": dict(
+        vertex_shader="strand.vert", geometry_shader="ribbon.geom", fragment_shader="light_slice.frag"
+    ),
+    "light_list": dict(
+        vertex_shader="strand.vert", geometry_shader="ribbon.geom", fragment_shader="light_list.frag"
+    ),
     "occluder_sphere": dict(vertex_shader="fullscreen.vert", fragment_shader="occluder_sphere.frag"),
     "occluder_mesh": dict(vertex_shader="occluder_mesh.vert", fragment_shader="occluder_mesh.frag"),
     "occluder_color": dict(vertex_shader="fullscreen.vert", fragment_shader="occluder_color.frag"),
     "patch": dict(vertex_shader="patch.vert", fragment_shader="patch.frag"),
 }
-_COMPUTE = {"omega_maps": "omega_maps.comp", "omega_exact": "omega_exact.comp",
-            "occluder_visibility": "occluder_visibility.comp"}
+_COMPUTE = {
+    "omega_maps": "omega_maps.comp",
+    "omega_exact": "omega_exact.comp",
+    "occluder_visibility": "occluder_visibility.comp",
+}
 _CACHE: dict = {}
 
 
@@ -68,15 +72,17 @@ def programs(ctx) -> dict:
     if key not in _CACHE:
         # moderngl expands includes one level deep: put the constants into the model.
         ctx.includes["hairjax_model"] = shader_source("model.glsl").replace(
-            '#include "hairjax_constants"', constants_glsl())
+            '#include "hairjax_constants"', constants_glsl()
+        )
         ctx.includes["hairjax_ribbon_fragment"] = shader_source("ribbon_fragment.glsl")
         built = {}
         for name, stages in _PROGRAMS.items():
             try:
                 built[name] = ctx.program(**{k: shader_source(v) for k, v in stages.items()})
             except Exception as err:
-                raise GLError(f"shader program {name!r} ({', '.join(stages.values())}) "
-                              f"failed to build:\n{err}") from err
+                raise GLError(
+                    f"shader program {name!r} ({', '.join(stages.values())}) failed to build:\n{err}"
+                ) from err
         for name, file in _COMPUTE.items():
             try:
                 built[name] = ctx.compute_shader(shader_source(file))

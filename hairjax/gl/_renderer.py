@@ -47,9 +47,15 @@ class GLResult:
     occluder: OccluderLight | None = None
 
 
-def render_gl(scene: Scene, params=None, *,
-              clip_slices: bool = True, omega: np.ndarray | None = None,
-              order: np.ndarray | None = None, occluder: OccluderLight | None = None) -> GLResult:
+def render_gl(
+    scene: Scene,
+    params=None,
+    *,
+    clip_slices: bool = True,
+    omega: np.ndarray | None = None,
+    order: np.ndarray | None = None,
+    occluder: OccluderLight | None = None,
+) -> GLResult:
     """Render `scene` with OpenGL.
 
     **Arguments:** `params` (default `scene.params`); `clip_slices`: draw into each
@@ -90,29 +96,49 @@ def render_gl(scene: Scene, params=None, *,
             omega = np.asarray(omega, dtype="f4").reshape(strands.count)
             strands.omega.write(omega.tobytes())
             if lighting and occluder is None:
-                raise ValueError("render_gl: with omega and a scene whose occluder takes part in "
-                                 "the light, pass occluder= too (occluder_light(scene, geometry))")
+                raise ValueError(
+                    "render_gl: with omega and a scene whose occluder takes part in "
+                    "the light, pass occluder= too (occluder_light(scene, geometry))"
+                )
         elif scene.shadows.casts:
-            frame = light_frame(scene.strands.points, strands.segments, scene.strands.width,
-                                scene.light, scene.shadows.resolution, scene.strands.width_units)
+            frame = light_frame(
+                scene.strands.points,
+                strands.segments,
+                scene.strands.width,
+                scene.light,
+                scene.shadows.resolution,
+                scene.strands.width_units,
+            )
             points = Points(ctx, strands, None if surface is None else surface.points)
             try:
                 frame = with_receivers(frame, points.receivers)
-                omega_all = gl_shadow_pass(scene.shadows.method)(ctx, progs, scene, strands, frame,
-                                                                 points, clip_slices=clip_slices)
-                omega = omega_all[:strands.count].copy()
+                omega_all = gl_shadow_pass(scene.shadows.method)(
+                    ctx, progs, scene, strands, frame, points, clip_slices=clip_slices
+                )
+                omega = omega_all[: strands.count].copy()
                 strands.omega.write(omega.tobytes())
                 lap("shadows")
                 if lighting and surface is not None:  # lighting: the scene has an occluder
-                    occluder = occluder_shadow(ctx, progs, scene, strands, points, surface,
-                                               omega_all[strands.count:])
+                    occluder = occluder_shadow(
+                        ctx, progs, scene, strands, points, surface, omega_all[strands.count :]
+                    )
                     lap("occluder shadow")
             finally:
                 points.release()
         if lighting and occluder is not None:  # lighting: given with omega, or made above
             strands.visibility.write(np.asarray(occluder.visibility, "f4").tobytes())
-        image = camera_pass(ctx, progs, scene, params, strands, view, order, depth_far, surface,
-                             occluder if lighting else None)
+        image = camera_pass(
+            ctx,
+            progs,
+            scene,
+            params,
+            strands,
+            view,
+            order,
+            depth_far,
+            surface,
+            occluder if lighting else None,
+        )
         lap("camera pass")
         return GLResult(image, omega, timings, occluder if lighting else None)
     finally:
@@ -130,7 +156,8 @@ def _render_patches(scene: Scene, params, omega, order, occluder) -> GLResult:
     clock = time.perf_counter()
     colors = np.asarray(scene_point_colors(scene, params), np.float64)
     shaded = time.perf_counter()
-    image = render_patches_gl(get_context(), camera_view(scene.camera), scene_patches(scene),
-                              colors, scene.background)
+    image = render_patches_gl(
+        get_context(), camera_view(scene.camera), scene_patches(scene), colors, scene.background
+    )
     timings = {"point colours (JAX)": shaded - clock, "four passes": time.perf_counter() - shaded}
     return GLResult(image, None, timings)

@@ -16,8 +16,9 @@ from ._uniforms import set_uniforms
 __all__ = ["lookup_texture", "point_inputs", "shading_uniforms", "streak_texture", "use_shading_textures"]
 
 
-def point_inputs(scene: Scene, tangent: np.ndarray, color: np.ndarray, alpha: np.ndarray,
-                 segments: np.ndarray) -> tuple[np.ndarray, np.ndarray, list]:
+def point_inputs(
+    scene: Scene, tangent: np.ndarray, color: np.ndarray, alpha: np.ndarray, segments: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, list]:
     """The strands' per-point `color` and `alpha` as the shading model changes them
     (`point_inputs`: §17's textures), and its further vertex attributes as
     `(values, format, name)` (`gl_attributes`: §17's normal and (shift, mask) maps), with
@@ -44,10 +45,10 @@ def shading_uniforms(scene: Scene, params) -> dict:
     if model.gl_id is None:
         raise TypeError(f"shading model {model.name!r} has no GL renderer (gl_id is None)")
     if not isinstance(params, model.params_type):
-        raise TypeError(f"shading model {model.name!r} takes {model.params_type.__name__}, "
-                        f"got {type(params).__name__}")
-    return {"shading.model": model.gl_id, "shading.kappa": float(params.kappa),
-            **model.gl_uniforms(params)}
+        raise TypeError(
+            f"shading model {model.name!r} takes {model.params_type.__name__}, got {type(params).__name__}"
+        )
+    return {"shading.model": model.gl_id, "shading.kappa": float(params.kappa), **model.gl_uniforms(params)}
 
 
 def lookup_texture(ctx, scene: Scene, params):
@@ -84,5 +85,9 @@ def use_shading_textures(prog, scene: Scene, table, streak) -> None:
     set_uniforms(prog, streaks=streak is not None)
     if streak is not None and scene.streaks is not None:  # the texture is made from scene.streaks
         streak.use(1)
-        set_uniforms(prog, streak_texture=1, streak_texels=scene.streaks.texels,
-                     streak_width=float(scene.streaks.width))
+        set_uniforms(
+            prog,
+            streak_texture=1,
+            streak_texels=scene.streaks.texels,
+            streak_width=float(scene.streaks.width),
+        )

@@ -17,6 +17,7 @@ _PASSES: dict[str, Callable] = {}
 
 def register_gl_shadow_pass(method: str) -> Callable[[Callable], Callable]:
     """Decorator: `fn` is the GL pass of shadow method `method`."""
+
     def register(fn: Callable) -> Callable:
         _PASSES[method] = fn
         return fn

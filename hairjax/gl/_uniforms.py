@@ -29,12 +29,17 @@ def vec(v) -> tuple:
 
 def view_uniforms(prefix: str, view) -> dict:
     """The `View` struct of model.glsl (docs/model.md §2, §7) named `prefix`."""
-    return {f"{prefix}.origin": vec(view.origin), f"{prefix}.forward": vec(view.forward),
-            f"{prefix}.right": vec(view.right), f"{prefix}.up": vec(view.up),
-            f"{prefix}.focal": float(view.focal), f"{prefix}.center": (float(view.cx), float(view.cy)),
-            # Fires for orthographic (directional-light) views: near = −inf, unused there.
-            f"{prefix}.near": float(view.near) if np.isfinite(view.near) else -1e30,
-            f"{prefix}.perspective": bool(view.perspective)}
+    return {
+        f"{prefix}.origin": vec(view.origin),
+        f"{prefix}.forward": vec(view.forward),
+        f"{prefix}.right": vec(view.right),
+        f"{prefix}.up": vec(view.up),
+        f"{prefix}.focal": float(view.focal),
+        f"{prefix}.center": (float(view.cx), float(view.cy)),
+        # Fires for orthographic (directional-light) views: near = −inf, unused there.
+        f"{prefix}.near": float(view.near) if np.isfinite(view.near) else -1e30,
+        f"{prefix}.perspective": bool(view.perspective),
+    }
 
 
 def light_uniforms(scene: Scene) -> dict:
@@ -46,14 +51,17 @@ def light_uniforms(scene: Scene) -> dict:
         vector, point = d / np.linalg.norm(d), False
     else:
         vector, point = np.asarray(light.position, dtype=np.float64), True
-    return {"light_vector": vec(vector), "point_light": point,
-            "light_rgb": vec(light.color)}
+    return {"light_vector": vec(vector), "point_light": point, "light_rgb": vec(light.color)}
 
 
 def light_pass_uniforms(scene: Scene, frame: LightFrame) -> dict:
     """The ribbon programs drawn from the light (docs/model.md §7): its raster, unshaded."""
     r = scene.shadows.resolution
-    return dict(raster_size=(float(r), float(r)), shade=False,
-                world_width=scene.strands.width_units == "world",
-                light_perspective=bool(frame.view.perspective), resolution=r,
-                **view_uniforms("view", frame.view))
+    return dict(
+        raster_size=(float(r), float(r)),
+        shade=False,
+        world_width=scene.strands.width_units == "world",
+        light_perspective=bool(frame.view.perspective),
+        resolution=r,
+        **view_uniforms("view", frame.view),
+    )

@@ -18,11 +18,11 @@ from ._compare import compare as compare
 from ._compare import format_report as format_report
 from ._compare import image_stats as image_stats
 from ._compare import median_time as median_time
-from ._sweep import KNOBS as KNOBS
+from ._knobs import KNOBS as KNOBS
+from ._knobs import QUICK_KNOBS as QUICK_KNOBS
+from ._knobs import SweepError as SweepError
+from ._knobs import knob_scene as knob_scene
 from ._sweep import PATHS as PATHS
-from ._sweep import QUICK_KNOBS as QUICK_KNOBS
-from ._sweep import SweepError as SweepError
-from ._sweep import knob_scene as knob_scene
 from ._sweep import load_points as load_points
 from ._sweep import run_sweep as run_sweep
 from ._sweep_report import THRESHOLDS as THRESHOLDS

@@ -51,8 +51,9 @@ def _run_child(cfg: dict, workdir: Path) -> dict:
     # The child imports this very package, installed or not.
     package_root = str(Path(__file__).resolve().parents[2])
     env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
-    code = ("import sys; from hairjax.tools._bench_timing import child_main; "
-            "sys.exit(child_main(sys.argv[1:]))")
+    code = (
+        "import sys; from hairjax.tools._bench_timing import child_main; sys.exit(child_main(sys.argv[1:]))"
+    )
     proc = subprocess.run([sys.executable, "-c", code, str(cfg_path), str(out_path)], env=env)
     if proc.returncode == 0 and out_path.exists():
         return json.loads(out_path.read_text())
@@ -94,10 +95,8 @@ def _targets_met(cfg: dict, r: dict) -> dict:
         return met
     met |= {
         "shading_s": r["stages"]["shading"]["median_s"] <= TARGETS["shading_s"],
-        "gradient_over_shading":
-            r["gradient_over_shading"] <= TARGETS["gradient_over_shading"],
-        "ordering_msegments_per_s":
-            r["ordering"]["msegments_per_s"] >= TARGETS["ordering_msegments_per_s"],
+        "gradient_over_shading": r["gradient_over_shading"] <= TARGETS["gradient_over_shading"],
+        "ordering_msegments_per_s": r["ordering"]["msegments_per_s"] >= TARGETS["ordering_msegments_per_s"],
     }
     if target_config:
         met["full_render_s"] = r["stages"]["full_render"]["median_s"] <= TARGETS["full_render_s"]
@@ -125,11 +124,12 @@ def bench_main(args) -> int:
     started = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="hairjax-bench-") as tmp:
         for i, cfg in enumerate(configs):
-            cfg = dict(cfg, index=i, name=config_name(cfg), repeats=repeats, x64=x64,
-                       backend=backend)
-            print(f"[{i + 1}/{len(configs)}] {cfg['name']}: {cfg['strands']:,} strands x "
-                  f"{POINTS} points, {cfg['maps']} opacity maps of {cfg['map_resolution']}^2",
-                  flush=True)
+            cfg = dict(cfg, index=i, name=config_name(cfg), repeats=repeats, x64=x64, backend=backend)
+            print(
+                f"[{i + 1}/{len(configs)}] {cfg['name']}: {cfg['strands']:,} strands x "
+                f"{POINTS} points, {cfg['maps']} opacity maps of {cfg['map_resolution']}^2",
+                flush=True,
+            )
             t0 = time.perf_counter()
             r = _run_child(cfg, Path(tmp))
             r["targets_met"] = _targets_met(cfg, r)
@@ -144,14 +144,18 @@ def bench_main(args) -> int:
         machine["gl_version"] = gl_info.get("gl_version")
     gl_line = ""
     if backend != "jax":
-        gl_line = ("\nGL: " + (f"{gl_info['gl_renderer']} ({gl_info['gl_version']})"
-                               if gl_info else next((r["gl"]["error"] for r in results
-                                                     if r.get("gl", {}).get("error")), "-")))
-    header = (f"hairjax bench ({backend}): median of {repeats} run(s) after 1 warm-up; "
-              f"{machine['platform']}, {machine['cpu_count']} CPUs, "
-              f"jax {machine['jax_version']} ({machine['jax_backend']}, {dtype})\n"
-              f"scene: fur balls of {POINTS}-point strands, directional light, bins ordering "
-              f"({ORDERING_BINS}), camera eye {EYE} target {TARGET} fov {FOV:g}{gl_line}")
+        gl_line = "\nGL: " + (
+            f"{gl_info['gl_renderer']} ({gl_info['gl_version']})"
+            if gl_info
+            else next((r["gl"]["error"] for r in results if r.get("gl", {}).get("error")), "-")
+        )
+    header = (
+        f"hairjax bench ({backend}): median of {repeats} run(s) after 1 warm-up; "
+        f"{machine['platform']}, {machine['cpu_count']} CPUs, "
+        f"jax {machine['jax_version']} ({machine['jax_backend']}, {dtype})\n"
+        f"scene: fur balls of {POINTS}-point strands, directional light, bins ordering "
+        f"({ORDERING_BINS}), camera eye {EYE} target {TARGET} fov {FOV:g}{gl_line}"
+    )
     print()
     print(format_table(configs, results, header))
     print(f"\ntotal {time.perf_counter() - started:.1f} s")
@@ -165,15 +169,28 @@ def bench_main(args) -> int:
             "repeats": repeats,
             "warmup_runs": 1,
             "machine": machine,
-            "targets": dict(TARGETS, full_render_config={
-                "strands": FULL_RENDER_TARGET_CONFIG[0], "size": FULL_RENDER_TARGET_CONFIG[1]},
-                jax_over_gl=GL_TARGET_RATIO),
+            "targets": dict(
+                TARGETS,
+                full_render_config={
+                    "strands": FULL_RENDER_TARGET_CONFIG[0],
+                    "size": FULL_RENDER_TARGET_CONFIG[1],
+                },
+                jax_over_gl=GL_TARGET_RATIO,
+            ),
             "kim_2003_segments_per_s": KIM_2003_SEGMENTS_PER_S,
             "configurations": [
-                {"name": config_name(c), "strands": c["strands"], "points_per_strand": POINTS,
-                 "width": c["size"], "height": c["size"], "maps": c["maps"],
-                 "map_resolution": c["map_resolution"], "light": "directional",
-                 "camera": {"eye": EYE, "target": TARGET, "fov": FOV}, **r}
+                {
+                    "name": config_name(c),
+                    "strands": c["strands"],
+                    "points_per_strand": POINTS,
+                    "width": c["size"],
+                    "height": c["size"],
+                    "maps": c["maps"],
+                    "map_resolution": c["map_resolution"],
+                    "light": "directional",
+                    "camera": {"eye": EYE, "target": TARGET, "fov": FOV},
+                    **r,
+                }
                 for c, r in zip(configs, results)
             ],
         }
@@ -181,6 +198,7 @@ def bench_main(args) -> int:
         print(f"wrote {args.json}")
     # Running out of memory is a property of the machine, not a failure of the benchmark.
     # So is a machine without OpenGL ("unavailable"); a GL error is a failure.
-    failed = any(r["status"] not in ("ok", "MemoryError")
-                 or r.get("gl", {}).get("status") == "error" for r in results)
+    failed = any(
+        r["status"] not in ("ok", "MemoryError") or r.get("gl", {}).get("status") == "error" for r in results
+    )
     return 1 if failed else 0

@@ -3,8 +3,17 @@ the targets the table marks, and the names of the stages (BENCHMARKS.md)."""
 
 from __future__ import annotations
 
-__all__ = ["configurations", "config_name", "bench_scene", "TARGETS", "STAGES", "STAGE_LABELS",
-           "GL_PASSES", "BACKENDS", "QUICK_REPEATS"]
+__all__ = [
+    "configurations",
+    "config_name",
+    "bench_scene",
+    "TARGETS",
+    "STAGES",
+    "STAGE_LABELS",
+    "GL_PASSES",
+    "BACKENDS",
+    "QUICK_REPEATS",
+]
 
 # Scene of the benchmark: the default scene's camera and light (hairjax/scenes/default.toml).
 EYE = (0.0, 0.3, 4.2)
@@ -17,9 +26,9 @@ ORDERING_BINS = 256
 KIM_2003_SEGMENTS_PER_S = 0.7e6
 
 TARGETS = {
-    "full_render_s": 2.0,            # 100k strands at 1024² (only that configuration)
-    "shading_s": 0.100,              # every configuration
-    "gradient_over_shading": 3.0,    # every configuration
+    "full_render_s": 2.0,  # 100k strands at 1024² (only that configuration)
+    "shading_s": 0.100,  # every configuration
+    "gradient_over_shading": 3.0,  # every configuration
     "ordering_msegments_per_s": 20.0,  # every configuration
 }
 FULL_RENDER_TARGET_CONFIG = (100_000, 1024)
@@ -48,8 +57,9 @@ def configurations(quick: bool) -> list[dict]:
     """The benchmark configurations: fur balls × image sizes (`--quick`: one tiny one)."""
     if quick:
         return [dict(strands=2_000, size=128, maps=8, map_resolution=64)]
-    return [dict(strands=n, size=s, maps=64, map_resolution=256)
-            for n in (20_000, 100_000) for s in (512, 1024)]
+    return [
+        dict(strands=n, size=s, maps=64, map_resolution=256) for n in (20_000, 100_000) for s in (512, 1024)
+    ]
 
 
 def config_name(cfg: dict) -> str:
@@ -72,10 +82,10 @@ def bench_scene(cfg: dict):
         strands=hair,
         camera=Camera(eye=EYE, target=TARGET, fov=FOV, width=cfg["size"], height=cfg["size"]),
         light=Light(kind="directional", direction=(-0.6, -0.8, -0.5)),
-        shading=KajiyaKay(ShadingParams(kd=(0.55, 0.35, 0.2), ks=0.35, shininess=30.0, kappa=1.0,
-                                        ambient=0.05)),
-        shadows=Shadows(method="opacity-maps", maps=cfg["maps"],
-                        resolution=cfg["map_resolution"]),
+        shading=KajiyaKay(
+            ShadingParams(kd=(0.55, 0.35, 0.2), ks=0.35, shininess=30.0, kappa=1.0, ambient=0.05)
+        ),
+        shadows=Shadows(method="opacity-maps", maps=cfg["maps"], resolution=cfg["map_resolution"]),
         ordering=Ordering(method="bins", bins=ORDERING_BINS),
         background=(0.02, 0.02, 0.03),
         name="bench",

@@ -63,51 +63,109 @@ def format_table(configs: list[dict], results: list[dict], header: str) -> str:
         for key in substeps:
             rows.append(("  " + key.split("/", 1)[1], jax_cells(stage(key)), ""))
         rows.append((STAGE_LABELS["geometry_opacity"], jax_cells(stage("geometry_opacity")), ""))
-        rows.append((STAGE_LABELS["shading"],
-                     jax_cells(lambda c, r: _fmt_time(r["stages"]["shading"]["median_s"])
-                               + _mark(r["targets_met"].get("shading_s"))),
-                     f"<= {TARGETS['shading_s'] * 1e3:.0f} ms"))
+        rows.append(
+            (
+                STAGE_LABELS["shading"],
+                jax_cells(
+                    lambda c, r: (
+                        _fmt_time(r["stages"]["shading"]["median_s"])
+                        + _mark(r["targets_met"].get("shading_s"))
+                    )
+                ),
+                f"<= {TARGETS['shading_s'] * 1e3:.0f} ms",
+            )
+        )
         rows.append((STAGE_LABELS["gradient"], jax_cells(stage("gradient")), ""))
-        rows.append(("  gradient / shading",
-                     jax_cells(lambda c, r: f"{r['gradient_over_shading']:.2f}x"
-                               + _mark(r["targets_met"].get("gradient_over_shading"))),
-                     f"<= {TARGETS['gradient_over_shading']:g}x"))
-        rows.append((STAGE_LABELS["full_render"],
-                     jax_cells(lambda c, r: _fmt_time(r["stages"]["full_render"]["median_s"])
-                               + _mark(r["targets_met"].get("full_render_s"))),
-                     f"<= {TARGETS['full_render_s']:g} s at "
-                     f"{FULL_RENDER_TARGET_CONFIG[0] // 1000}k @ {FULL_RENDER_TARGET_CONFIG[1]}"))
-        rows.append(("ordering (M segments/s)",
-                     jax_cells(lambda c, r: f"{r['ordering']['msegments_per_s']:.1f}"
-                               + _mark(r["targets_met"].get("ordering_msegments_per_s"))),
-                     f">= {TARGETS['ordering_msegments_per_s']:g}"))
-        rows.append(("  speed-up over kim-2003",
-                     jax_cells(lambda c, r: f"{r['ordering']['speedup_over_kim_2003']:.0f}x"),
-                     "(0.7 M/s, P-III 700 MHz)"))
-        rows.append(("  segments ordered",
-                     jax_cells(lambda c, r: f"{r['ordering']['segments']:,}"), ""))
+        rows.append(
+            (
+                "  gradient / shading",
+                jax_cells(
+                    lambda c, r: (
+                        f"{r['gradient_over_shading']:.2f}x"
+                        + _mark(r["targets_met"].get("gradient_over_shading"))
+                    )
+                ),
+                f"<= {TARGETS['gradient_over_shading']:g}x",
+            )
+        )
+        rows.append(
+            (
+                STAGE_LABELS["full_render"],
+                jax_cells(
+                    lambda c, r: (
+                        _fmt_time(r["stages"]["full_render"]["median_s"])
+                        + _mark(r["targets_met"].get("full_render_s"))
+                    )
+                ),
+                f"<= {TARGETS['full_render_s']:g} s at "
+                f"{FULL_RENDER_TARGET_CONFIG[0] // 1000}k @ {FULL_RENDER_TARGET_CONFIG[1]}",
+            )
+        )
+        rows.append(
+            (
+                "ordering (M segments/s)",
+                jax_cells(
+                    lambda c, r: (
+                        f"{r['ordering']['msegments_per_s']:.1f}"
+                        + _mark(r["targets_met"].get("ordering_msegments_per_s"))
+                    )
+                ),
+                f">= {TARGETS['ordering_msegments_per_s']:g}",
+            )
+        )
+        rows.append(
+            (
+                "  speed-up over kim-2003",
+                jax_cells(lambda c, r: f"{r['ordering']['speedup_over_kim_2003']:.0f}x"),
+                "(0.7 M/s, P-III 700 MHz)",
+            )
+        )
+        rows.append(("  segments ordered", jax_cells(lambda c, r: f"{r['ordering']['segments']:,}"), ""))
         rows.append(("camera fragments", jax_cells(lambda c, r: f"{r['fragments']:,}"), ""))
-        rows.append(("shadow-map fragments",
-                     jax_cells(lambda c, r: "-" if r["shadow_fragments"] is None
-                               else f"{r['shadow_fragments']:,}"), ""))
+        rows.append(
+            (
+                "shadow-map fragments",
+                jax_cells(
+                    lambda c, r: "-" if r["shadow_fragments"] is None else f"{r['shadow_fragments']:,}"
+                ),
+                "",
+            )
+        )
     if have_gl:
         for key in GL_PASSES:
-            rows.append((f"GL {key}", gl_cells(
-                lambda c, r, key=key: _fmt_time(r["gl"]["passes"].get(key, {}).get("median_s"))),
-                ""))
-        rows.append(("GL full render",
-                     gl_cells(lambda c, r: _fmt_time(r["gl"]["full_render"]["median_s"])), ""))
+            rows.append(
+                (
+                    f"GL {key}",
+                    gl_cells(lambda c, r, key=key: _fmt_time(r["gl"]["passes"].get(key, {}).get("median_s"))),
+                    "",
+                )
+            )
+        rows.append(
+            ("GL full render", gl_cells(lambda c, r: _fmt_time(r["gl"]["full_render"]["median_s"])), "")
+        )
         if have_jax:
-            rows.append(("JAX / GL full render",
-                         cells(lambda c, r: f"{r['jax_over_gl']:.2f}x"
-                               + _mark(r["targets_met"].get("jax_over_gl"))
-                               if "jax_over_gl" in r else ""),
-                         f">= {GL_TARGET_RATIO:g}x at {FULL_RENDER_TARGET_CONFIG[0] // 1000}k @ "
-                         f"{FULL_RENDER_TARGET_CONFIG[1]}, 64 maps (GL no slower than JAX)"))
+            rows.append(
+                (
+                    "JAX / GL full render",
+                    cells(
+                        lambda c, r: (
+                            f"{r['jax_over_gl']:.2f}x" + _mark(r["targets_met"].get("jax_over_gl"))
+                            if "jax_over_gl" in r
+                            else ""
+                        )
+                    ),
+                    f">= {GL_TARGET_RATIO:g}x at {FULL_RENDER_TARGET_CONFIG[0] // 1000}k @ "
+                    f"{FULL_RENDER_TARGET_CONFIG[1]}, 64 maps (GL no slower than JAX)",
+                )
+            )
         rows.append(("GL status", [r.get("gl", {}).get("status", "-") for r in results], ""))
-    rows.append(("peak RSS",
-                 [f"{r['peak_rss_kib'] / 1024 ** 2:.2f} GiB" if r.get("peak_rss_kib") else "-"
-                  for r in results], ""))
+    rows.append(
+        (
+            "peak RSS",
+            [f"{r['peak_rss_kib'] / 1024**2:.2f} GiB" if r.get("peak_rss_kib") else "-" for r in results],
+            "",
+        )
+    )
     rows.append(("status", [r.get("status", "?") for r in results], ""))
 
     head = ("stage", names, "target")
@@ -125,8 +183,7 @@ def format_table(configs: list[dict], results: list[dict], header: str) -> str:
     out = [header, "", line(*head), "  ".join("-" * w for w in widths)]
     out += [line(*r) for r in rows]
     errors = [(n, r["error"]) for n, r in zip(names, results) if r.get("error")]
-    errors += [(n, r["gl"]["error"]) for n, r in zip(names, results)
-               if r.get("gl", {}).get("error")]
+    errors += [(n, r["gl"]["error"]) for n, r in zip(names, results) if r.get("gl", {}).get("error")]
     if errors:
         out.append("")
         out += [f"{n}: {e}" for n, e in errors]

@@ -61,7 +61,9 @@ def measure_gl(scene, repeats: int, progress) -> dict:
         for key, value in result.timings.items():
             passes.setdefault(key, []).append(value)
     return {
-        "status": "ok", "error": None, **info,
+        "status": "ok",
+        "error": None,
+        **info,
         "full_render": {"median_s": _median(total), "runs_s": total},
         "passes": {k: {"median_s": _median(v), "runs_s": v} for k, v in passes.items()},
         "image_finite": bool(np.all(np.isfinite(result.image))),
@@ -85,8 +87,7 @@ def _measure(cfg: dict, repeats: int, progress) -> dict:
         return out
     out.update(_measure_jax(scene, repeats, progress))
     if out.get("gl", {}).get("status") == "ok":
-        out["jax_over_gl"] = (out["stages"]["full_render"]["median_s"]
-                              / out["gl"]["full_render"]["median_s"])
+        out["jax_over_gl"] = out["stages"]["full_render"]["median_s"] / out["gl"]["full_render"]["median_s"]
     return out
 
 
@@ -104,8 +105,7 @@ def _measure_jax(scene, repeats: int, progress) -> dict:
 
     # One run is `render_profiled`: it clears the scene's cached set-up and geometry, then
     # times prepare, geometry_stage and shading_stage, blocking between them.
-    runs: dict[str, list[float]] = {k: [] for k in ("geometry_setup", "geometry_opacity",
-                                                    "full_render")}
+    runs: dict[str, list[float]] = {k: [] for k in ("geometry_setup", "geometry_opacity", "full_render")}
     substeps: dict[str, list[float]] = {}
     progress("warm-up run (compiles)")
     image, _ = render_profiled(scene)
@@ -134,18 +134,21 @@ def _measure_jax(scene, repeats: int, progress) -> dict:
     # Gradient of an image loss with respect to the shading parameters, geometry reused.
     # The geometry is an argument rather than a closed-over constant, so that XLA does not
     # embed tens of millions of fragments in the compiled program.
-    target = jax.block_until_ready(shading_stage(
-        geom, ShadingParams(kd=(0.4, 0.3, 0.25), ks=0.5, shininess=20.0, kappa=1.5,
-                            ambient=params.ambient)))
+    target = jax.block_until_ready(
+        shading_stage(
+            geom,
+            ShadingParams(kd=(0.4, 0.3, 0.25), ks=0.5, shininess=20.0, kappa=1.5, ambient=params.ambient),
+        )
+    )
 
     def loss(sub, geometry, target_image):
-        p = ShadingParams(kd=sub["kd"], ks=sub["ks"], shininess=sub["shininess"],
-                          kappa=sub["kappa"], ambient=params.ambient)
+        p = ShadingParams(
+            kd=sub["kd"], ks=sub["ks"], shininess=sub["shininess"], kappa=sub["kappa"], ambient=params.ambient
+        )
         return jnp.sum((shading_stage(geometry, p) - target_image) ** 2)
 
     grad_fn = jax.jit(jax.grad(loss))
-    sub = {"kd": params.kd, "ks": params.ks, "shininess": params.shininess,
-           "kappa": params.kappa}
+    sub = {"kd": params.kd, "ks": params.ks, "shininess": params.shininess, "kappa": params.kappa}
     progress("gradient (compiles, then warm calls)")
     grads = jax.block_until_ready(grad_fn(sub, geom, target))
     runs["gradient"] = []
@@ -187,8 +190,7 @@ def _measure_jax(scene, repeats: int, progress) -> dict:
         "points": int(scene.strands.num_points),
         "segments": int(len(segments)),
         "fragments": int(len(setup.frag_pixel)),
-        "shadow_fragments": (None if setup.shadow is None
-                             else int(len(setup.shadow.frag_coverage))),
+        "shadow_fragments": (None if setup.shadow is None else int(len(setup.shadow.frag_coverage))),
         "image_finite": bool(jnp.all(jnp.isfinite(image))),
         "dtype": str(image.dtype),
     }
@@ -223,8 +225,7 @@ def child_main(argv) -> int:
     except Exception as err:  # reported in the table; the parent exits non-zero
         # XLA reports an allocation failure as a RuntimeError "RESOURCE_EXHAUSTED".
         oom = "RESOURCE_EXHAUSTED" in str(err) or "out of memory" in str(err).lower()
-        result.update(status="MemoryError" if oom else "error",
-                      error=f"{type(err).__name__}: {err}"[:2000])
+        result.update(status="MemoryError" if oom else "error", error=f"{type(err).__name__}: {err}"[:2000])
     import jax
 
     result["wall_s"] = time.perf_counter() - start

@@ -74,13 +74,15 @@ def compare(scene: Scene, repeats: int = 3) -> dict:
 def format_report(r: dict) -> str:
     # GL reports no Ω without shadows, and for hair patches (it shades them with JAX's colours).
     tau = "n/a (no Ω from GL)" if r["tau_max_abs"] is None else f"{r['tau_max_abs']:.3g}"
-    return "\n".join([
-        f"{r['scene']} ({r['size'][0]}x{r['size'][1]}): GL vs JAX",
-        f"  max abs difference   {r['max_abs']:.3g}",
-        f"  RMSE                 {r['rmse']:.3g}",
-        f"  PSNR                 {r['psnr_db']:.1f} dB",
-        f"  pixels > 1e-4        {100 * r['share_over_1e-4']:.4f} %",
-        f"  max |Δτ| per point   {tau}",
-        f"  time, JAX (full)     {r['jax_s']:.3f} s  (median of {r['repeats']})",
-        f"  time, GL             {r['gl_s']:.3f} s  (ratio JAX/GL {r['jax_s'] / r['gl_s']:.2f})",
-    ])
+    return "\n".join(
+        [
+            f"{r['scene']} ({r['size'][0]}x{r['size'][1]}): GL vs JAX",
+            f"  max abs difference   {r['max_abs']:.3g}",
+            f"  RMSE                 {r['rmse']:.3g}",
+            f"  PSNR                 {r['psnr_db']:.1f} dB",
+            f"  pixels > 1e-4        {100 * r['share_over_1e-4']:.4f} %",
+            f"  max |Δτ| per point   {tau}",
+            f"  time, JAX (full)     {r['jax_s']:.3f} s  (median of {r['repeats']})",
+            f"  time, GL             {r['gl_s']:.3f} s  (ratio JAX/GL {r['jax_s'] / r['gl_s']:.2f})",
+        ]
+    )

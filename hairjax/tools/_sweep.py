@@ -27,80 +27,15 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from .._geometry._ordering import Ordering
-from .._geometry._shadows import Shadows
 from .._io._files import atomic_path, write_json, write_text
 from .._scene._scene import Scene
 from .._supersample import supersample
 from ._compare import image_stats
+from ._knobs import KNOBS, SHADOW_KNOBS, SweepError, knob_scene, reference_scene
 
-__all__ = ["KNOBS", "QUICK_KNOBS", "PATHS", "SweepError", "run_sweep", "load_points", "knob_scene"]
+__all__ = ["PATHS", "run_sweep", "load_points", "scene_digest"]
 
-KNOBS: dict[str, tuple] = {
-    "maps": (1, 2, 4, 8, 16, 32, 64, 128, 256, 512),
-    "map_resolution": (64, 128, 256, 512, 1024, 2048),
-    "bins": (1, 4, 16, 64, 256, 1024, 4096, "exact"),
-    "width": (0.25, 0.5, 1.0, 2.0, 4.0),
-    "supersampling": (1, 2, 3, 4),
-}
-# A few values per knob, for a smoke test and the notebook's test run.
-QUICK_KNOBS: dict[str, tuple] = {
-    "maps": (1, 4, 16),
-    "map_resolution": (32, 64),
-    "bins": (1, 16, "exact"),
-    "width": (0.5, 1.0, 2.0),
-    "supersampling": (1, 2),
-}
 PATHS = ("jax", "gl")
-_SHADOW_KNOBS = ("maps", "map_resolution")
-
-
-class SweepError(ValueError):
-    """Bad sweep input, or an output folder that holds a different sweep."""
-
-
-def _with_width(scene: Scene, factor: float) -> Scene:
-    """Ribbons `factor` times as wide and as much more transparent (the same hair mass)."""
-    strands = scene.strands
-    return scene.replace(strands=strands.replace(width=strands.width * factor,
-                                                 alpha=np.minimum(strands.alpha / factor, 1.0)))
-
-
-# Each knob: (scene, value) → (scene, supersampling factor). A `bins` value is a bin
-# count, or the name of a registered ordering (e.g. "exact") to draw with instead.
-def _with_shadow_option(scene: Scene, key: str, value: int) -> Scene:
-    """Through the registry: a shadow method without the option is a SceneError naming it."""
-    options = {**dataclasses.asdict(scene.shadows), key: int(value)}
-    return scene.replace(shadows=Shadows(scene.shadows.method, **options))
-
-
-_KNOB_SETTERS: dict[str, Callable] = {
-    "maps": lambda s, v: (_with_shadow_option(s, "maps", v), 1),
-    "map_resolution": lambda s, v: (_with_shadow_option(s, "resolution", v), 1),
-    "bins": lambda s, v: (s.replace(ordering=Ordering(v) if isinstance(v, str) else Ordering("bins", int(v))), 1),
-    "width": lambda s, v: (_with_width(s, float(v)), 1),
-    "supersampling": lambda s, v: (s, int(v)),
-}
-
-
-def knob_scene(scene: Scene, knob: str, value) -> tuple[Scene, int]:
-    """The scene with one knob set, and the supersampling factor to render it with."""
-    if knob not in _KNOB_SETTERS:
-        raise SweepError(f"unknown knob {knob!r}; knobs: {', '.join(KNOBS)}")
-    return _KNOB_SETTERS[knob](scene, value)
-
-
-def reference_scene(scene: Scene, knobs: dict) -> tuple[Scene, int]:
-    """Exact shadows (when the scene has shadows) at the scene's map resolution, exact
-    ordering, the finest supersampling swept.
-
-    The resolution stays the scene's: ribbons are w texels wide in the light's view
-    (docs/model.md §7), so a finer map draws thinner hair and Ω does not converge as the
-    resolution grows; the `map_resolution` knob shows how far it moves instead."""
-    shadows = (Shadows("exact", resolution=scene.shadows.resolution) if scene.shadows.casts
-               else scene.shadows)
-    s = max(knobs.get("supersampling", (1,)))
-    return scene.replace(shadows=shadows, ordering=Ordering("exact")), int(s)
 
 
 def _renderer(path: str) -> Callable[[Scene], tuple[np.ndarray, np.ndarray | None]]:
@@ -152,8 +87,13 @@ def _measure(run, scene: Scene, s: int, repeats: int):
 
 def _errors(image: np.ndarray, omega, reference: dict, kappa: float) -> dict:
     stats = image_stats(image[..., :3], reference["image"][..., :3])
-    out = {"rmse": stats["rmse"], "max_abs": stats["max_abs"],
-           "rel_rmse": stats["rmse"] / reference["peak"], "tau_rmse": None, "tau_max": None}
+    out = {
+        "rmse": stats["rmse"],
+        "max_abs": stats["max_abs"],
+        "rel_rmse": stats["rmse"] / reference["peak"],
+        "tau_rmse": None,
+        "tau_max": None,
+    }
     if omega is not None and reference["omega"] is not None:
         # τ = exp(−κΩ) (`transmittance`, §7) in float64 NumPy: the error measure stays
         # outside JAX's working precision.
@@ -172,11 +112,29 @@ def scene_digest(scene: Scene) -> str:
     for a in (s.points, s.offsets, s.alpha, s.width, s.color, *mesh):
         if a is not None:
             h.update(np.ascontiguousarray(a).tobytes())
-    h.update(repr((scene.camera, scene.light, scene.shading.name, scene.shadows, scene.ordering,
-                   scene.occluder, scene.background)).encode())
+    h.update(
+        repr(
+            (
+                scene.camera,
+                scene.light,
+                scene.shading.name,
+                scene.shadows,
+                scene.ordering,
+                scene.occluder,
+                scene.background,
+            )
+        ).encode()
+    )
     # The model's configuration (a table size, §17's maps) and its parameters' values.
-    h.update(repr([(f.name, getattr(scene.shading, f.name)) for f in dataclasses.fields(scene.shading)
-                   if f.name != "params"]).encode())
+    h.update(
+        repr(
+            [
+                (f.name, getattr(scene.shading, f.name))
+                for f in dataclasses.fields(scene.shading)
+                if f.name != "params"
+            ]
+        ).encode()
+    )
     for leaf in jax.tree_util.tree_leaves(scene.params):
         h.update(np.asarray(leaf, np.float64).tobytes())
     if scene.streaks is not None:  # §16
@@ -216,8 +174,10 @@ def _check_config(out: Path, config: dict, restart: bool) -> None:
         old = json.loads(path.read_text())
         same = {k: old.get(k) for k in ("scene_digest", "repeats", "reference")}
         if same != {k: config[k] for k in same}:
-            raise SweepError(f"{out} holds a sweep of other settings ({old.get('scene')}, "
-                             f"repeats {old.get('repeats')}); choose another --out or pass --restart")
+            raise SweepError(
+                f"{out} holds a sweep of other settings ({old.get('scene')}, "
+                f"repeats {old.get('repeats')}); choose another --out or pass --restart"
+            )
     if restart:
         for name in ("points.jsonl", *[f"reference_{p}.npz" for p in PATHS]):
             (out / name).unlink(missing_ok=True)
@@ -230,8 +190,12 @@ def _reference(out: Path, path: str, run, scene: Scene, knobs: dict, repeats: in
     if file.exists():
         data = np.load(file)
         omega = data["omega"] if data["omega"].size else None
-        return {"image": data["image"], "omega": omega, "peak": float(data["peak"]),
-                "time_s": float(data["time_s"])}
+        return {
+            "image": data["image"],
+            "omega": omega,
+            "peak": float(data["peak"]),
+            "time_s": float(data["time_s"]),
+        }
     ref_scene, s = reference_scene(scene, knobs)
     # Rendered once, untimed beyond that one run: its image is what the points need, and at
     # s² exact-shadow renders it is the sweep's most expensive setting.
@@ -247,13 +211,20 @@ def _reference(out: Path, path: str, run, scene: Scene, knobs: dict, repeats: in
     omega = None if omega is None else np.asarray(omega, np.float64)
     with atomic_path(file, ".npz") as tmp:
         with open(tmp, "wb") as f:
-            np.savez(f, image=image, omega=np.zeros(0) if omega is None else omega, peak=peak,
-                     time_s=median)
+            np.savez(f, image=image, omega=np.zeros(0) if omega is None else omega, peak=peak, time_s=median)
     return {"image": image, "omega": omega, "peak": peak, "time_s": median}
 
 
-def run_sweep(scene: Scene, out, *, knobs: dict | None = None, paths: Sequence[str] = PATHS,
-              repeats: int = 3, restart: bool = False, progress: bool = True) -> list[dict]:
+def run_sweep(
+    scene: Scene,
+    out,
+    *,
+    knobs: dict | None = None,
+    paths: Sequence[str] = PATHS,
+    repeats: int = 3,
+    restart: bool = False,
+    progress: bool = True,
+) -> list[dict]:
     """Sweep `knobs` (name → values; default `KNOBS`) for `paths` and return all points.
 
     A point is a dict: path, knob, value, and either `skipped` (why the renderer refused
@@ -272,23 +243,34 @@ def run_sweep(scene: Scene, out, *, knobs: dict | None = None, paths: Sequence[s
         raise SweepError(f"repeats must be at least 1, got {repeats}")
     if not scene.shadows.casts:
         # A scene without shadows has no shadow knobs to turn.
-        knobs = {k: v for k, v in knobs.items() if k not in _SHADOW_KNOBS}
+        knobs = {k: v for k, v in knobs.items() if k not in SHADOW_KNOBS}
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    config = {"scene": scene.name, "scene_digest": scene_digest(scene), "repeats": repeats,
-              "reference": {"shadows": ("none" if not scene.shadows.casts
-                                        else f"exact at {scene.shadows.resolution}²"),
-                            "ordering": "exact",
-                            "supersampling": int(max(knobs.get("supersampling", (1,))))},
-              "knobs": {k: list(v) for k, v in knobs.items()}, "paths": list(paths),
-              "size": [scene.camera.width, scene.camera.height]}
+    config = {
+        "scene": scene.name,
+        "scene_digest": scene_digest(scene),
+        "repeats": repeats,
+        "reference": {
+            "shadows": ("none" if not scene.shadows.casts else f"exact at {scene.shadows.resolution}²"),
+            "ordering": "exact",
+            "supersampling": int(max(knobs.get("supersampling", (1,)))),
+        },
+        "knobs": {k: list(v) for k, v in knobs.items()},
+        "paths": list(paths),
+        "size": [scene.camera.width, scene.camera.height],
+    }
     _check_config(out, config, restart)
 
     finished = load_points(out)
     _rewrite(out, finished)  # drops a line cut short, so the next append starts a fresh line
     done = {(p["path"], p["knob"], json.dumps(p["value"])) for p in finished}
-    todo = [(path, knob, value) for path in paths for knob, values in knobs.items()
-            for value in values if (path, knob, json.dumps(value)) not in done]
+    todo = [
+        (path, knob, value)
+        for path in paths
+        for knob, values in knobs.items()
+        for value in values
+        if (path, knob, json.dumps(value)) not in done
+    ]
     kappa = float(np.asarray(scene.params.kappa))
     with _progress(progress, len(todo), len(done)) as advance:
         runs = {}
@@ -308,8 +290,14 @@ def run_sweep(scene: Scene, out, *, knobs: dict | None = None, paths: Sequence[s
                 _append(out, {"path": path, "knob": knob, "value": value, "skipped": str(err)})
                 advance(None)
                 continue
-            point = {"path": path, "knob": knob, "value": value, "time_s": median, "times": times,
-                     **_errors(image, omega, references[path], kappa)}
+            point = {
+                "path": path,
+                "knob": knob,
+                "value": value,
+                "time_s": median,
+                "times": times,
+                **_errors(image, omega, references[path], kappa),
+            }
             _append(out, point)
             advance(None)
     return load_points(out)
@@ -326,8 +314,9 @@ class _progress:
             return lambda label: None
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-        self.bar = Progress(TextColumn("{task.description:<28}"), BarColumn(), MofNCompleteColumn(),
-                            TimeElapsedColumn())
+        self.bar = Progress(
+            TextColumn("{task.description:<28}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn()
+        )
         self.bar.start()
         if self.done:
             self.bar.console.print(f"resuming: {self.done} points already done")

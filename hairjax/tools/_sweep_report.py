@@ -18,8 +18,11 @@ _COLUMNS = ("path", "knob", "value", "time_s", "rmse", "rel_rmse", "max_abs", "t
 
 def cheapest(points: list[dict], threshold: float, path: str, knob: str | None = None) -> dict | None:
     """The fastest point of `path` (and `knob`) whose relative RMSE is at most `threshold`."""
-    ok = [p for p in _measured(points) if p["path"] == path and (knob is None or p["knob"] == knob)
-          and p["rel_rmse"] <= threshold]
+    ok = [
+        p
+        for p in _measured(points)
+        if p["path"] == path and (knob is None or p["knob"] == knob) and p["rel_rmse"] <= threshold
+    ]
     return min(ok, key=lambda p: p["time_s"], default=None)
 
 
@@ -39,12 +42,16 @@ def summary_markdown(points: list[dict], config: dict) -> str:
     """Markdown: the settings, the cheapest settings reaching each threshold, the table."""
     ref = config["reference"]
     paths = [p for p in config["paths"] if any(q["path"] == p for q in points)]
-    lines = [f"# Sweep of `{config['scene']}` ({config['size'][0]}×{config['size'][1]})", "",
-             f"Reference per path: shadows {ref['shadows']}, ordering {ref['ordering']}, "
-             f"supersampling {ref['supersampling']}×{ref['supersampling']}. One knob changes at a "
-             "time, the others keep the scene's settings, so each curve levels off at the error "
-             "of the settings it does not change. Relative RMSE = RMSE / the reference's peak "
-             f"value; times are medians of {config['repeats']} renders after a warm-up.", ""]
+    lines = [
+        f"# Sweep of `{config['scene']}` ({config['size'][0]}×{config['size'][1]})",
+        "",
+        f"Reference per path: shadows {ref['shadows']}, ordering {ref['ordering']}, "
+        f"supersampling {ref['supersampling']}×{ref['supersampling']}. One knob changes at a "
+        "time, the others keep the scene's settings, so each curve levels off at the error "
+        "of the settings it does not change. Relative RMSE = RMSE / the reference's peak "
+        f"value; times are medians of {config['repeats']} renders after a warm-up.",
+        "",
+    ]
     for t in THRESHOLDS:
         lines.append(f"## Cheapest settings reaching {t:.1%} relative RMSE")
         lines.append("")
@@ -69,8 +76,9 @@ def summary_markdown(points: list[dict], config: dict) -> str:
         lines.append("")
     lines += ["## All points", "", "| " + " | ".join(_COLUMNS) + " |", "|---" * len(_COLUMNS) + "|"]
     for p in _sorted(_measured(points), config):
-        lines.append("| " + " | ".join(_fmt(p.get(c)) if c != "value" else str(p["value"])
-                                       for c in _COLUMNS) + " |")
+        lines.append(
+            "| " + " | ".join(_fmt(p.get(c)) if c != "value" else str(p["value"]) for c in _COLUMNS) + " |"
+        )
     return "\n".join(lines) + "\n"
 
 
@@ -80,9 +88,11 @@ def _sorted(points: list[dict], config: dict) -> list[dict]:
     def key(p):
         values = order.get(p["knob"], [])
         v = json.dumps(p["value"])
-        return (config["paths"].index(p["path"]) if p["path"] in config["paths"] else 99,
-                list(config["knobs"]).index(p["knob"]) if p["knob"] in config["knobs"] else 99,
-                values.index(v) if v in values else 99)
+        return (
+            config["paths"].index(p["path"]) if p["path"] in config["paths"] else 99,
+            list(config["knobs"]).index(p["knob"]) if p["knob"] in config["knobs"] else 99,
+            values.index(v) if v in values else 99,
+        )
 
     return sorted(points, key=key)
 
@@ -105,11 +115,18 @@ def pareto_plot(points: list[dict], config: dict, path) -> Path:
                 continue
             x = [p["time_s"] for p in pts]
             y = [max(p["rel_rmse"], floor) for p in pts]
-            ax.plot(x, y, styles.get(p_name, ":"), marker="o", ms=3, color=colors[knob],
-                    label=f"{p_name}: {knob}")
+            ax.plot(
+                x, y, styles.get(p_name, ":"), marker="o", ms=3, color=colors[knob], label=f"{p_name}: {knob}"
+            )
             for p, xi, yi in zip(pts, x, y):
-                ax.annotate(str(p["value"]), (xi, yi), fontsize=6, xytext=(2, 2),
-                            textcoords="offset points", color=colors[knob])
+                ax.annotate(
+                    str(p["value"]),
+                    (xi, yi),
+                    fontsize=6,
+                    xytext=(2, 2),
+                    textcoords="offset points",
+                    color=colors[knob],
+                )
     for t in THRESHOLDS:
         ax.axhline(t, color="grey", lw=0.6, ls=":")
     ax.set_xscale("log")

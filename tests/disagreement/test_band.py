@@ -26,12 +26,15 @@ def omega_scene() -> hj.Scene:
     """300 strands from one root: with llvmpipe, GL's float32 puts one point's Ω on the
     other side of a light-side boundary, which changes 8 pixels by up to 0.03 where no
     camera-side boundary is (found by trying seeds)."""
-    return hj.Scene(hj.furball(300, 8, seed=1, alpha=0.5),
-                    camera=hj.Camera(eye=(0, 0.3, 3.5), width=48, height=48),
-                    light=hj.Light(direction=(-0.5, -0.7, -0.4)),
-                    shading=hj.KajiyaKay(hj.ShadingParams(kd=(0.6, 0.4, 0.3), ks=0.4, shininess=20.0, kappa=2.0,
-                                            ambient=0.05)),
-                    shadows=hj.Shadows("opacity-maps", 16, 64))
+    return hj.Scene(
+        hj.furball(300, 8, seed=1, alpha=0.5),
+        camera=hj.Camera(eye=(0, 0.3, 3.5), width=48, height=48),
+        light=hj.Light(direction=(-0.5, -0.7, -0.4)),
+        shading=hj.KajiyaKay(
+            hj.ShadingParams(kd=(0.6, 0.4, 0.3), ks=0.4, shininess=20.0, kappa=2.0, ambient=0.05)
+        ),
+        shadows=hj.Shadows("opacity-maps", 16, 64),
+    )
 
 
 SCENES = {
@@ -126,10 +129,19 @@ def test_transmittance_uncertainty_is_the_sup_over_kappa():
     omega = np.array([0.01, 0.5, 3.0, 50.0, 0.01, 0.5, 3.0, 50.0, 3.0])
     d = np.array([1e-3, 1e-3, 1e-3, 1e-3, 5e-3, 0.3, 1.0, 20.0, 1e-7])
     # Ω' anywhere in [Ω − d, Ω + d]: the sup over κ grows with |Ω − Ω'|, so the ends.
-    brute = np.max([np.abs(np.exp(-kappa * omega) - np.exp(-kappa * other)).max(axis=0)
-                    for other in (omega - d, omega + d)], axis=0)
+    brute = np.max(
+        [
+            np.abs(np.exp(-kappa * omega) - np.exp(-kappa * other)).max(axis=0)
+            for other in (omega - d, omega + d)
+        ],
+        axis=0,
+    )
     np.testing.assert_allclose(transmittance_uncertainty(omega, d), brute, rtol=1e-6)
-    np.testing.assert_allclose(transmittance_uncertainty(omega[:3], d[:3]), d[:3] / (np.e * omega[:3]),
-                               rtol=0.1)
+    np.testing.assert_allclose(
+        transmittance_uncertainty(omega[:3], d[:3]), d[:3] / (np.e * omega[:3]), rtol=0.1
+    )
     assert transmittance_uncertainty(np.array([0.2, 0.2, 0.0]), np.array([0.2, 0.3, 0.0])).tolist() == [
-        1.0, 1.0, 0.0]
+        1.0,
+        1.0,
+        0.0,
+    ]

@@ -44,15 +44,17 @@ def test_judge_statuses():
     # An undetermined parameter is not judged by its error, but unexpected it is a failure.
     status, failure, _ = judge("converged", {**good, "ks": 1.0}, fitted, ("ks",), (), 1e-2)
     assert status.startswith("wrong:") and "ks undetermined" in status and failure
-    status, failure, _ = judge("converged", {**good, "shininess": 50.0}, fitted, ("shininess",),
-                               ("shininess",), 1e-2)
+    status, failure, _ = judge(
+        "converged", {**good, "shininess": 50.0}, fitted, ("shininess",), ("shininess",), 1e-2
+    )
     assert status == "converged" and not failure
     # Undetermined but at the truth (Ks → 0 when the truth is 0): not wrong.
     status, failure, worst = judge("converged", good, fitted, ("ks",), (), 1e-2)
     assert status == "converged" and not failure and worst == 5e-3
     # A clear stop is not a failure, even off the truth; a missing expected flag is noted.
-    status, failure, _ = judge("stopped: reached max_steps = 9", {**good, "kd": 0.3}, fitted, (),
-                               ("shininess",), 1e-2)
+    status, failure, _ = judge(
+        "stopped: reached max_steps = 9", {**good, "kd": 0.3}, fitted, (), ("shininess",), 1e-2
+    )
     assert status.startswith("stopped: reached max_steps") and "not reported undetermined" in status
     assert not failure
     # A NaN error is never "within the bound".

@@ -32,7 +32,7 @@ def test_fit_slope():
     maps_vs_time = load_experiment("05_maps_vs_time")
     maps = [1, 2, 4, 8, 16, 32, 64]
     assert maps_vs_time.fit_slope(maps, [0.5 * n for n in maps]) == pytest.approx(1.0)
-    assert maps_vs_time.fit_slope(maps, [n ** 0.5 for n in maps]) == pytest.approx(0.5)
+    assert maps_vs_time.fit_slope(maps, [n**0.5 for n in maps]) == pytest.approx(0.5)
     assert math.isnan(maps_vs_time.fit_slope([1, 16], [1.0, 2.0]))  # one point >= 16
 
 
@@ -41,7 +41,8 @@ def test_maps_vs_time_tiny(tmp_path, capsys, gl):
     scene.write_text(TINY_SCENE)
     out = tmp_path / "out"
     status = load_experiment("05_maps_vs_time").main(
-        ["--scene", str(scene), "--maps", "1,4", "--repeats", "1", "--out", str(out)])
+        ["--scene", str(scene), "--maps", "1,4", "--repeats", "1", "--out", str(out)]
+    )
     assert status == 0
     printed = capsys.readouterr().out
     assert "slope" in printed

@@ -34,8 +34,9 @@ def test_turned_camera_keeps_distance_height_and_target():
     import hairjax as hj
 
     module = load_experiment("06_order_reuse")
-    scene = hj.Scene(hj.furball(10, 3, seed=0),
-                     camera=hj.Camera(eye=(1.0, 0.5, 4.0), target=(1.0, -0.1, 0.0)))
+    scene = hj.Scene(
+        hj.furball(10, 3, seed=0), camera=hj.Camera(eye=(1.0, 0.5, 4.0), target=(1.0, -0.1, 0.0))
+    )
     view = module.turned(scene, 90.0)
     # By hand: turning (0, 0.6, 4) about y by +90° gives (4, 0.6, 0) (x = sin·z, z = cos·z).
     np.testing.assert_allclose(view.camera.eye, (1.0 + 4.0, 0.5, 0.0), atol=1e-12)
@@ -47,8 +48,8 @@ def test_image_difference_by_hand():
     module = load_experiment("06_order_reuse")
     a = np.zeros((2, 2, 4))
     b = np.zeros((2, 2, 4))
-    b[0, 0, 1] = 0.2   # one channel of one pixel
-    b[1, 1, 3] = 0.9   # alpha is not compared
+    b[0, 0, 1] = 0.2  # one channel of one pixel
+    b[1, 1, 3] = 0.9  # alpha is not compared
     d = module.image_difference(a, b)
     assert math.isclose(d["max_abs"], 0.2) and math.isclose(d["rmse"], math.sqrt(0.04 / 12))
     assert d["frac_visible"] == 0.25

@@ -9,12 +9,23 @@ from helpers import load_experiment
 def test_lookup_error_experiment_runs(tmp_path, capsys, gl):
     """experiments/08_lookup_error.py end to end on a tiny scene, both renderers."""
     scene = tmp_path / "tiny.toml"
-    scene.write_text('[hair]\nsource = "furball"\nstrands = 200\npoints = 6\n'
-                     '[shadows]\nmethod = "none"\n')
+    scene.write_text('[hair]\nsource = "furball"\nstrands = 200\npoints = 6\n[shadows]\nmethod = "none"\n')
     out = tmp_path / "out"
     status = load_experiment("08_lookup_error").main(
-        ["--scene", str(scene), "--size", "32", "--sizes", "4,64", "--repeats", "1", "--gl",
-         "--out", str(out)])
+        [
+            "--scene",
+            str(scene),
+            "--size",
+            "32",
+            "--sizes",
+            "4,64",
+            "--repeats",
+            "1",
+            "--gl",
+            "--out",
+            str(out),
+        ]
+    )
     assert status == 0 and "GL RMSE" in capsys.readouterr().out
     with open(out / "lookup_error.csv", newline="") as f:
         rows = list(csv.DictReader(f))

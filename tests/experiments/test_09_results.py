@@ -8,9 +8,15 @@ from helpers import REPO
 
 def test_results_page_is_complete():
     text = (REPO / "docs" / "results.md").read_text()
-    for heading in ("## 1. Error against run time", "## 2. kim-2003 Fig. 16", "## 3. kim-2003 Fig. 8",
-                    "## 4. kim-2003 §3", "## 5. Stiff fits", "Cheapest settings reaching 1.0%",
-                    "Cheapest settings reaching 0.1%"):
+    for heading in (
+        "## 1. Error against run time",
+        "## 2. kim-2003 Fig. 16",
+        "## 3. kim-2003 Fig. 8",
+        "## 4. kim-2003 §3",
+        "## 5. Stiff fits",
+        "Cheapest settings reaching 1.0%",
+        "Cheapest settings reaching 0.1%",
+    ):
         assert heading in text, heading
     for figure in re.findall(r"\]\((figures/[^)]+\.png)\)", text):
         assert (REPO / "docs" / figure).read_bytes()[:4] == b"\x89PNG", figure

@@ -50,8 +50,9 @@ def test_recovery_without_variable_projection(scene, target):
 def test_gains_alone_are_one_linear_solve(scene, target):
     """With p and κ held, the image is linear in Kd and Ks: the fit is a single solve that
     lands on the truth to rounding, from a start far off."""
-    start = hj.ShadingParams(kd=5.0, ks=1e-4, shininess=TRUE.shininess, kappa=TRUE.kappa,
-                             ambient=TRUE.ambient)
+    start = hj.ShadingParams(
+        kd=5.0, ks=1e-4, shininess=TRUE.shininess, kappa=TRUE.kappa, ambient=TRUE.ambient
+    )
     r = hj.fit(scene, target, fit=("kd", "ks"), init=start)
     assert r.steps == 1 and r.termination == "converged" and r.loss[1] < 1e-12 * r.loss[0]
     assert rel(r.params.kd, TRUE.kd) < 1e-6 and rel(r.params.ks, TRUE.ks) < 1e-6
@@ -91,8 +92,9 @@ def test_nnls_matches_scipy():
         assert np.all(got >= 0)
         # Compared by the residual norm (unique even where c is not); 1e-10: float64
         # rounding of 40-row sums, far below the differences between supports.
-        np.testing.assert_allclose(np.linalg.norm(phi @ got - rhs), np.linalg.norm(phi @ want - rhs),
-                                   rtol=1e-10)
+        np.testing.assert_allclose(
+            np.linalg.norm(phi @ got - rhs), np.linalg.norm(phi @ want - rhs), rtol=1e-10
+        )
         if trial % 5 != 2:
             np.testing.assert_allclose(got, want, atol=1e-10)
         else:
@@ -100,8 +102,9 @@ def test_nnls_matches_scipy():
 
 
 def test_subset_and_scalar(scene, target):
-    start = TRUE.__class__(kd=TRUE.kd, ks=0.1, shininess=TRUE.shininess, kappa=TRUE.kappa,
-                           ambient=TRUE.ambient)
+    start = TRUE.__class__(
+        kd=TRUE.kd, ks=0.1, shininess=TRUE.shininess, kappa=TRUE.kappa, ambient=TRUE.ambient
+    )
     r = hj.fit(scene, target, fit=("ks",), init=start, scalar=("ks",))
     assert rel(r.params.ks, TRUE.ks) < 1e-6
     np.testing.assert_array_equal(r.params.kd, TRUE.kd)  # held fixed
@@ -114,8 +117,9 @@ def test_fitting_kappa_alone_reuses_the_shading_terms(scene, target, monkeypatch
 
     original = kk.kajiya_kay_terms
     monkeypatch.setattr(kk, "kajiya_kay_terms", lambda *a: calls.append(1) or original(*a))
-    start = hj.ShadingParams(kd=TRUE.kd, ks=TRUE.ks, shininess=TRUE.shininess, kappa=0.5,
-                             ambient=TRUE.ambient)
+    start = hj.ShadingParams(
+        kd=TRUE.kd, ks=TRUE.ks, shininess=TRUE.shininess, kappa=0.5, ambient=TRUE.ambient
+    )
     r = hj.fit(scene, target, fit=("kappa",), init=start)
     assert rel(r.params.kappa, TRUE.kappa) < 1e-6
     # Traced when the terms were prepared (once to find what κ reaches, once for the
@@ -131,11 +135,9 @@ def test_several_targets_at_once(scene):
 
 
 def test_shininess_undetermined_without_specular(scene):
-    no_spec = hj.ShadingParams(kd=TRUE.kd, ks=0.0, shininess=25.0, kappa=TRUE.kappa,
-                               ambient=TRUE.ambient)
+    no_spec = hj.ShadingParams(kd=TRUE.kd, ks=0.0, shininess=25.0, kappa=TRUE.kappa, ambient=TRUE.ambient)
     target = np.asarray(hj.render(scene, no_spec))
-    start = hj.ShadingParams(kd=TRUE.kd, ks=0.0, shininess=80.0, kappa=TRUE.kappa,
-                             ambient=TRUE.ambient)
+    start = hj.ShadingParams(kd=TRUE.kd, ks=0.0, shininess=80.0, kappa=TRUE.kappa, ambient=TRUE.ambient)
     r = hj.fit(scene, target, fit=("shininess",), init=start)
     assert "shininess" in r.undetermined and r.std_error["shininess"] is None
     assert np.isfinite(float(r.params.shininess)) and all(np.isfinite(r.loss))
@@ -155,8 +157,7 @@ def test_a_parameter_without_effect_does_not_stop_the_solvers(scene, solver):
 
 
 def test_kappa_undetermined_when_everything_is_in_shadow(scene):
-    dark = hj.ShadingParams(kd=TRUE.kd, ks=TRUE.ks, shininess=TRUE.shininess, kappa=1e4,
-                            ambient=TRUE.ambient)
+    dark = hj.ShadingParams(kd=TRUE.kd, ks=TRUE.ks, shininess=TRUE.shininess, kappa=1e4, ambient=TRUE.ambient)
     target = np.asarray(hj.render(scene, dark))
     r = hj.fit(scene, target, fit=("kappa",), init=dark)
     assert "kappa" in r.undetermined
@@ -172,8 +173,9 @@ def test_standard_errors_with_noise(scene, target):
         se = np.asarray(r.std_error[name])
         assert np.all(se > 0) and np.all(np.isfinite(se))
         # The truth lies within 5 standard errors (Gaussian noise, a well-posed fit).
-        assert np.all(np.abs(np.asarray(getattr(r.params, name)) - np.asarray(getattr(TRUE, name)))
-                      < 5 * se + 1e-12), name
+        assert np.all(
+            np.abs(np.asarray(getattr(r.params, name)) - np.asarray(getattr(TRUE, name))) < 5 * se + 1e-12
+        ), name
 
 
 def test_standard_errors_equal_the_parameter_space_formula(scene, target):
@@ -188,8 +190,7 @@ def test_standard_errors_equal_the_parameter_space_formula(scene, target):
     r = hj.fit(scene, noisy, fit=names, init=INIT)
 
     def image(x):
-        p = hj.ShadingParams(kd=x[1:4], ks=r.params.ks, shininess=x[0], kappa=x[4],
-                             ambient=r.params.ambient)
+        p = hj.ShadingParams(kd=x[1:4], ks=r.params.ks, shininess=x[0], kappa=x[4], ambient=r.params.ambient)
         return hj.render(scene, p)[..., :3].ravel()
 
     x = jnp.concatenate([r.params.shininess[None], r.params.kd, r.params.kappa[None]])
@@ -216,8 +217,13 @@ def test_bfgs_on_a_faint_highlight_in_float32():
         scene = small_furball_scene(strands=400, size=48)
         target = np.asarray(hj.render(scene, truth))
         assert target.dtype == np.float32
-        r = hj.fit(scene, target, solver="bfgs", max_steps=300,
-                   init=hj.ShadingParams(kd=0.5, ks=0.3, shininess=40.0, kappa=2.0))
+        r = hj.fit(
+            scene,
+            target,
+            solver="bfgs",
+            max_steps=300,
+            init=hj.ShadingParams(kd=0.5, ks=0.3, shininess=40.0, kappa=2.0),
+        )
     assert r.termination == "converged" and r.undetermined == ()
     # 1e-3: the issue's noise-free bound.
     for name in ("kd", "ks", "shininess", "kappa"):
@@ -249,19 +255,21 @@ def test_bfgs_update_satisfies_the_secant_equation_at_small_scale():
     s = jnp.asarray([1e-6, 2e-6, -1e-6])
     y = jnp.asarray([2e-6, 1e-6, -3e-6])  # sᵀy = 7e-12 > 0
     for _ in range(2):  # the first pair (H rescaled, then updated) and a second one
-        info, count = opt.update_hessian(z, z + s, info, optx.FunctionInfo.EvalGrad(1.0, g0 + y),
-                                         count)
+        info, count = opt.update_hessian(z, z + s, info, optx.FunctionInfo.EvalGrad(1.0, g0 + y), count)
         np.testing.assert_allclose(info.hessian.as_matrix() @ s, y, rtol=1e-9)
         z, g0 = z + s, g0 + y
         s, y = jnp.asarray([-1e-6, 1e-6, 2e-6]), jnp.asarray([-1e-6, 3e-6, 4e-6])
     assert int(count) == 3
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(fit=("kd", "gloss")), "unknown parameter 'gloss'"),
-    (dict(solver="adam"), "unknown solver"),
-    (dict(scalar=("kappa",)), "grey value"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(fit=("kd", "gloss")), "unknown parameter 'gloss'"),
+        (dict(solver="adam"), "unknown solver"),
+        (dict(scalar=("kappa",)), "grey value"),
+    ],
+)
 def test_bad_arguments(scene, target, kwargs, message):
     with pytest.raises(hj.FitError, match=message):
         hj.fit(scene, target, **kwargs)
@@ -284,12 +292,17 @@ def test_custom_jvp_matches_autodiff(scene, target, names):
     import jax
 
     terms = fit_terms(scene, INIT, names, target)
-    args = (jnp.asarray([0.3, 0.5, 0.2]), jnp.asarray([0.4, 0.4, 0.4]), jnp.asarray(25.0),
-            jnp.asarray(2.5))
-    tangent = (jnp.asarray([0.1, -0.2, 0.3]), jnp.asarray([0.5, 0.1, -0.1]), jnp.asarray(3.0),
-               jnp.asarray(-0.7))
-    tangent = tuple(t if n in names or n in ("kd", "ks") else jnp.zeros_like(t)
-                    for n, t in zip(("kd", "ks", "shininess", "kappa"), tangent))
+    args = (jnp.asarray([0.3, 0.5, 0.2]), jnp.asarray([0.4, 0.4, 0.4]), jnp.asarray(25.0), jnp.asarray(2.5))
+    tangent = (
+        jnp.asarray([0.1, -0.2, 0.3]),
+        jnp.asarray([0.5, 0.1, -0.1]),
+        jnp.asarray(3.0),
+        jnp.asarray(-0.7),
+    )
+    tangent = tuple(
+        t if n in names or n in ("kd", "ks") else jnp.zeros_like(t)
+        for n, t in zip(("kd", "ks", "shininess", "kappa"), tangent)
+    )
     f = lambda *a: fit_image(terms, *a, ambient=0.05)  # noqa: E731
     g = lambda *a: fit_image(terms, *a, ambient=0.05, plain=True)  # noqa: E731
     out_f, jvp_f = jax.jvp(f, args, tangent)
@@ -350,10 +363,12 @@ def _overflow_beyond_kappa_5(monkeypatch, scene):
         return jnp.where(params.kappa > 5.0, jnp.inf, original(terms, params))
 
     monkeypatch.setattr(_shading_fit, "fixed_image", overflowing)
-    start = hj.ShadingParams(kd=TRUE.kd, ks=TRUE.ks, shininess=TRUE.shininess, kappa=4.0,
-                             ambient=TRUE.ambient)
-    far = np.asarray(hj.render(scene, hj.ShadingParams(kd=TRUE.kd, ks=TRUE.ks,
-                                                        shininess=TRUE.shininess, kappa=40.0)))
+    start = hj.ShadingParams(
+        kd=TRUE.kd, ks=TRUE.ks, shininess=TRUE.shininess, kappa=4.0, ambient=TRUE.ambient
+    )
+    far = np.asarray(
+        hj.render(scene, hj.ShadingParams(kd=TRUE.kd, ks=TRUE.ks, shininess=TRUE.shininess, kappa=40.0))
+    )
     return far, start
 
 
@@ -363,8 +378,9 @@ def test_divergence_ends_cleanly(scene, monkeypatch, fresh_jit):
     import optimistix as optx
 
     far, start = _overflow_beyond_kappa_5(monkeypatch, scene)
-    monkeypatch.setattr(_entry, "make_solver", lambda name, rtol, atol: (
-        optx.GaussNewton(rtol=rtol, atol=atol), True))
+    monkeypatch.setattr(
+        _entry, "make_solver", lambda name, rtol, atol: (optx.GaussNewton(rtol=rtol, atol=atol), True)
+    )
     r = hj.fit(scene, far, fit=("kappa",), init=start, solver="gauss-newton")
     assert r.termination.startswith("stopped: diverged")
     assert not np.isfinite(r.loss[-1])  # the step that overflowed is recorded
@@ -409,14 +425,26 @@ def test_predicted_decrease_is_the_gauss_newton_step_of_the_residuals(scene, tar
     norms of J, with J from central differences of the residuals in float64 (truncation
     O(h²) ~ 1e-10 relative)."""
     model = _shading_fit.fit_model(hj.KajiyaKay)
-    terms = [model.prepare(scene, INIT, ("kd", "ks", "shininess", "kappa"),
-                           *_problem.target_arrays(scene, target, None, None))]
+    terms = [
+        model.prepare(
+            scene,
+            INIT,
+            ("kd", "ks", "shininess", "kappa"),
+            *_problem.target_arrays(scene, target, None, None),
+        )
+    ]
     problem = _problem.Problem(terms, INIT, model, ("shininess", "kappa"), ("kd", "ks"), ())
     z = jnp.array([np.log(12.0), np.log(1.7)])
     r = np.asarray(_problem.point(z, problem)[1])
     h = 1e-5
-    cols = [(np.asarray(_problem.point(z + h * e, problem)[1])
-             - np.asarray(_problem.point(z - h * e, problem)[1])) / (2 * h) for e in jnp.eye(2)]
+    cols = [
+        (
+            np.asarray(_problem.point(z + h * e, problem)[1])
+            - np.asarray(_problem.point(z - h * e, problem)[1])
+        )
+        / (2 * h)
+        for e in jnp.eye(2)
+    ]
     jac = np.stack(cols, axis=1)
     step = np.linalg.lstsq(jac, -r, rcond=None)[0]
     expected = 0.5 * np.sum((jac @ step) ** 2)
@@ -442,8 +470,9 @@ def test_a_tolerance_test_passed_too_early_restarts_the_solver(scene, target, mo
 
 
 @pytest.mark.parametrize("start, termination", [(TRUE, "converged"), (INIT, "stopped: reached max_steps")])
-def test_a_stalled_solver_converges_only_where_nothing_is_left(scene, target, monkeypatch, fresh_jit,
-                                                               start, termination):
+def test_a_stalled_solver_converges_only_where_nothing_is_left(
+    scene, target, monkeypatch, fresh_jit, start, termination
+):
     """A solver that never moves and never says it is done (as LM at the float32 floor,
     rejecting every step): at the optimum `fit` stops after STALL_STEPS steps as converged;
     far from it, it runs to max_steps and says so."""

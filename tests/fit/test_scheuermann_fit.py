@@ -12,8 +12,16 @@ from helpers import scheuermann_scene
 import hairjax as hj
 from hairjax._shading._scheuermann import ScheuermannParams
 
-FIT_NAMES = ("kd", "primary_color", "primary_exponent", "primary_shift", "secondary_color",
-             "secondary_exponent", "secondary_shift", "kappa")
+FIT_NAMES = (
+    "kd",
+    "primary_color",
+    "primary_exponent",
+    "primary_shift",
+    "secondary_color",
+    "secondary_exponent",
+    "secondary_shift",
+    "kappa",
+)
 
 
 def test_fit_recovers_every_parameter():
@@ -25,14 +33,23 @@ def test_fit_recovers_every_parameter():
     scene = scheuermann_scene(size=16, strands=20)
     truth = scene.params
     target = np.asarray(hj.render(scene, truth))
-    start = ScheuermannParams(kd=0.3, ambient=truth.ambient, primary_color=0.2, primary_exponent=15.0,
-                              primary_shift=0.0, secondary_color=0.2, secondary_exponent=14.0,
-                              secondary_shift=-0.05, kappa=0.5)
+    start = ScheuermannParams(
+        kd=0.3,
+        ambient=truth.ambient,
+        primary_color=0.2,
+        primary_exponent=15.0,
+        primary_shift=0.0,
+        secondary_color=0.2,
+        secondary_exponent=14.0,
+        secondary_shift=-0.05,
+        kappa=0.5,
+    )
     result = hj.fit(scene, target, init=start)
     assert result.fitted == FIT_NAMES and result.termination == "converged"
     for name in FIT_NAMES:
-        np.testing.assert_allclose(getattr(result.params, name), getattr(truth, name), rtol=1e-8,
-                                   err_msg=name)
+        np.testing.assert_allclose(
+            getattr(result.params, name), getattr(truth, name), rtol=1e-8, err_msg=name
+        )
         assert np.all(np.isfinite(result.std_error[name]))
     assert result.loss[0] > 1e-3 and result.rmse < 1e-10
     assert json.loads(json.dumps(result.to_json()))["params"]["primary_shift"] == pytest.approx(0.15)
@@ -58,15 +75,30 @@ def test_fit_from_the_cli(tmp_path, capsys):
     from hairjax.cli import main
 
     scene_file = tmp_path / "s.toml"
-    scene_file.write_text('[hair]\nsource = "scalp"\nstrands = 20\npoints = 5\n'
-                          '[camera]\nwidth = 16\nheight = 12\n[shadows]\nmethod = "none"\n'
-                          '[shading]\nmodel = "scheuermann"\nprimary_shift = 0.2\n')
+    scene_file.write_text(
+        '[hair]\nsource = "scalp"\nstrands = 20\npoints = 5\n'
+        '[camera]\nwidth = 16\nheight = 12\n[shadows]\nmethod = "none"\n'
+        '[shading]\nmodel = "scheuermann"\nprimary_shift = 0.2\n'
+    )
     scene = hj.load_scene(scene_file)
     target = tmp_path / "t.exr"
     hj.write_image(target, np.asarray(hj.render(scene)))
     report = tmp_path / "fit.json"
-    assert main(["fit", str(scene_file), "--target", str(target), "--fit",
-                 "primary_shift,secondary_color", "--json", str(report)]) == 0
+    assert (
+        main(
+            [
+                "fit",
+                str(scene_file),
+                "--target",
+                str(target),
+                "--fit",
+                "primary_shift,secondary_color",
+                "--json",
+                str(report),
+            ]
+        )
+        == 0
+    )
     out = capsys.readouterr().out
     assert "primary_shift" in out and "fixed" in out  # every parameter listed, unfitted ones fixed
     # The target is float32 (EXR): recovery to float32 rounding.

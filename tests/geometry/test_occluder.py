@@ -35,8 +35,12 @@ def test_a_quad_in_front_hides_the_hair_behind_it():
     k = np.array([0.2, 0.4, 0.6])
     params = hj.ShadingParams(kd=0.5, ks=0.0, ambient=0.1)
     front = hj.Occluder(kind="mesh", color=k, **quad([[-3, -3, 0], [0, -3, 0], [0, 3, 0], [-3, 3, 0]]))
-    base = dict(camera=hj.Camera(eye=(0, 0, 5), width=32, height=32), shadows=hj.Shadows("none"),
-                light=hj.Light(direction=(0, 0, -1)), shading=hj.KajiyaKay(params))
+    base = dict(
+        camera=hj.Camera(eye=(0, 0, 5), width=32, height=32),
+        shadows=hj.Shadows("none"),
+        light=hj.Light(direction=(0, 0, -1)),
+        shading=hj.KajiyaKay(params),
+    )
     img = np.asarray(hj.render(hj.Scene(hair, occluder=front, **base)))
     plain = np.asarray(hj.render(hj.Scene(hair, **base)))
     row = 16 if plain[16, 8, 3] > 0 else 15  # the hair's row (y = 0 is on a pixel edge)
@@ -55,9 +59,14 @@ def test_a_quad_between_light_and_hair_leaves_only_ambient():
     hair = hj.Strands.from_list([hair_line(n=9)], alpha=0.5)
     occ = hj.Occluder(kind="mesh", **quad([[-3, 1, 3], [0, 1, 3], [0, 1, -3], [-3, 1, -3]]))
     params = hj.ShadingParams(kd=0.5, ks=0.2, ambient=0.07, kappa=0.0)
-    scene = hj.Scene(hair, camera=hj.Camera(eye=(0, 0, 5), width=32, height=32),
-                     light=hj.Light(direction=(0, -1, 0)), shading=hj.KajiyaKay(params), occluder=occ,
-                     shadows=hj.Shadows("opacity-maps", maps=4, resolution=32))
+    scene = hj.Scene(
+        hair,
+        camera=hj.Camera(eye=(0, 0, 5), width=32, height=32),
+        light=hj.Light(direction=(0, -1, 0)),
+        shading=hj.KajiyaKay(params),
+        occluder=occ,
+        shadows=hj.Shadows("opacity-maps", maps=4, resolution=32),
+    )
     geom = hj.geometry_stage(scene)
     x = scene.strands.points[:, 0]
     # The point at x = 0 lies under the quad's edge: the map's texel there may go either way.
@@ -81,8 +90,9 @@ def slab_scene(method: str, kappa: float = 0.7):
 
     def strands(spacing):
         z = (np.arange(count) - count // 2) * spacing
-        return hj.Strands.from_list([hair_line(y=0.5, z=zi, n=5) * [1.6, 1, 1] for zi in z],
-                                    alpha=0.3, width=2.0)
+        return hj.Strands.from_list(
+            [hair_line(y=0.5, z=zi, n=5) * [1.6, 1, 1] for zi in z], alpha=0.3, width=2.0
+        )
 
     hair = strands(0.1)
     # Re-space the strands to one texel of the light's framing (set by the strands' x
@@ -93,12 +103,17 @@ def slab_scene(method: str, kappa: float = 0.7):
         hair = strands(spacing)
     frame = light_frame(hair.points, hair.segments(), hair.width, light, res)
     assert abs(frame.view.focal * spacing - 1) < 1e-9
-    occ = hj.Occluder(kind="mesh", color=(0.5, 0.6, 0.7),
-                      **quad([[-3, 0, 3], [3, 0, 3], [3, 0, -3], [-3, 0, -3]]))
-    return hj.Scene(hair, camera=hj.Camera(eye=(0, -5, 0.0), up=(0, 0, -1), fov=20, width=16,
-                                           height=16),
-                    light=light, occluder=occ, shadows=shadow_method(method, 4, res),
-                    shading=hj.KajiyaKay(hj.ShadingParams(kd=0.5, ks=0.1, ambient=0.05, kappa=kappa)))
+    occ = hj.Occluder(
+        kind="mesh", color=(0.5, 0.6, 0.7), **quad([[-3, 0, 3], [3, 0, 3], [3, 0, -3], [-3, 0, -3]])
+    )
+    return hj.Scene(
+        hair,
+        camera=hj.Camera(eye=(0, -5, 0.0), up=(0, 0, -1), fov=20, width=16, height=16),
+        light=light,
+        occluder=occ,
+        shadows=shadow_method(method, 4, res),
+        shading=hj.KajiyaKay(hj.ShadingParams(kd=0.5, ks=0.1, ambient=0.05, kappa=kappa)),
+    )
 
 
 @pytest.mark.parametrize("method", ["opacity-maps", "exact"])
@@ -125,15 +140,31 @@ def test_kappa_gradient_through_the_receiving_occluder():
 
     def loss(kappa):
         p = scene.params
-        return float(np.sum(np.asarray(hj.render(scene, hj.ShadingParams(
-            kd=p.kd, ks=p.ks, shininess=p.shininess, ambient=p.ambient, kappa=kappa))) ** 2))
+        return float(
+            np.sum(
+                np.asarray(
+                    hj.render(
+                        scene,
+                        hj.ShadingParams(
+                            kd=p.kd, ks=p.ks, shininess=p.shininess, ambient=p.ambient, kappa=kappa
+                        ),
+                    )
+                )
+                ** 2
+            )
+        )
 
     import jax.numpy as jnp
 
     def loss_jax(kappa):
         p = scene.params
-        return jnp.sum(hj.render(scene, hj.ShadingParams(
-            kd=p.kd, ks=p.ks, shininess=p.shininess, ambient=p.ambient, kappa=kappa)) ** 2)
+        return jnp.sum(
+            hj.render(
+                scene,
+                hj.ShadingParams(kd=p.kd, ks=p.ks, shininess=p.shininess, ambient=p.ambient, kappa=kappa),
+            )
+            ** 2
+        )
 
     grad = float(jax.grad(loss_jax)(0.7))
     fd = central_difference(loss, 0.7, 1e-6 * 0.7)
@@ -146,8 +177,11 @@ def test_kappa_gradient_through_the_receiving_occluder():
     colour = k * 0.05 + np.exp(-0.7 * omega) * k
     by_hand = np.sum(2 * colour * -omega * np.exp(-0.7 * omega) * k)
     assert by_hand < -1.0
-    occ_only = jax.grad(lambda kp: jnp.sum(occluder_colors(geom, hj.ShadingParams(
-        kd=0.5, ks=0.1, ambient=0.05, kappa=kp)) ** 2))(0.7)
+    occ_only = jax.grad(
+        lambda kp: jnp.sum(
+            occluder_colors(geom, hj.ShadingParams(kd=0.5, ks=0.1, ambient=0.05, kappa=kp)) ** 2
+        )
+    )(0.7)
     np.testing.assert_allclose(float(occ_only), by_hand, rtol=1e-9)
 
 
@@ -157,37 +191,51 @@ def gl_scenes():
     out = {"slab": slab_scene("opacity-maps"), "slab-exact": slab_scene("exact")}
     hair = hj.Strands.from_list([hair_line(n=9), hair_line(y=0.3, z=0.5, n=9)], alpha=0.5)
     out["quad-shadow"] = hj.Scene(
-        hair, camera=hj.Camera(eye=(1, 2, 5), width=32, height=32),
-        light=hj.Light(direction=(0.2, -1, 0.1)), shading=hj.KajiyaKay(hj.ShadingParams(kappa=0.5)),
+        hair,
+        camera=hj.Camera(eye=(1, 2, 5), width=32, height=32),
+        light=hj.Light(direction=(0.2, -1, 0.1)),
+        shading=hj.KajiyaKay(hj.ShadingParams(kappa=0.5)),
         occluder=hj.Occluder(kind="mesh", **quad([[-3, 1, 3], [0, 1, 3], [0, 1, -3], [-3, 1, -3]])),
-        shadows=hj.Shadows("opacity-maps", maps=4, resolution=32))
+        shadows=hj.Shadows("opacity-maps", maps=4, resolution=32),
+    )
     # A point light between two layers of hair: the upper layer lies behind the light's
     # near plane (V = 1 in both renderers: occluder_visibility's and the compute shader's
     # "unseen" branch); the quad under the light (x ≤ −0.3: a triangle reaching the light's
     # near plane would not be drawn, §13) shadows the lower layer where x ≤ −0.6.
-    layers = hj.Strands.from_list([hair_line(y=0.0, z=z, n=9) for z in (-0.2, 0.2)]
-                                  + [hair_line(y=2.0, z=z, n=9) for z in (-0.2, 0.2)], alpha=0.5)
+    layers = hj.Strands.from_list(
+        [hair_line(y=0.0, z=z, n=9) for z in (-0.2, 0.2)] + [hair_line(y=2.0, z=z, n=9) for z in (-0.2, 0.2)],
+        alpha=0.5,
+    )
     out["quad-point-light"] = hj.Scene(
-        layers, camera=hj.Camera(eye=(0.5, 1.0, 5), target=(0, 1, 0), width=32, height=32),
-        light=hj.Light(kind="point", position=(0.0, 1.0, 0.0)), shading=hj.KajiyaKay(hj.ShadingParams(kappa=0.5)),
-        occluder=hj.Occluder(kind="mesh", **quad([[-3, 0.5, 3], [-0.3, 0.5, 3], [-0.3, 0.5, -3],
-                                                   [-3, 0.5, -3]])),
-        shadows=hj.Shadows("opacity-maps", maps=4, resolution=128))  # bias 3 texels: 0.28 at z = 1
+        layers,
+        camera=hj.Camera(eye=(0.5, 1.0, 5), target=(0, 1, 0), width=32, height=32),
+        light=hj.Light(kind="point", position=(0.0, 1.0, 0.0)),
+        shading=hj.KajiyaKay(hj.ShadingParams(kappa=0.5)),
+        occluder=hj.Occluder(
+            kind="mesh", **quad([[-3, 0.5, 3], [-0.3, 0.5, 3], [-0.3, 0.5, -3], [-3, 0.5, -3]])
+        ),
+        shadows=hj.Shadows("opacity-maps", maps=4, resolution=128),
+    )  # bias 3 texels: 0.28 at z = 1
     small = hj.Camera(eye=(0.0, 0.6, 4.5), target=(0.0, 0.1, 0.0), width=64, height=64)
     sphere = hj.load_scene(EXAMPLES / "occluder.toml")  # with 600 of its 3,000 strands
     out["sphere"] = sphere.replace(
-        camera=small, shadows=hj.Shadows("opacity-maps", 16, 64),
-        strands=hj.scalp(strands=600, points=16, seed=4, length=0.6, radius=0.7, coverage=0.35,
-                         alpha=0.5))
+        camera=small,
+        shadows=hj.Shadows("opacity-maps", 16, 64),
+        strands=hj.scalp(strands=600, points=16, seed=4, length=0.6, radius=0.7, coverage=0.35, alpha=0.5),
+    )
     if DATA.is_dir():
         sintel = hj.load_scene(EXAMPLES / "sintel.toml")
-        out["sintel"] = sintel.replace(camera=hj.Camera(
-            eye=sintel.camera.eye, target=sintel.camera.target, fov=sintel.camera.fov,
-            width=64, height=64), shadows=hj.Shadows("opacity-maps", 16, 128))
+        out["sintel"] = sintel.replace(
+            camera=hj.Camera(
+                eye=sintel.camera.eye, target=sintel.camera.target, fov=sintel.camera.fov, width=64, height=64
+            ),
+            shadows=hj.Shadows("opacity-maps", 16, 128),
+        )
         # A point light above the left shoulder: perspective light views, exact Ω.
         out["sintel-point"] = out["sintel"].replace(
             light=hj.Light(kind="point", position=(-30.0, 70.0, 40.0)),
-            shadows=hj.Shadows("exact", resolution=128))
+            shadows=hj.Shadows("exact", resolution=128),
+        )
     return out
 
 
@@ -217,8 +265,7 @@ def test_gl_agrees_with_jax(gl, name):
     # Inside sub-pixel triangles GL's normal follows llvmpipe's vertex rounding: the band
     # holds those pixels, and GL stays within the first-order bound there (+ 1e-4).
     diff = np.abs(result.image - jax_image).max(axis=-1).ravel()
-    bound = interpolation_bound(camera_view(scene.camera), scene.occluder, scene.light,
-                                OCCLUDER_VERTEX_STEP)
+    bound = interpolation_bound(camera_view(scene.camera), scene.occluder, scene.light, OCCLUDER_VERTEX_STEP)
     only_mesh = (np.asarray(geom.transmittance) == 1.0) & (np.asarray(geom.alpha_channel) == 1.0)
     assert np.all(diff[only_mesh] <= bound[only_mesh] + PIXEL_TOL)
     full = render_gl(scene)
@@ -264,11 +311,12 @@ def test_mesh_occluder_in_a_scene_file(tmp_path):
     occ = hj.load_scene(path).occluder
     assert occ.kind == "mesh" and occ.path == str(obj.resolve()) and occ.triangles.shape == (2, 3)
     assert occ == hj.Occluder(kind="mesh", path=str(obj.resolve()), color=(0.1, 0.2, 0.3))
-    for extra, message in [('path = "sub/quad.obj"\nradius = 2\n',
-                             "occluder.radius is only for kind = 'sphere'"),
-                           ("", "occluder.path is required"),
-                           ('path = "nope.obj"\n', "occluder.path file not found"),
-                           ('path = "sub/quad.ply"\n', "occluder.path must be a path to a .obj")]:
+    for extra, message in [
+        ('path = "sub/quad.obj"\nradius = 2\n', "occluder.radius is only for kind = 'sphere'"),
+        ("", "occluder.path is required"),
+        ('path = "nope.obj"\n', "occluder.path file not found"),
+        ('path = "sub/quad.ply"\n', "occluder.path must be a path to a .obj"),
+    ]:
         path.write_text(head + extra)
         with pytest.raises(hj.SceneError, match=message):
             hj.load_scene(path)
@@ -295,10 +343,13 @@ def test_guard_degenerate_triangles_and_a_mesh_behind_the_eye(gl):
     np.testing.assert_array_equal(n[4:], 0.0)
     np.testing.assert_allclose(n[:4], [[0, 0, 1]] * 4)
     hair = hj.Strands.from_list([hair_line(z=-1.0)], alpha=0.5)
-    scene = hj.Scene(hair, camera=hj.Camera(eye=(0, 0, 5), width=16, height=16),
-                     light=hj.Light(direction=(0, 0, -1)),
-                     occluder=hj.Occluder(kind="mesh", vertices=flat, triangles=tris),
-                     shadows=hj.Shadows("opacity-maps", maps=4, resolution=16))
+    scene = hj.Scene(
+        hair,
+        camera=hj.Camera(eye=(0, 0, 5), width=16, height=16),
+        light=hj.Light(direction=(0, 0, -1)),
+        occluder=hj.Occluder(kind="mesh", vertices=flat, triangles=tris),
+        shadows=hj.Shadows("opacity-maps", maps=4, resolution=16),
+    )
     view = camera_view(scene.camera)
     depth, _, _ = mesh_hits(view, flat, tris[2:])
     assert not np.isfinite(depth).any()

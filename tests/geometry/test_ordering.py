@@ -57,14 +57,23 @@ def test_radix_argsort_is_a_stable_sort(keys):
 
 # --- the static inside-to-outside order (scheuermann-2004 slide 14, docs/model.md §4) ---
 
+
 def test_static_order_by_hand():
     from hairjax._geometry._ordering import static_order
 
     # Distances from the centre (0, 0, 0), by hand: each segment's key is its nearer end's.
-    points = np.array([[3.0, 0, 0], [0, 2.0, 0],     # seg 0: r 3 → 2, key 2
-                       [0, 0, 1.0], [0, 4.0, 0],     # seg 1: r 1 → 4, key 1
-                       [0.5, 0, 0], [0, 0, -0.5],    # seg 2: r 0.5 → 0.5, key 0.5
-                       [0, -1.0, 0], [0, 0, 7.0]])   # seg 3: r 1 → 7, key 1 (ties seg 1)
+    points = np.array(
+        [
+            [3.0, 0, 0],
+            [0, 2.0, 0],  # seg 0: r 3 → 2, key 2
+            [0, 0, 1.0],
+            [0, 4.0, 0],  # seg 1: r 1 → 4, key 1
+            [0.5, 0, 0],
+            [0, 0, -0.5],  # seg 2: r 0.5 → 0.5, key 0.5
+            [0, -1.0, 0],
+            [0, 0, 7.0],
+        ]
+    )  # seg 3: r 1 → 7, key 1 (ties seg 1)
     segments = np.array([[0, 1], [2, 3], [4, 5], [6, 7]])
     # Inside first; the tie between segments 1 and 3 goes by index.
     np.testing.assert_array_equal(static_order(points, segments, np.zeros(3)), [2, 1, 3, 0])
@@ -93,8 +102,10 @@ def test_static_order_is_a_permutation_inside_first(seed, n_points):
     order = static_order(points, segments, centre)
     np.testing.assert_array_equal(np.sort(order), np.arange(n_points))
     # The key recomputed here, one segment at a time, never decreases along the order.
-    key = [min(np.linalg.norm(points[a] - centre), np.linalg.norm(points[b] - centre))
-           for a, b in segments[order]]
+    key = [
+        min(np.linalg.norm(points[a] - centre), np.linalg.norm(points[b] - centre))
+        for a, b in segments[order]
+    ]
     assert all(k0 <= k1 for k0, k1 in zip(key, key[1:]))
 
 
@@ -104,17 +115,25 @@ def test_static_order_is_the_same_from_every_view():
     import hairjax as hj
     from hairjax._geometry._setup import visibility_order
 
-    scene = hj.Scene(hj.furball(30, 5, seed=1), ordering=hj.Ordering("static"),
-                     camera=hj.Camera(eye=(0.0, 0.3, 3.5), width=16, height=16))
-    orders = [visibility_order(scene.replace(camera=dataclasses.replace(scene.camera, eye=eye)))[4]
-              for eye in [(0.0, 0.3, 3.5), (3.5, 0.3, 0.0), (0.0, -3.0, -2.0)]]
+    scene = hj.Scene(
+        hj.furball(30, 5, seed=1),
+        ordering=hj.Ordering("static"),
+        camera=hj.Camera(eye=(0.0, 0.3, 3.5), width=16, height=16),
+    )
+    orders = [
+        visibility_order(scene.replace(camera=dataclasses.replace(scene.camera, eye=eye)))[4]
+        for eye in [(0.0, 0.3, 3.5), (3.5, 0.3, 0.0), (0.0, -3.0, -2.0)]
+    ]
     assert len(orders[0]) == scene.strands.segments().shape[0]  # every segment drawable
     for other in orders[1:]:
         np.testing.assert_array_equal(other, orders[0])
     # ... while the exact order does change with the view.
-    exact = [visibility_order(scene.replace(ordering=hj.Ordering("exact"),
-                                            camera=dataclasses.replace(scene.camera, eye=eye)))[4]
-             for eye in [(0.0, 0.3, 3.5), (0.0, 0.3, -3.5)]]
+    exact = [
+        visibility_order(
+            scene.replace(ordering=hj.Ordering("exact"), camera=dataclasses.replace(scene.camera, eye=eye))
+        )[4]
+        for eye in [(0.0, 0.3, 3.5), (0.0, 0.3, -3.5)]
+    ]
     assert not np.array_equal(exact[0], exact[1])
 
 
@@ -123,9 +142,11 @@ def test_static_order_skips_segments_behind_the_near_plane():
     from hairjax._geometry._setup import visibility_order
 
     # A camera inside the ball: some segments have an end nearer than `near` or behind it.
-    scene = hj.Scene(hj.furball(30, 5, seed=1), ordering=hj.Ordering("static"),
-                     camera=hj.Camera(eye=(0.0, 0.0, 0.3), target=(0.0, 0.0, -1.0), near=0.05,
-                                      width=16, height=16))
+    scene = hj.Scene(
+        hj.furball(30, 5, seed=1),
+        ordering=hj.Ordering("static"),
+        camera=hj.Camera(eye=(0.0, 0.0, 0.3), target=(0.0, 0.0, -1.0), near=0.05, width=16, height=16),
+    )
     view, _, depth, segments, order = visibility_order(scene)
     drawable = (depth[segments[:, 0]] > 0.05) & (depth[segments[:, 1]] > 0.05)
     assert 0 < len(order) < len(segments)
@@ -138,9 +159,11 @@ def test_static_scene_file_loads_and_renders(tmp_path):
     import hairjax as hj
 
     path = tmp_path / "static.toml"
-    path.write_text('[hair]\nsource = "furball"\nstrands = 20\npoints = 4\n'
-                    '[camera]\nwidth = 16\nheight = 16\n[shadows]\nmethod = "none"\n'
-                    '[ordering]\nmethod = "static"\n')
+    path.write_text(
+        '[hair]\nsource = "furball"\nstrands = 20\npoints = 4\n'
+        '[camera]\nwidth = 16\nheight = 16\n[shadows]\nmethod = "none"\n'
+        '[ordering]\nmethod = "static"\n'
+    )
     scene = hj.load_scene(path)
     assert scene.ordering == hj.Ordering(method="static")
     image = np.asarray(hj.render(scene))

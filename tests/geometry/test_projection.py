@@ -7,8 +7,7 @@ from hairjax._geometry._projection import camera_view
 
 
 def test_target_at_centre_up_is_up_right_is_right():
-    cam = Camera(eye=(1.0, 2.0, 5.0), target=(0.5, 1.0, -1.0), up=(0, 1, 0), fov=50.0,
-                 width=64, height=48)
+    cam = Camera(eye=(1.0, 2.0, 5.0), target=(0.5, 1.0, -1.0), up=(0, 1, 0), fov=50.0, width=64, height=48)
     view = camera_view(cam)
     xy, depth = view.project(np.array([cam.target]))
     np.testing.assert_allclose(xy[0], [32.0, 24.0], atol=1e-12)

@@ -13,20 +13,24 @@ def image(frags, w, h, weights=None):
 
 def test_coverage_by_hand():
     # Width 1: box [d − ½, d + ½] ∩ [−½, ½] has length 1 − d for 0 ≤ d ≤ 1.
-    np.testing.assert_allclose(ribbon_coverage(np.array([0.0, 0.25, 0.5, 1.0, 1.5]), np.ones(5)),
-                               [1.0, 0.75, 0.5, 0.0, 0.0])
+    np.testing.assert_allclose(
+        ribbon_coverage(np.array([0.0, 0.25, 0.5, 1.0, 1.5]), np.ones(5)), [1.0, 0.75, 0.5, 0.0, 0.0]
+    )
     # Width 0.25: fully inside the box up to d = 0.375, then shrinking to 0 at 0.625.
-    np.testing.assert_allclose(ribbon_coverage(np.array([0.0, 0.375, 0.5, 0.625]), np.full(4, 0.25)),
-                               [0.25, 0.25, 0.125, 0.0])
+    np.testing.assert_allclose(
+        ribbon_coverage(np.array([0.0, 0.375, 0.5, 0.625]), np.full(4, 0.25)), [0.25, 0.25, 0.125, 0.0]
+    )
     # Width 3: the box is inside the ribbon for d ≤ 1.
-    np.testing.assert_allclose(ribbon_coverage(np.array([0.0, 1.0, 1.5, 2.0]), np.full(4, 3.0)),
-                               [1.0, 1.0, 0.5, 0.0])
+    np.testing.assert_allclose(
+        ribbon_coverage(np.array([0.0, 1.0, 1.5, 2.0]), np.full(4, 3.0)), [1.0, 1.0, 0.5, 0.0]
+    )
 
 
 def test_horizontal_line_through_pixel_centres():
     # y = 3.5 runs through row 3's centres; x ∈ [2.2, 7.9) contains centres 2.5 … 7.5.
-    f = rasterize(np.array([[2.2, 3.5]]), np.array([[7.9, 3.5]]), np.ones(1), np.ones(1),
-                  np.ones(1), 10, 8, False)
+    f = rasterize(
+        np.array([[2.2, 3.5]]), np.array([[7.9, 3.5]]), np.ones(1), np.ones(1), np.ones(1), 10, 8, False
+    )
     img = image(f, 10, 8)
     expected = np.zeros((8, 10))
     expected[3, 2:8] = 1.0
@@ -37,8 +41,9 @@ def test_horizontal_line_through_pixel_centres():
 
 def test_line_between_rows_splits_coverage():
     # y = 4.0: centres of rows 3 and 4 are ½ away, each covered ½.
-    f = rasterize(np.array([[0.0, 4.0]]), np.array([[6.0, 4.0]]), np.ones(1), np.ones(1),
-                  np.ones(1), 6, 8, False)
+    f = rasterize(
+        np.array([[0.0, 4.0]]), np.array([[6.0, 4.0]]), np.ones(1), np.ones(1), np.ones(1), 6, 8, False
+    )
     img = image(f, 6, 8)
     np.testing.assert_allclose(img[3], 0.5)
     np.testing.assert_allclose(img[4], 0.5)
@@ -82,13 +87,22 @@ def test_fragments_stay_inside_the_image_and_cover_positive():
 
 def test_perspective_correct_depth():
     # 1/z is linear in t: at t = ½ between z = 1 and z = 3, z = 1/(½ + 1/6) = 1.5.
-    f = rasterize(np.array([[0.0, 0.5]]), np.array([[2.0, 0.5]]), np.array([1.0]),
-                  np.array([3.0]), np.ones(1), 2, 1, True)
+    f = rasterize(
+        np.array([[0.0, 0.5]]),
+        np.array([[2.0, 0.5]]),
+        np.array([1.0]),
+        np.array([3.0]),
+        np.ones(1),
+        2,
+        1,
+        True,
+    )
     # Centres at x = 0.5, 1.5: t = ¼, ¾.
     np.testing.assert_allclose(np.sort(f.depth), [1 / (0.75 + 0.25 / 3), 1 / (0.25 + 0.75 / 3)])
 
 
 # --- ribbons of world-space width (kim-2003 Fig. 2; docs/model.md §5) ---
+
 
 def test_ribbon_widths_by_hand():
     from hairjax._geometry._raster import ribbon_widths
@@ -109,8 +123,16 @@ def test_tapered_ribbon_coverage_by_hand():
     # Row 16 (centre 16.5, d = ½): min(1, w/2) − max(0, −w/2) = min(1, w/2): x = 0.5 → 0.55, x = 4.5 → 0.95.
     # Row 17 (centre 17.5, d = 1.5): w/2 − 1 where w > 2, i.e. x > 5: x = 5.5 → w = 2.1, 0.05;
     # x = 7.5 → 0.25; x = 9.5 → 0.45. Rows 15 and 14 mirror 16 and 17.
-    f = rasterize(np.array([[0.0, 16.0]]), np.array([[10.0, 16.0]]), np.ones(1), np.ones(1),
-                  np.array([[1.0, 3.0]]), 32, 32, False)
+    f = rasterize(
+        np.array([[0.0, 16.0]]),
+        np.array([[10.0, 16.0]]),
+        np.ones(1),
+        np.ones(1),
+        np.array([[1.0, 3.0]]),
+        32,
+        32,
+        False,
+    )
     img = image(f, 32, 32)
     x = np.arange(10) + 0.5
     w = 1 + 2 * x / 10
@@ -140,10 +162,11 @@ def _world_segment_scene(width, units, depth=5.0):
     # A camera at z = depth looking at the origin, fov 90° on 32 rows: f = 16 pixels. The
     # segment x ∈ [−0.5, 0.5] at y = 0, depth `depth`, lands on row boundary y = 16.
     hair = hj.Strands.from_list([[[-0.5, 0.0, 0.0], [0.5, 0.0, 0.0]]], alpha=1.0, width=width)
-    return hj.Scene(hair.replace(width_units=units),
-                    camera=hj.Camera(eye=(0.0, 0.0, depth), target=(0.0, 0.0, 0.0), fov=90.0,
-                                     width=32, height=32),
-                    shadows=hj.Shadows("none"))
+    return hj.Scene(
+        hair.replace(width_units=units),
+        camera=hj.Camera(eye=(0.0, 0.0, depth), target=(0.0, 0.0, 0.0), fov=90.0, width=32, height=32),
+        shadows=hj.Shadows("none"),
+    )
 
 
 def test_world_width_segment_covers_the_expected_pixels():

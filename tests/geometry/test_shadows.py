@@ -21,10 +21,13 @@ def slab(method, maps=3, alpha=A):
     xs = np.linspace(-X, X, 9)
     strands = [np.stack([xs, np.full(9, y), np.full(9, z)], axis=1) for y in LAYERS for z in zs]
     hair = hj.Strands.from_list(strands, alpha=alpha)
-    return hj.Scene(hair, camera=hj.Camera(eye=(0, 3, 6), target=(0, -0.5, 0), width=16, height=16),
-                    light=hj.Light(direction=(0, -1, 0)),
-                    shading=hj.KajiyaKay(hj.ShadingParams(kd=1.0, ks=0.0, kappa=2.0)),
-                    shadows=shadow_method(method, maps, R))
+    return hj.Scene(
+        hair,
+        camera=hj.Camera(eye=(0, 3, 6), target=(0, -0.5, 0), width=16, height=16),
+        light=hj.Light(direction=(0, -1, 0)),
+        shading=hj.KajiyaKay(hj.ShadingParams(kd=1.0, ks=0.0, kappa=2.0)),
+        shadows=shadow_method(method, maps, R),
+    )
 
 
 def interior_points(scene):
@@ -43,15 +46,18 @@ def test_map_framing_is_what_the_test_assumes():
     assert setup.shadow.view.focal == pytest.approx((R - 4) / (2 * X))
 
 
-@pytest.mark.parametrize("method, maps, expected", [
-    ("exact", 3, (0.0, A, 2 * A)),
-    # N = 2: the middle layer sits on plane 1, the bottom on plane 2.
-    ("opacity-maps", 2, (0.0, A, 2 * A)),
-    # N = 3: the middle layer is halfway between planes 1 (Ω = a) and 2 (Ω = 2a).
-    ("opacity-maps", 3, (0.0, 1.5 * A, 2 * A)),
-    # N = 1: linear between Ω(D₀) = 0 and Ω(D₁) = 2a.
-    ("opacity-maps", 1, (0.0, A, 2 * A)),
-])
+@pytest.mark.parametrize(
+    "method, maps, expected",
+    [
+        ("exact", 3, (0.0, A, 2 * A)),
+        # N = 2: the middle layer sits on plane 1, the bottom on plane 2.
+        ("opacity-maps", 2, (0.0, A, 2 * A)),
+        # N = 3: the middle layer is halfway between planes 1 (Ω = a) and 2 (Ω = 2a).
+        ("opacity-maps", 3, (0.0, 1.5 * A, 2 * A)),
+        # N = 1: linear between Ω(D₀) = 0 and Ω(D₁) = 2a.
+        ("opacity-maps", 1, (0.0, A, 2 * A)),
+    ],
+)
 def test_omega_and_transmittance_of_a_slab(method, maps, expected):
     scene = slab(method, maps)
     geom = geometry_stage(scene)
@@ -78,10 +84,17 @@ def test_omega_is_linear_in_opacity():
 
 
 def test_more_maps_converge_to_exact():
-    scene = hj.Scene(hj.furball(300, 8, seed=1), light=hj.Light(direction=(0.3, -1, 0.2)),
-                     camera=hj.Camera(width=8, height=8))
+    scene = hj.Scene(
+        hj.furball(300, 8, seed=1),
+        light=hj.Light(direction=(0.3, -1, 0.2)),
+        camera=hj.Camera(width=8, height=8),
+    )
     exact = np.asarray(geometry_stage(scene.replace(shadows=hj.Shadows("exact", resolution=64))).omega)
-    errors = [np.abs(np.asarray(geometry_stage(scene.replace(
-        shadows=hj.Shadows("opacity-maps", n, 64))).omega) - exact).mean() for n in (2, 16, 128)]
+    errors = [
+        np.abs(
+            np.asarray(geometry_stage(scene.replace(shadows=hj.Shadows("opacity-maps", n, 64))).omega) - exact
+        ).mean()
+        for n in (2, 16, 128)
+    ]
     assert errors[0] > errors[1] > errors[2]
     assert errors[2] < 0.1 * errors[0]

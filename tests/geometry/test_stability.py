@@ -89,6 +89,7 @@ import hairjax as hj
 
 # --- the cases -----------------------------------------------------------------------------
 
+
 def coverage_by_hand(d: float, w: float) -> float:
     """docs/model.md §5's cross-ribbon coverage, written out independently of _raster."""
     return min(max(min(d + 0.5, w / 2) - max(d - 0.5, -w / 2), 0.0), 1.0)
@@ -111,7 +112,7 @@ def test_widths_quarter_and_eight_pixels(request, backend):
             expected = a * coverage_by_hand(abs(row + 0.5 - y), width)
             assert abs(alpha[row, col] - expected) <= tol, (width, row, alpha[row, col], expected)
     # The fur ball stays clear of those rows (the premise of the check above).
-    fur = runner_scene("mixed").strands.points[:runner_scene("mixed").strands.offsets[FUR]]
+    fur = runner_scene("mixed").strands.points[: runner_scene("mixed").strands.offsets[FUR]]
     fur_rows = np.array([pixel_of(p)[1] for p in fur])
     assert fur_rows.min() > 6 and fur_rows.max() < 23
     # The thin ribbon never covers more than its width.
@@ -131,8 +132,9 @@ def test_zero_length_segments_and_repeated_points(request, backend):
         zero_tangent = [s.offsets[REPEATED], *range(s.offsets[COINCIDENT], s.offsets[SINGLE + 1])]
         # ambient·c exactly, in the run's precision: diffuse and specular are exact zeros.
         dtype = res.colors.dtype
-        np.testing.assert_array_equal(res.colors[zero_tangent],
-                                      dtype.type(DEFAULT["ambient"]) * s.color[zero_tangent].astype(dtype))
+        np.testing.assert_array_equal(
+            res.colors[zero_tangent], dtype.type(DEFAULT["ambient"]) * s.color[zero_tangent].astype(dtype)
+        )
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
@@ -178,8 +180,9 @@ def test_point_light_at_a_strand_point(request, backend):
             omega = render_gl(scene).omega
     else:
         omega = res.omega
-        np.testing.assert_array_equal(res.colors[LIGHT_POINT], np.full(3, DEFAULT["ambient"],
-                                                                        res.colors.dtype))
+        np.testing.assert_array_equal(
+            res.colors[LIGHT_POINT], np.full(3, DEFAULT["ambient"], res.colors.dtype)
+        )
     np.testing.assert_array_equal(omega[unlit], 0.0)
 
 
@@ -220,8 +223,12 @@ def test_all_points_at_one_depth(request, backend):
     else:
         with precision(backend):
             scene = runner("flat", backend).scene
-            omegas = [res.omega, np.asarray(hj.geometry_stage(
-                scene.replace(shadows=hj.Shadows("opacity-maps", 4, SIZE))).omega)]
+            omegas = [
+                res.omega,
+                np.asarray(
+                    hj.geometry_stage(scene.replace(shadows=hj.Shadows("opacity-maps", 4, SIZE))).omega
+                ),
+            ]
     for omega in omegas:
         np.testing.assert_array_equal(omega, 0.0)
 
@@ -278,14 +285,17 @@ def test_coordinates_around_1e4_and_1e_minus_4(request, backend, scale):
     rel = 1000 * (DEFAULT["shininess"] + 8) * u
     bound = channel_bound(base.scene, base.scene.params, np.dtype(backend)).max()
     assert np.abs(image - ref.image).max() <= rel * bound
-    for got, want in zip(jax.tree_util.tree_leaves((res.g_params, res.g_alpha)),
-                         jax.tree_util.tree_leaves((ref.g_params, ref.g_alpha))):
+    for got, want in zip(
+        jax.tree_util.tree_leaves((res.g_params, res.g_alpha)),
+        jax.tree_util.tree_leaves((ref.g_params, ref.g_alpha)),
+    ):
         assert np.abs(np.asarray(got) - np.asarray(want)).max() <= rel * np.abs(np.asarray(want)).max()
 
 
 # --- the guards ----------------------------------------------------------------------------
 # One test per guard (the table in the module docstring): inputs that make it fire, and the
 # guarded result checked against the model's value.
+
 
 def test_guard_light_sees_all_points_at_one_depth():
     """_shadows.light_frame's span fallback: every point at one light depth gives span 1
@@ -294,8 +304,7 @@ def test_guard_light_sees_all_points_at_one_depth():
     from hairjax._geometry._shadows import light_frame
 
     pts = np.array([[0.0, 0.0, 0.0], [1.0, 0.5, 0.0], [-0.5, 1.0, 0.0]])
-    frame = light_frame(pts, np.array([[0, 1], [1, 2]]), np.ones(1),
-                        hj.Light(direction=(0.0, 0.0, -1.0)), 16)
+    frame = light_frame(pts, np.array([[0, 1], [1, 2]]), np.ones(1), hj.Light(direction=(0.0, 0.0, -1.0)), 16)
     assert np.ptp(frame.depth) == 0.0 and frame.span == 1.0
 
 
@@ -317,13 +326,16 @@ def test_guard_no_point_in_front_of_a_point_light():
     assert frame.view.focal == pytest.approx(6 / np.tan(np.radians(80.0)), rel=1e-12)
     maps = shadow_setup(pts, segs, np.zeros(1, int), np.ones(1), light, hj.Shadows("opacity-maps", 2, 16))
     np.testing.assert_array_equal(maps.texel, -1)
-    omega = point_opacity(jnp.ones((3, 16, 16)), jnp.asarray(maps.plane), jnp.asarray(maps.f),
-                          jnp.asarray(maps.texel))
+    omega = point_opacity(
+        jnp.ones((3, 16, 16)), jnp.asarray(maps.plane), jnp.asarray(maps.f), jnp.asarray(maps.texel)
+    )
     np.testing.assert_array_equal(omega, 0.0)
     exact = shadow_setup(pts, segs, np.zeros(1, int), np.ones(1), light, hj.Shadows("exact", resolution=16))
     np.testing.assert_array_equal(exact.weight, 0.0)
-    np.testing.assert_array_equal(exact_opacity(jnp.zeros(0), jnp.zeros(0, bool),
-                                                jnp.asarray(exact.index), jnp.asarray(exact.weight)), 0.0)
+    np.testing.assert_array_equal(
+        exact_opacity(jnp.zeros(0), jnp.zeros(0, bool), jnp.asarray(exact.index), jnp.asarray(exact.weight)),
+        0.0,
+    )
 
 
 def test_guard_points_outside_the_light_map():
@@ -344,11 +356,23 @@ def test_guard_plane_clamps():
     from hairjax._geometry._projection import View
     from hairjax._geometry._shadows import LightFrame, point_planes
 
-    view = View(np.zeros(3), np.array([0.0, 0.0, -1.0]), np.array([1.0, 0, 0]), np.array([0, 1.0, 0]),
-                8, 8, 1.0, 4.0, 4.0, False, -np.inf)
+    view = View(
+        np.zeros(3),
+        np.array([0.0, 0.0, -1.0]),
+        np.array([1.0, 0, 0]),
+        np.array([0, 1.0, 0]),
+        8,
+        8,
+        1.0,
+        4.0,
+        4.0,
+        False,
+        -np.inf,
+    )
     depth = np.array([1.0, 2.0, 3.0, 0.5])  # D₀ = 1, D_N = 3; the last one unseen
-    frame = LightFrame(view, np.zeros((4, 2)), depth, np.array([True, True, True, False]),
-                       np.zeros(0, int), 1.0, 2.0)
+    frame = LightFrame(
+        view, np.zeros((4, 2)), depth, np.array([True, True, True, False]), np.zeros(0, int), 1.0, 2.0
+    )
     plane, f = point_planes(frame, 4)
     np.testing.assert_array_equal(plane, [0, 2, 3, 0])
     np.testing.assert_array_equal(f, [0.0, 0.0, 1.0, 0.0])
@@ -374,8 +398,14 @@ def test_guard_fragment_below_the_nearest_plane(monkeypatch):
     monkeypatch.setattr(frame_mod, "rasterize", nudged)
     hair = hj.furball(6, 4, seed=1)
     segs = hair.segments()
-    setup = shadows_mod.shadow_setup(hair.points, segs, hair.strand_of_point[segs[:, 0]], hair.width,
-                                     hj.Light(direction=(0.3, -1.0, 0.2)), hj.Shadows("opacity-maps", 4, 16))
+    setup = shadows_mod.shadow_setup(
+        hair.points,
+        segs,
+        hair.strand_of_point[segs[:, 0]],
+        hair.width,
+        hj.Light(direction=(0.3, -1.0, 0.2)),
+        hj.Shadows("opacity-maps", 4, 16),
+    )
     slices = setup.frag_cell // 16**2
     assert slices.min() == 0 and slices.max() <= 4
 
@@ -385,8 +415,9 @@ def test_guard_exact_shadows_without_fragments(request):
     one-point strands and zero-length segments draws no light-space fragment: Ω = 0 on
     both renderers; the image is the background."""
     hair = hj.Strands.from_list([[[0.0, 0.0, 0.0]], [[0.5, 0.2, 0.0], [0.5, 0.2, 0.0]]], alpha=0.7)
-    scene = hj.Scene(hair, camera=camera(), shadows=hj.Shadows("exact", resolution=SIZE),
-                     background=(0.1, 0.2, 0.3))
+    scene = hj.Scene(
+        hair, camera=camera(), shadows=hj.Shadows("exact", resolution=SIZE), background=(0.1, 0.2, 0.3)
+    )
     geometry = hj.geometry_stage(scene)
     np.testing.assert_array_equal(geometry.omega, 0.0)
     image = np.asarray(hj.shading_stage(geometry, scene.params))
@@ -452,8 +483,14 @@ def test_guard_light_sees_all_points_at_one_spot():
 
     pts = np.array([[0.2, 1.0, 0.3], [0.2, 0.0, 0.3], [0.2, -1.0, 0.3]])
     segs = np.array([[0, 1], [1, 2]])
-    setup = shadow_setup(pts, segs, np.zeros(2, int), np.ones(1), hj.Light(direction=(0.0, -1.0, 0.0)),
-                         hj.Shadows("exact", resolution=16))
+    setup = shadow_setup(
+        pts,
+        segs,
+        np.zeros(2, int),
+        np.ones(1),
+        hj.Light(direction=(0.0, -1.0, 0.0)),
+        hj.Shadows("exact", resolution=16),
+    )
     assert setup.view.focal == 1.0 and setup.frag_strand.size == 0
     np.testing.assert_allclose(setup.view.project(pts)[0], 8.0, atol=1e-15)
 
@@ -527,8 +564,16 @@ def test_guard_constant_depth_fragments_keep_z(dtype):
 
     z = 1.469  # 1/(1/z) ≠ z in float64 and float32
     with precision(dtype):
-        frags = rasterize(np.array([[1.2, 3.3]]), np.array([[14.7, 9.1]]), np.array([z]), np.array([z]),
-                          np.ones(1), 16, 16, True)
+        frags = rasterize(
+            np.array([[1.2, 3.3]]),
+            np.array([[14.7, 9.1]]),
+            np.array([z]),
+            np.array([z]),
+            np.ones(1),
+            16,
+            16,
+            True,
+        )
         zz = frags.depth.dtype.type(z)
         assert frags.size > 10 and np.all(frags.depth == zz)
         t = frags.t
@@ -547,11 +592,16 @@ def test_guard_sphere_rays_that_miss_and_an_eye_inside():
         view = camera_view(hj.Camera(eye=eye, target=(0.0, 0.0, -1.0), width=16, height=16))
         depth, normal, point = sphere_hits(view, occ)
         hit = np.isfinite(depth)
-        assert (hit.all() if hits == "all" else 0 < hit.sum() < hit.size)
+        assert hit.all() if hits == "all" else 0 < hit.sum() < hit.size
         assert np.all(depth[hit] > 0)
         np.testing.assert_allclose(np.linalg.norm(point[hit], axis=1), 0.5, rtol=1e-12)
         np.testing.assert_allclose(normal[hit], point[hit] / 0.5, atol=1e-12)
-    scene = hj.Scene(hj.Strands.from_list([[[2.0, 2.0, 0.0]]]), camera=hj.Camera(width=16, height=16),
-                     light=hj.Light(direction=(0.0, 0.0, 1.0)), occluder=occ, shadows=hj.Shadows("none"))
+    scene = hj.Scene(
+        hj.Strands.from_list([[[2.0, 2.0, 0.0]]]),
+        camera=hj.Camera(width=16, height=16),
+        light=hj.Light(direction=(0.0, 0.0, 1.0)),
+        occluder=occ,
+        shadows=hj.Shadows("none"),
+    )
     setup = hj.prepare(scene)
     assert setup.opaque.any() and np.all(setup.occluder_direct == 0.0)  # lit from behind

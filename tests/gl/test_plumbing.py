@@ -64,8 +64,11 @@ def test_cli_reports_missing_gl_and_jax_still_works(monkeypatch, tmp_path, capsy
 
 def test_shader_compile_errors_name_the_shader(gl, monkeypatch):
     original = _programs.shader_source
-    monkeypatch.setattr(_programs, "shader_source",
-                        lambda name: original(name) + ("\nnot glsl;" if name == "camera.frag" else ""))
+    monkeypatch.setattr(
+        _programs,
+        "shader_source",
+        lambda name: original(name) + ("\nnot glsl;" if name == "camera.frag" else ""),
+    )
     _programs.clear_cache()
     try:
         with pytest.raises(GLError, match=r"camera.*camera\.frag"):

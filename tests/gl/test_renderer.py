@@ -65,8 +65,11 @@ def references():
         if name not in cache:
             scene = load(name)
             geom = hj.geometry_stage(scene)
-            cache[name] = scene, np.asarray(hj.shading_stage(geom, scene.params)), (
-                None if geom.omega is None else np.asarray(geom.omega))
+            cache[name] = (
+                scene,
+                np.asarray(hj.shading_stage(geom, scene.params)),
+                (None if geom.omega is None else np.asarray(geom.omega)),
+            )
             occluders[name] = occluder_light(scene, geom)
         return cache[name]
 
@@ -134,8 +137,9 @@ def test_both_shading_conventions(gl, model):
 def test_a_wrong_shader_fails_the_check(gl, references):
     """Flip the sign of the seed's specular term in GLSL: the check must catch it."""
     scene, jax_image, omega = references("point_light")
-    wrong = render_gl_with_edited_shader(scene, omega, "tl * tv + sin_tl * sin_tv",
-                                         "tl * tv - sin_tl * sin_tv")
+    wrong = render_gl_with_edited_shader(
+        scene, omega, "tl * tv + sin_tl * sin_tv", "tl * tv - sin_tl * sin_tv"
+    )
     bad, _ = unexplained_pixels(scene, wrong, jax_image)
     assert bad.size > 100
     # And the correct shader passes again afterwards.

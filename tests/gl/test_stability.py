@@ -50,6 +50,7 @@ import hairjax as hj
 
 # --- the cases -----------------------------------------------------------------------------
 
+
 def test_gl_depth_test_keeps_its_resolution_at_1e_minus_4(gl):
     """Hair just in front of / just behind the occluder (relative depth gaps 3e-5 … 3e-4,
     beyond tests/gl/test_renderer.py's 1e-5 band for "at the sphere's depth") in a scene
@@ -73,10 +74,14 @@ def test_gl_depth_test_keeps_its_resolution_at_1e_minus_4(gl):
         lambert.append((o + t * d)[2] / s)  # N·L with L = +z
         _, y, z = o + t * (1 - gap) * d  # a horizontal hair at the hit's depth × (1 − gap)
         strands.append([[-0.3 * s, y, z], [0.3 * s, y, z]])
-    scene = hj.Scene(hj.Strands.from_list(strands, alpha=1.0), camera=cam,
-                     light=hj.Light(direction=(0.0, 0.0, -1.0)),
-                     occluder=hj.Occluder(center=(0.0, 0.0, 0.0), radius=s, color=(0.2, 0.2, 0.2)),
-                     shadows=hj.Shadows("none"), shading=hj.KajiyaKay(hj.ShadingParams(kd=0.0, ks=0.0, ambient=1.0)))
+    scene = hj.Scene(
+        hj.Strands.from_list(strands, alpha=1.0),
+        camera=cam,
+        light=hj.Light(direction=(0.0, 0.0, -1.0)),
+        occluder=hj.Occluder(center=(0.0, 0.0, 0.0), radius=s, color=(0.2, 0.2, 0.2)),
+        shadows=hj.Shadows("none"),
+        shading=hj.KajiyaKay(hj.ShadingParams(kd=0.0, ks=0.0, ambient=1.0)),
+    )
     jax_image = np.asarray(hj.render(scene))
     gl_image = render_gl(scene).image
     # By hand: hair in front (gap > 0) shows white (it runs through the pixel centre:
@@ -93,6 +98,7 @@ def test_gl_depth_test_keeps_its_resolution_at_1e_minus_4(gl):
 # One test per guard (the table in the module docstring): inputs that make it fire, and the
 # guarded result checked against the model's value.
 
+
 def test_guard_glsl_kajiya_kay_gap_and_log1p(gl):
     """model.glsl: kajiya_kay_gap's b ≤ 0 branch on the cases of
     test_guard_kajiya_kay_gap_on_the_far_side (tests/shading/test_stability.py: b = −1,
@@ -104,16 +110,19 @@ def test_guard_glsl_kajiya_kay_gap_and_log1p(gl):
     near 0 (asserted: the reason for the function)."""
     x, y = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
     w = np.array([0.6614378, 0.75, 0.0])
-    for model, rows, b in (("kajiya-kay", [(x, x, -x), (x, y, x), (y, w, -y)], [-1.0, 0.0, -0.75]),
-                           ("kajiya-kay-mirror", [(x, x, x), (y, w, y)], [-1.0, -0.75])):
+    for model, rows, b in (
+        ("kajiya-kay", [(x, x, -x), (x, y, x), (y, w, -y)], [-1.0, 0.0, -0.75]),
+        ("kajiya-kay-mirror", [(x, x, x), (y, w, y)], [-1.0, -0.75]),
+    ):
         t, light, eye = (np.array(c, np.float32) for c in zip(*rows))
         out = glsl_highlight(gl, t, light, eye, model, 1e4)
         np.testing.assert_array_equal(out[:, 1], 1.0 - np.float32(b))
         np.testing.assert_array_equal(out[:, 0], 0.0)
         for p in (0.5, 1.0):
             np.testing.assert_array_equal(glsl_highlight(gl, t, light, eye, model, p)[:, 0], 0.0)
-    xs = np.concatenate([-np.geomspace(1e-9, 0.49, 60), np.geomspace(1e-9, 0.99, 60),
-                         [-0.5, -0.75, -0.999, 1.0, 3.0, 1e3]]).astype(np.float32)
+    xs = np.concatenate(
+        [-np.geomspace(1e-9, 0.49, 60), np.geomspace(1e-9, 0.99, 60), [-0.5, -0.75, -0.999, 1.0, 3.0, 1e3]]
+    ).astype(np.float32)
     body = "    outp[2u * i] = log1p_accurate(inp[i]);\n    outp[2u * i + 1u] = log(1.0 + inp[i]);"
     out = run_glsl(gl, body, xs[:, None], 2)
     exact = np.log1p(xs.astype(np.float64))
@@ -130,10 +139,13 @@ def test_guard_point_light_on_the_occluder(gl):
     from hairjax.gl import render_gl
 
     hair = hj.Strands.from_list([[[-0.5, 1.5, 0.5], [0.5, 1.5, 0.5]]], alpha=0.5)
-    scene = hj.Scene(hair, camera=hj.Camera(eye=(0.0, 0.0, 4.0), width=9, height=9),
-                     light=hj.Light(kind="point", position=(0.0, 0.0, 1.0)),
-                     occluder=hj.Occluder(center=(0.0, 0.0, 0.0), radius=1.0, color=(1.0, 1.0, 1.0)),
-                     shadows=hj.Shadows("none"))
+    scene = hj.Scene(
+        hair,
+        camera=hj.Camera(eye=(0.0, 0.0, 4.0), width=9, height=9),
+        light=hj.Light(kind="point", position=(0.0, 0.0, 1.0)),
+        occluder=hj.Occluder(center=(0.0, 0.0, 0.0), radius=1.0, color=(1.0, 1.0, 1.0)),
+        shadows=hj.Shadows("none"),
+    )
     assert np.array_equal(hj.prepare(scene).view.pixel_rays()[1][4 * 9 + 4], [0.0, 0.0, -1.0])
     jax_image, gl_image = np.asarray(hj.render(scene)), render_gl(scene).image
     assert np.all(np.isfinite(gl_image))

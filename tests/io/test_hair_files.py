@@ -83,9 +83,7 @@ def hair_bytes(
     return header + body
 
 
-def tfx3_bytes(
-    positions, *, arrays=None, version=3.0, n_strands=None, per_strand=None, offsets=None
-):
+def tfx3_bytes(positions, *, arrays=None, version=3.0, n_strands=None, per_strand=None, offsets=None):
     """TressFX 3 file; `positions` is [S, V, 3]. `arrays` maps header slot -> bytes."""
     positions = np.asarray(positions, dtype="<f4")
     s, v = positions.shape[:2]
@@ -218,9 +216,7 @@ RAGGED_POINTS = np.concatenate(RAGGED)
 @needs_data
 def test_every_asset_is_listed():
     """A new asset in shared/data must be added to REAL_FILES (and so be checked)."""
-    found = {
-        str(p.relative_to(DATA)) for ext in ("tfx", "hair", "ply") for p in DATA.rglob(f"*.{ext}")
-    }
+    found = {str(p.relative_to(DATA)) for ext in ("tfx", "hair", "ply") for p in DATA.rglob(f"*.{ext}")}
     assert found == set(REAL_FILES)
 
 

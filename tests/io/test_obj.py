@@ -45,18 +45,21 @@ def test_polygons_are_fanned(tmp_path):
     np.testing.assert_array_equal(f, [[0, 1, 2], [0, 2, 3], [0, 3, 4]])
 
 
-@pytest.mark.parametrize("text, line, message", [
-    ("v 0 0\nf 1 1 1\n", 1, "'v' needs 3 coordinates"),
-    ("v 0 0 x\n", 1, "must be numbers"),
-    ("v 0 0 nan\n", 1, "must be finite"),
-    ("v 0 0 0\nv 1 0 0\nf 1 2\n", 3, "at least 3 vertices"),
-    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", 4, "refers to vertex 4, but 3 vertices"),
-    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -4\n", 4, "refers to vertex -4"),
-    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", 4, "indices start at 1"),
-    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/a 2 3\n", 4, "is not an index"),
-    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/2/3/4 2 3\n", 4, "is not v, v/vt"),
-    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf a 2 3\n", 4, "is not an index"),
-])
+@pytest.mark.parametrize(
+    "text, line, message",
+    [
+        ("v 0 0\nf 1 1 1\n", 1, "'v' needs 3 coordinates"),
+        ("v 0 0 x\n", 1, "must be numbers"),
+        ("v 0 0 nan\n", 1, "must be finite"),
+        ("v 0 0 0\nv 1 0 0\nf 1 2\n", 3, "at least 3 vertices"),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", 4, "refers to vertex 4, but 3 vertices"),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -4\n", 4, "refers to vertex -4"),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", 4, "indices start at 1"),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/a 2 3\n", 4, "is not an index"),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/2/3/4 2 3\n", 4, "is not v, v/vt"),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf a 2 3\n", 4, "is not an index"),
+    ],
+)
 def test_malformed_lines_name_the_file_and_line(tmp_path, text, line, message):
     path = write(tmp_path, text)
     with pytest.raises(MeshFormatError, match=message) as info:
@@ -85,8 +88,9 @@ def test_the_sintel_head():
     assert v.shape == (3046, 3) and f.shape == (5952, 3)
     lines = path.read_text().splitlines()
     vn = np.array([[float(x) for x in ln.split()[1:4]] for ln in lines if ln.startswith("vn ")])
-    corners = np.array([[[int(x) for x in w.split("//")] for w in ln.split()[1:]]
-                        for ln in lines if ln.startswith("f ")])
+    corners = np.array(
+        [[[int(x) for x in w.split("//")] for w in ln.split()[1:]] for ln in lines if ln.startswith("f ")]
+    )
     np.testing.assert_array_equal(corners[..., 0] - 1, f)
     cos = np.sum(vertex_normals(v, f)[f] * vn[corners[..., 1] - 1], axis=-1)
     assert np.median(cos) > 0.99 and np.percentile(cos, 1) > 0.8

@@ -51,8 +51,7 @@ def fake_io(monkeypatch):
 
     def load_hair(path, alpha=1.0, width=1.0):
         calls.append({"path": Path(path), "alpha": alpha, "width": width})
-        return Strands.from_list([[[0, 0, 0], [1, 0, 0]], [[0, 1, 0], [0, 1, 2]]],
-                                 alpha=alpha, width=width)
+        return Strands.from_list([[[0, 0, 0], [1, 0, 0]], [[0, 1, 0], [0, 1, 2]]], alpha=alpha, width=width)
 
     module = types.ModuleType("hairjax._io")
     module.load_hair = load_hair
@@ -83,10 +82,10 @@ def test_default_scene_values():
     expected = furball(strands=20000, points=16, seed=0, length=1.0, gravity=(0.0, -0.08, 0.0))
     np.testing.assert_array_equal(hair.points, expected.points)
 
-    assert scene.camera == Camera(eye=(0.0, 0.3, 4.2), target=(0.0, -0.1, 0.0),
-                                  up=(0.0, 1.0, 0.0), fov=40.0, width=512, height=512)
-    assert scene.light == Light(kind="directional", direction=(-0.6, -0.8, -0.5),
-                                color=(1.0, 1.0, 1.0))
+    assert scene.camera == Camera(
+        eye=(0.0, 0.3, 4.2), target=(0.0, -0.1, 0.0), up=(0.0, 1.0, 0.0), fov=40.0, width=512, height=512
+    )
+    assert scene.light == Light(kind="directional", direction=(-0.6, -0.8, -0.5), color=(1.0, 1.0, 1.0))
     assert isinstance(scene.shading, hj.KajiyaKay) and type(scene.shading).name == "kajiya-kay"
     p = scene.params
     np.testing.assert_allclose(p.kd, [0.55, 0.35, 0.2], rtol=1e-6)
@@ -102,8 +101,17 @@ def test_default_scene_values():
 
 # --------------------------------------------------------------------------- examples
 
-EXAMPLE_NAMES = ["point_light", "grazing", "dense_opaque", "occluder", "tressfx_ponytail", "sintel",
-                 "furball_animated", "scheuermann", "patches"]
+EXAMPLE_NAMES = [
+    "point_light",
+    "grazing",
+    "dense_opaque",
+    "occluder",
+    "tressfx_ponytail",
+    "sintel",
+    "furball_animated",
+    "scheuermann",
+    "patches",
+]
 
 
 def test_every_example_is_listed():
@@ -138,8 +146,7 @@ def test_example_specifics():
     assert dense.strands.num_strands >= 10000
 
     occ = load_scene(EXAMPLES / "occluder.toml")
-    assert occ.occluder == Occluder(center=(0.0, 0.0, 0.0), radius=0.68,
-                                    color=(0.6, 0.5, 0.45))
+    assert occ.occluder == Occluder(center=(0.0, 0.0, 0.0), radius=0.68, color=(0.6, 0.5, 0.45))
     roots = occ.strands.points[occ.strands.offsets[:-1]]
     assert np.all(np.linalg.norm(roots, axis=1) > occ.occluder.radius)
 
@@ -196,11 +203,17 @@ def test_absent_tables_take_dataclass_defaults(tmp_path):
     np.testing.assert_array_equal(scene.strands.points, furball(strands=50).points)
 
 
-@pytest.mark.parametrize("table, message", [
-    ('[shadows]\nmethod = "exact"\nmaps = 8\n', r"shadows\.maps is not a key of method = 'exact'"),
-    ('[shadows]\nmethod = "none"\nresolution = 8\n', r"shadows\.resolution is not a key of method = 'none'"),
-    ('[ordering]\nmethod = "none"\nbins = 3\n', r"ordering\.bins is not a key of method = 'none'"),
-])
+@pytest.mark.parametrize(
+    "table, message",
+    [
+        ('[shadows]\nmethod = "exact"\nmaps = 8\n', r"shadows\.maps is not a key of method = 'exact'"),
+        (
+            '[shadows]\nmethod = "none"\nresolution = 8\n',
+            r"shadows\.resolution is not a key of method = 'none'",
+        ),
+        ('[ordering]\nmethod = "none"\nbins = 3\n', r"ordering\.bins is not a key of method = 'none'"),
+    ],
+)
 def test_keys_another_method_would_ignore_are_refused(tmp_path, table, message):
     with pytest.raises(SceneError, match=message):
         load_scene(write(tmp_path, HAIR + table))
@@ -213,7 +226,10 @@ def test_name_must_come_before_the_tables(tmp_path):
 
 
 def test_values_are_read(tmp_path):
-    text = 'name = "custom"\n' + HAIR + """
+    text = (
+        'name = "custom"\n'
+        + HAIR
+        + """
 [camera]
 fov = 30          # a TOML integer is fine where a float is expected
 width = 64
@@ -239,6 +255,7 @@ method = "none"
 [background]
 color = [0.25, 0.5, 0.75]
 """
+    )
     scene = load_scene(write(tmp_path, text))
     assert scene.name == "custom"
     assert scene.camera == Camera(fov=30.0, width=64, height=48, near=0.5)
@@ -269,8 +286,7 @@ alpha = 0.75
 width = 2.5
 """
     got = load_scene(write(tmp_path, text)).strands
-    want = scalp(strands=20, points=5, seed=9, length=0.5, gravity=(0, -0.3, 0.1), radius=2.0,
-                 coverage=0.25)
+    want = scalp(strands=20, points=5, seed=9, length=0.5, gravity=(0, -0.3, 0.1), radius=2.0, coverage=0.25)
     np.testing.assert_array_equal(got.points, want.points)
     np.testing.assert_array_equal(got.offsets, want.offsets)
     np.testing.assert_array_equal(got.alpha, 0.75)
@@ -394,126 +410,194 @@ def test_hair_format_error_is_wrapped(tmp_path, monkeypatch):
 ERROR_CASES = [
     # structure
     ("unknown-table", HAIR + "[hairs]\nx = 1\n", ["'hairs'", "allowed tables"]),
-    ("unknown-top-key", 'foo = 1\n' + HAIR, ["'foo'", "allowed tables"]),
+    ("unknown-top-key", "foo = 1\n" + HAIR, ["'foo'", "allowed tables"]),
     ("unknown-key", HAIR + "[camera]\nfox = 40\n", ["camera.fox", "allowed keys", "fov"]),
     ("unknown-hair-key", HAIR + "length_jitter = 0.1\n", ["hair.length_jitter"]),
-    ("table-not-table", 'camera = 3\n' + HAIR, ["camera must be a table ([camera]), got 3"]),
-    ("name-type", 'name = 3\n' + HAIR, ["name must be a non-empty string", "3"]),
+    ("table-not-table", "camera = 3\n" + HAIR, ["camera must be a table ([camera]), got 3"]),
+    ("name-type", "name = 3\n" + HAIR, ["name must be a non-empty string", "3"]),
     ("missing-hair", "[camera]\nfov = 40\n", ["hair.source is required", "'furball'"]),
     ("missing-source", "[hair]\nstrands = 5\n", ["hair.source is required"]),
     # [hair]
     ("source-type", "[hair]\nsource = 3\n", ["hair.source must be a non-empty string"]),
-    ("source-unknown", '[hair]\nsource = "furbal"\n',
-     ["hair.source must be 'furball', 'scalp', or a path to a .hair/.tfx/.ply file",
-      "'furbal'"]),
+    (
+        "source-unknown",
+        '[hair]\nsource = "furbal"\n',
+        ["hair.source must be 'furball', 'scalp', or a path to a .hair/.tfx/.ply file", "'furbal'"],
+    ),
     ("source-suffix", '[hair]\nsource = "head.obj"\n', ["hair.source must be", ".tfx"]),
     ("missing-file", '[hair]\nsource = "nope.tfx"\n', ["hair.source file not found", "nope.tfx"]),
-    ("strands-string", '[hair]\nsource = "furball"\nstrands = "many"\n',
-     ["hair.strands must be an integer", "'many' (string)"]),
-    ("strands-bool", '[hair]\nsource = "furball"\nstrands = true\n',
-     ["hair.strands must be an integer", "true (boolean)"]),
-    ("strands-float", '[hair]\nsource = "furball"\nstrands = 50.0\n',
-     ["hair.strands must be an integer", "50.0"]),
-    ("strands-zero", '[hair]\nsource = "furball"\nstrands = 0\n',
-     ["hair.strands must be an integer >= 1, got 0"]),
+    (
+        "strands-string",
+        '[hair]\nsource = "furball"\nstrands = "many"\n',
+        ["hair.strands must be an integer", "'many' (string)"],
+    ),
+    (
+        "strands-bool",
+        '[hair]\nsource = "furball"\nstrands = true\n',
+        ["hair.strands must be an integer", "true (boolean)"],
+    ),
+    (
+        "strands-float",
+        '[hair]\nsource = "furball"\nstrands = 50.0\n',
+        ["hair.strands must be an integer", "50.0"],
+    ),
+    (
+        "strands-zero",
+        '[hair]\nsource = "furball"\nstrands = 0\n',
+        ["hair.strands must be an integer >= 1, got 0"],
+    ),
     ("points-one", HAIR + "points = 1\n", ["hair.points must be an integer >= 2, got 1"]),
     ("seed-negative", HAIR + "seed = -1\n", ["hair.seed must be an integer >= 0, got -1"]),
     ("length-zero", HAIR + "length = 0\n", ["hair.length must be > 0, got 0"]),
     ("width-negative", HAIR + "width = -1\n", ["hair.width must be > 0, got -1"]),
-    ("width-string", HAIR + 'width = "wide"\n',
-     ["hair.width must be a finite number", "'wide' (string)"]),
+    ("width-string", HAIR + 'width = "wide"\n', ["hair.width must be a finite number", "'wide' (string)"]),
     ("width-nan", HAIR + "width = nan\n", ["hair.width must be a finite number"]),
     ("width-inf", HAIR + "width = inf\n", ["hair.width must be a finite number"]),
     ("alpha-zero", HAIR + "alpha = 0\n", ["hair.alpha must be in (0, 1], got 0"]),
     ("alpha-big", HAIR + "alpha = 1.5\n", ["hair.alpha must be in (0, 1], got 1.5"]),
     ("scale-zero", HAIR + "scale = 0\n", ["hair.scale must be > 0, got 0"]),
-    ("translate-short", HAIR + "translate = [1, 2]\n",
-     ["hair.translate must be an array of 3 finite numbers", "[1, 2] (array)"]),
-    ("gravity-string", HAIR + 'gravity = [0, "down", 0]\n',
-     ["hair.gravity must be an array of 3 finite numbers"]),
+    (
+        "translate-short",
+        HAIR + "translate = [1, 2]\n",
+        ["hair.translate must be an array of 3 finite numbers", "[1, 2] (array)"],
+    ),
+    (
+        "gravity-string",
+        HAIR + 'gravity = [0, "down", 0]\n',
+        ["hair.gravity must be an array of 3 finite numbers"],
+    ),
     ("gravity-bool", HAIR + "gravity = [0, true, 0]\n", ["hair.gravity", "true"]),
-    ("color-negative", HAIR + "color = [-0.1, 0, 0]\n",
-     ["hair.color must be an array of 3 numbers >= 0"]),
+    ("color-negative", HAIR + "color = [-0.1, 0, 0]\n", ["hair.color must be an array of 3 numbers >= 0"]),
     ("color-scalar", HAIR + "color = 0.5\n", ["hair.color must be an array of 3 numbers"]),
-    ("inertia-scalp", '[hair]\nsource = "scalp"\ninertia = [0, 0, 0]\n',
-     ["hair.inertia applies only to source = 'furball'", "'scalp'"]),
+    (
+        "inertia-scalp",
+        '[hair]\nsource = "scalp"\ninertia = [0, 0, 0]\n',
+        ["hair.inertia applies only to source = 'furball'", "'scalp'"],
+    ),
     ("radius-furball", HAIR + "radius = 1\n", ["hair.radius applies only to source = 'scalp'"]),
     ("coverage-furball", HAIR + "coverage = 0.5\n", ["hair.coverage applies only to"]),
-    ("coverage-zero", '[hair]\nsource = "scalp"\nstrands = 5\ncoverage = 0\n',
-     ["hair.coverage must be in (0, 1], got 0"]),
-    ("radius-negative", '[hair]\nsource = "scalp"\nstrands = 5\nradius = -1\n',
-     ["hair.radius must be > 0, got -1"]),
-    ("procedural-key-on-file", '[hair]\nsource = "x.tfx"\nstrands = 5\n',
-     ["hair.strands applies only to procedural sources", "'x.tfx'"]),
+    (
+        "coverage-zero",
+        '[hair]\nsource = "scalp"\nstrands = 5\ncoverage = 0\n',
+        ["hair.coverage must be in (0, 1], got 0"],
+    ),
+    (
+        "radius-negative",
+        '[hair]\nsource = "scalp"\nstrands = 5\nradius = -1\n',
+        ["hair.radius must be > 0, got -1"],
+    ),
+    (
+        "procedural-key-on-file",
+        '[hair]\nsource = "x.tfx"\nstrands = 5\n',
+        ["hair.strands applies only to procedural sources", "'x.tfx'"],
+    ),
     # [camera] (ranges are Camera's own checks, wrapped with the path)
-    ("camera-width-negative", HAIR + "[camera]\nwidth = -1\n",
-     ["camera.width must be an integer in [1, 16384], got -1"]),
-    ("camera-width-float", HAIR + "[camera]\nwidth = 512.0\n",
-     ["camera.width must be an integer", "512.0"]),
-    ("camera-height-bool", HAIR + "[camera]\nheight = true\n",
-     ["camera.height must be an integer", "true (boolean)"]),
+    (
+        "camera-width-negative",
+        HAIR + "[camera]\nwidth = -1\n",
+        ["camera.width must be an integer in [1, 16384], got -1"],
+    ),
+    ("camera-width-float", HAIR + "[camera]\nwidth = 512.0\n", ["camera.width must be an integer", "512.0"]),
+    (
+        "camera-height-bool",
+        HAIR + "[camera]\nheight = true\n",
+        ["camera.height must be an integer", "true (boolean)"],
+    ),
     ("camera-fov-zero", HAIR + "[camera]\nfov = 0\n", ["camera.fov must be in (0, 180)"]),
-    ("camera-fov-string", HAIR + '[camera]\nfov = "wide"\n',
-     ["camera.fov must be a finite number"]),
-    ("camera-eye-short", HAIR + "[camera]\neye = [0, 0]\n",
-     ["camera.eye must be an array of 3 finite numbers"]),
-    ("camera-eye-target", HAIR + "[camera]\neye = [0, 0, 0]\n",
-     ["camera.eye and camera.target must differ"]),
-    ("camera-up-parallel", HAIR + "[camera]\nup = [0, 0, 1]\n",
-     ["camera.up must not be parallel"]),
+    ("camera-fov-string", HAIR + '[camera]\nfov = "wide"\n', ["camera.fov must be a finite number"]),
+    (
+        "camera-eye-short",
+        HAIR + "[camera]\neye = [0, 0]\n",
+        ["camera.eye must be an array of 3 finite numbers"],
+    ),
+    ("camera-eye-target", HAIR + "[camera]\neye = [0, 0, 0]\n", ["camera.eye and camera.target must differ"]),
+    ("camera-up-parallel", HAIR + "[camera]\nup = [0, 0, 1]\n", ["camera.up must not be parallel"]),
     ("camera-near-negative", HAIR + "[camera]\nnear = -1\n", ["camera.near must be positive"]),
     # [light]
-    ("light-kind", HAIR + '[light]\nkind = "spot"\n',
-     ["light.kind must be one of 'directional', 'point'", "'spot'"]),
-    ("light-direction-zero", HAIR + "[light]\ndirection = [0, 0, 0]\n",
-     ["light.direction must not have length 0"]),
-    ("light-position-directional", HAIR + "[light]\nposition = [1, 1, 1]\n",
-     ["light.position is not allowed for kind = 'directional'", "light.direction"]),
-    ("light-direction-point", HAIR + '[light]\nkind = "point"\nposition = [1, 1, 1]\n'
-     "direction = [0, -1, 0]\n", ["light.direction is not allowed for kind = 'point'"]),
-    ("light-point-no-position", HAIR + '[light]\nkind = "point"\n',
-     ["light.position is required for a point light"]),
-    ("light-color-short", HAIR + "[light]\ncolor = [1, 1]\n",
-     ["light.color must be an array of 3 numbers >= 0"]),
+    (
+        "light-kind",
+        HAIR + '[light]\nkind = "spot"\n',
+        ["light.kind must be one of 'directional', 'point'", "'spot'"],
+    ),
+    (
+        "light-direction-zero",
+        HAIR + "[light]\ndirection = [0, 0, 0]\n",
+        ["light.direction must not have length 0"],
+    ),
+    (
+        "light-position-directional",
+        HAIR + "[light]\nposition = [1, 1, 1]\n",
+        ["light.position is not allowed for kind = 'directional'", "light.direction"],
+    ),
+    (
+        "light-direction-point",
+        HAIR + '[light]\nkind = "point"\nposition = [1, 1, 1]\ndirection = [0, -1, 0]\n',
+        ["light.direction is not allowed for kind = 'point'"],
+    ),
+    (
+        "light-point-no-position",
+        HAIR + '[light]\nkind = "point"\n',
+        ["light.position is required for a point light"],
+    ),
+    (
+        "light-color-short",
+        HAIR + "[light]\ncolor = [1, 1]\n",
+        ["light.color must be an array of 3 numbers >= 0"],
+    ),
     ("light-color-negative", HAIR + "[light]\ncolor = [1, -1, 1]\n", ["light.color"]),
     # [shading]
-    ("shading-model", HAIR + '[shading]\nmodel = "phong"\n',
-     ["shading.model must be one of 'kajiya-kay', 'kajiya-kay-lookup', 'kajiya-kay-mirror'", "'phong'"]),
-    ("kd-negative", HAIR + "[shading]\nkd = -0.1\n",
-     ["shading.kd must be a number >= 0 or an array of 3 numbers >= 0, got -0.1"]),
+    (
+        "shading-model",
+        HAIR + '[shading]\nmodel = "phong"\n',
+        ["shading.model must be one of 'kajiya-kay', 'kajiya-kay-lookup', 'kajiya-kay-mirror'", "'phong'"],
+    ),
+    (
+        "kd-negative",
+        HAIR + "[shading]\nkd = -0.1\n",
+        ["shading.kd must be a number >= 0 or an array of 3 numbers >= 0, got -0.1"],
+    ),
     ("kd-bool", HAIR + "[shading]\nkd = true\n", ["shading.kd", "true (boolean)"]),
     ("ks-short", HAIR + "[shading]\nks = [1, 2]\n", ["shading.ks must be a number >= 0"]),
     ("ks-negative-channel", HAIR + "[shading]\nks = [0.1, -0.2, 0.1]\n", ["shading.ks"]),
-    ("shininess-zero", HAIR + "[shading]\nshininess = 0\n",
-     ["shading.shininess must be > 0, got 0"]),
+    ("shininess-zero", HAIR + "[shading]\nshininess = 0\n", ["shading.shininess must be > 0, got 0"]),
     ("kappa-negative", HAIR + "[shading]\nkappa = -1\n", ["shading.kappa must be >= 0, got -1"]),
     ("ambient-negative", HAIR + "[shading]\nambient = -0.5\n", ["shading.ambient", "-0.5"]),
     # [shadows], [ordering]
-    ("shadows-method", HAIR + '[shadows]\nmethod = "pcf"\n',
-     ["shadows.method must be one of 'exact', 'none', 'opacity-maps'"]),
-    ("shadows-resolution-zero", HAIR + "[shadows]\nresolution = 0\n",
-     ["shadows.resolution must be an integer in [4, 16384], got 0"]),
+    (
+        "shadows-method",
+        HAIR + '[shadows]\nmethod = "pcf"\n',
+        ["shadows.method must be one of 'exact', 'none', 'opacity-maps'"],
+    ),
+    (
+        "shadows-resolution-zero",
+        HAIR + "[shadows]\nresolution = 0\n",
+        ["shadows.resolution must be an integer in [4, 16384], got 0"],
+    ),
     ("shadows-maps-zero", HAIR + "[shadows]\nmaps = 0\n", ["shadows.maps must be an integer in"]),
     ("shadows-maps-float", HAIR + "[shadows]\nmaps = 1.5\n", ["shadows.maps must be an integer"]),
     ("width-units", HAIR + 'width_units = "mm"\n', ["hair.width_units must be one of 'pixels', 'world'"]),
-    ("ordering-method", HAIR + '[ordering]\nmethod = "sorted"\n',
-     ["ordering.method must be one of 'bins', 'exact', 'none'"]),
+    (
+        "ordering-method",
+        HAIR + '[ordering]\nmethod = "sorted"\n',
+        ["ordering.method must be one of 'bins', 'exact', 'none'"],
+    ),
     ("ordering-bins-zero", HAIR + "[ordering]\nbins = 0\n", ["ordering.bins must be an integer"]),
     ("ordering-bins-bool", HAIR + "[ordering]\nbins = false\n", ["ordering.bins", "false"]),
     # [occluder], [background]
-    ("occluder-kind", HAIR + '[occluder]\nkind = "cube"\n',
-     ["occluder.kind must be one of 'sphere'"]),
+    ("occluder-kind", HAIR + '[occluder]\nkind = "cube"\n', ["occluder.kind must be one of 'sphere'"]),
     ("occluder-radius", HAIR + "[occluder]\nradius = 0\n", ["occluder.radius must be > 0, got 0"]),
     ("occluder-center", HAIR + "[occluder]\ncenter = [0, 0]\n", ["occluder.center"]),
-    ("occluder-color", HAIR + '[occluder]\ncolor = "red"\n',
-     ["occluder.color must be an array of 3 numbers >= 0", "'red' (string)"]),
+    (
+        "occluder-color",
+        HAIR + '[occluder]\ncolor = "red"\n',
+        ["occluder.color must be an array of 3 numbers >= 0", "'red' (string)"],
+    ),
     ("background-long", HAIR + "[background]\ncolor = [0, 0, 0, 1]\n", ["background.color"]),
     ("background-key", HAIR + "[background]\nalpha = 1\n", ["background.alpha", "color"]),
 ]
 
 
-@pytest.mark.parametrize("text, fragments", [c[1:] for c in ERROR_CASES],
-                         ids=[c[0] for c in ERROR_CASES])
+@pytest.mark.parametrize("text, fragments", [c[1:] for c in ERROR_CASES], ids=[c[0] for c in ERROR_CASES])
 def test_error_names_key_and_file(tmp_path, text, fragments):
     path = write(tmp_path, text)
     with pytest.raises(SceneError) as err:
@@ -524,11 +608,15 @@ def test_error_names_key_and_file(tmp_path, text, fragments):
         assert fragment in msg, (fragment, msg)
 
 
-@pytest.mark.parametrize("content, fragment", [
-    (b"[hair\nsource = 'furball'\n", "invalid TOML"),
-    (b"[hair]\nsource = 'furball'\nsource = 'scalp'\n", "invalid TOML"),
-    (b"[hair]\nsource = \xff\n", "not valid UTF-8"),
-], ids=["syntax", "duplicate-key", "not-utf8"])
+@pytest.mark.parametrize(
+    "content, fragment",
+    [
+        (b"[hair\nsource = 'furball'\n", "invalid TOML"),
+        (b"[hair]\nsource = 'furball'\nsource = 'scalp'\n", "invalid TOML"),
+        (b"[hair]\nsource = \xff\n", "not valid UTF-8"),
+    ],
+    ids=["syntax", "duplicate-key", "not-utf8"],
+)
 def test_unparsable_file(tmp_path, content, fragment):
     path = tmp_path / "broken.toml"
     path.write_bytes(content)
@@ -564,8 +652,7 @@ def test_docs_list_exactly_the_keys_of_each_table():
     sections = {}
     for chunk in DOCS.read_text(encoding="utf-8").split("\n## ")[1:]:
         heading, _, body = chunk.partition("\n")
-        keys = [line.split("|")[1].strip().strip("`") for line in body.splitlines()
-                if line.startswith("| `")]
+        keys = [line.split("|")[1].strip().strip("`") for line in body.splitlines() if line.startswith("| `")]
         sections[heading.strip()] = keys
     for table, keys in scene_tables().items():
         documented = sections[f"`[{table}]`"]
@@ -577,7 +664,7 @@ def test_docs_list_exactly_the_keys_of_each_table():
 def test_docs_show_the_packaged_default_scene():
     text = DOCS.read_text(encoding="utf-8")
     start = text.index("```toml\n# The built-in default scene") + len("```toml\n")
-    block = text[start:text.index("```", start)]
+    block = text[start : text.index("```", start)]
     assert block == default_scene_path().read_text(encoding="utf-8")
 
 

@@ -37,8 +37,9 @@ def test_scalp_roots_on_the_sphere_growing_outward():
     np.testing.assert_allclose(np.linalg.norm(pts[:, 0], axis=1), 0.5, rtol=1e-12)
     assert pts[:, 0, 1].min() >= -1e-12  # coverage ½: the upper hemisphere
     # Without gravity a strand is straight along its root normal.
-    np.testing.assert_allclose(np.linalg.norm(pts[:, -1], axis=1), 0.5 + np.linalg.norm(
-        pts[:, -1] - pts[:, 0], axis=1), rtol=1e-12)
+    np.testing.assert_allclose(
+        np.linalg.norm(pts[:, -1], axis=1), 0.5 + np.linalg.norm(pts[:, -1] - pts[:, 0], axis=1), rtol=1e-12
+    )
 
 
 @pytest.mark.parametrize("kwargs", [dict(strands=0), dict(points=1)])

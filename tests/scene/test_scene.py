@@ -12,12 +12,11 @@ field), and, where pytest checks hairjax's annotations at run time (jaxtyping's 
 
 from __future__ import annotations
 
-import contextlib
 import re
 
 import numpy as np
 import pytest
-from jaxtyping import TypeCheckError
+from helpers import refused
 
 import hairjax as hj
 from hairjax._constants import NEAR_FRACTION
@@ -25,18 +24,6 @@ from hairjax._constants import NEAR_FRACTION
 HAIR = hj.furball(strands=3, points=4, seed=0)
 QUAD = np.array([[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]])
 QUAD_TRIANGLES = [[0, 1, 2], [0, 2, 3]]
-
-
-@contextlib.contextmanager
-def refused(field: str, message: str):
-    """The block is refused a value of the wrong type for `field`: SceneError matching
-    `message`, or the annotation check's TypeCheckError naming the parameter (see above)."""
-    with pytest.raises((hj.SceneError, TypeCheckError)) as info:
-        yield
-    if isinstance(info.value, TypeCheckError):
-        assert f"parameter '{field}'" in str(info.value), str(info.value)
-    else:
-        assert re.search(message, str(info.value)), (message, str(info.value))
 
 
 def assert_same_params(a, b):

@@ -18,15 +18,20 @@ import hairjax as hj
 # One test per guard (the table in the module docstring): inputs that make it fire, and the
 # guarded result checked against the model's value.
 
+
 def test_guard_zero_tangent_of_repeated_points():
     """_scene/_strands.tangents/unit_rows: a zero central difference (repeated points, one-point
     strands) gives the zero tangent, exactly; other tangents are unit vectors."""
     from hairjax._scene._strands import tangents
 
-    hair = hj.Strands.from_list([[[0, 0, 0], [0, 0, 0], [1, 0, 0]],       # one-sided p1 − p0 = 0
-                                 [[2, 2, 2]],                              # one point
-                                 [[0, 1, 0], [0, 1, 0], [0, 1, 0]],       # all equal
-                                 [[0, 0, 0], [1, 2, 2], [0, 0, 0]]])      # p2 − p0 = 0 (middle)
+    hair = hj.Strands.from_list(
+        [
+            [[0, 0, 0], [0, 0, 0], [1, 0, 0]],  # one-sided p1 − p0 = 0
+            [[2, 2, 2]],  # one point
+            [[0, 1, 0], [0, 1, 0], [0, 1, 0]],  # all equal
+            [[0, 0, 0], [1, 2, 2], [0, 0, 0]],
+        ]
+    )  # p2 − p0 = 0 (middle)
     t = tangents(hair.points, hair.offsets)
     zero = [0, 3, 4, 5, 6, 8]
     np.testing.assert_array_equal(t[zero], 0.0)
@@ -43,6 +48,7 @@ def test_guard_fur_sources():
             return np.zeros(size)
 
     np.testing.assert_array_equal(_unit_vectors(Zeros(), 2), [[0.0, 1.0, 0.0]] * 2)
-    out = _grow(np.zeros((1, 3)), np.array([[0.0, 1.0, 0.0]]), np.array([0.5]), 3,
-                (0.0, -1.0, 0.0), (0.0, 0.0, 0.0))
+    out = _grow(
+        np.zeros((1, 3)), np.array([[0.0, 1.0, 0.0]]), np.array([0.5]), 3, (0.0, -1.0, 0.0), (0.0, 0.0, 0.0)
+    )
     np.testing.assert_array_equal(out[0], [[0.0, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 1.0, 0.0]])

@@ -26,14 +26,17 @@ def test_repeated_points_give_zero_not_nan():
     assert np.all(np.isfinite(t)) and np.all(t == 0)
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(alpha=0.0), "alpha"),
-    (dict(alpha=1.5), "alpha"),
-    (dict(width=-1.0), "width"),
-    (dict(points=np.array([[0, 0, np.nan]])), "NaN"),
-    (dict(offsets=np.array([0, 0, 1])), "at least one point"),
-    (dict(offsets=np.array([0, 2])), "offsets"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(alpha=0.0), "alpha"),
+        (dict(alpha=1.5), "alpha"),
+        (dict(width=-1.0), "width"),
+        (dict(points=np.array([[0, 0, np.nan]])), "NaN"),
+        (dict(offsets=np.array([0, 0, 1])), "at least one point"),
+        (dict(offsets=np.array([0, 2])), "offsets"),
+    ],
+)
 def test_invalid_strands(kwargs, message):
     base = dict(points=np.zeros((1, 3)), offsets=np.array([0, 1]), alpha=0.5, width=1.0)
     base.update(kwargs)

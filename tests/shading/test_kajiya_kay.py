@@ -69,7 +69,8 @@ def test_power_finite_at_zero_base_and_large_exponent():
     for base in (0.0, 1e-300, 0.5, 1.0):
         for p in (0.5, 1.0, 1e4):
             val, grads = jax.value_and_grad(specular_power, argnums=(0, 1))(
-                jnp.asarray(1.0 - base), jnp.asarray(p))
+                jnp.asarray(1.0 - base), jnp.asarray(p)
+            )
             assert np.isfinite(val) and all(np.isfinite(g) for g in grads)
     assert specular_power(jnp.asarray(1.0), jnp.asarray(3.0)) == 0.0  # b = 0
     assert specular_power(jnp.asarray(1.3), jnp.asarray(3.0)) == 0.0  # b = −0.3
@@ -171,9 +172,17 @@ def test_unknown_model_raises():
         hj.shading_model_class("phong")
 
 
-@pytest.mark.parametrize("bad", [dict(shininess=-1.0), dict(shininess=0.0), dict(kd=-0.1),
-                                 dict(ks=(0.1, float("nan"), 0.1)), dict(kappa=-1.0),
-                                 dict(ambient=float("inf"))])
+@pytest.mark.parametrize(
+    "bad",
+    [
+        dict(shininess=-1.0),
+        dict(shininess=0.0),
+        dict(kd=-0.1),
+        dict(ks=(0.1, float("nan"), 0.1)),
+        dict(kappa=-1.0),
+        dict(ambient=float("inf")),
+    ],
+)
 def test_parameters_are_checked_at_construction(bad):
     """The same range checks for parameters from Python as from a scene file."""
     import hairjax as hj

@@ -9,7 +9,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from helpers import PIXEL_TOL, camera_band, central_difference, small_furball_scene
+from helpers import PIXEL_TOL, camera_band, central_difference, refused, small_furball_scene
 
 import hairjax as hj
 from hairjax._errors import SceneError
@@ -23,9 +23,9 @@ kajiya_kay_lookup = jax.jit(_kajiya_kay_lookup, static_argnums=(4, 5))
 def test_table_holds_sine_and_power_at_texel_centres():
     n, p = 6, 7.5
     table = np.asarray(kajiya_kay_table(jnp.asarray(p), n))
-    c = (np.arange(n) + 0.5) / n * 2 - 1          # L·T (columns), V·T (rows)
+    c = (np.arange(n) + 0.5) / n * 2 - 1  # L·T (columns), V·T (rows)
     s = np.sqrt(1 - c**2)
-    base = c[None, :] * c[:, None] + s[None, :] * s[:, None]   # cos(θ_L − θ_V), the seed's b
+    base = c[None, :] * c[:, None] + s[None, :] * s[:, None]  # cos(θ_L − θ_V), the seed's b
     np.testing.assert_allclose(table[..., 0], np.broadcast_to(s[None, :], (n, n)), rtol=1e-14)
     np.testing.assert_allclose(table[..., 1], np.maximum(base, 0) ** p, rtol=1e-12, atol=1e-300)
 
@@ -33,7 +33,7 @@ def test_table_holds_sine_and_power_at_texel_centres():
 def test_bilinear_is_gl_linear_clamp_to_edge():
     n = 4
     i, j = np.meshgrid(np.arange(n), np.arange(n))
-    table = jnp.asarray(np.stack([i, j * j], axis=-1), dtype=float)   # [rows j, columns i]
+    table = jnp.asarray(np.stack([i, j * j], axis=-1), dtype=float)  # [rows j, columns i]
     sample = lambda u, v: np.asarray(bilinear(table, jnp.asarray(u), jnp.asarray(v)))  # noqa: E731
     # Texel centres return the texel.
     np.testing.assert_array_equal(sample(2.5 / n, 1.5 / n), [2, 1])
@@ -62,8 +62,13 @@ def test_lookup_converges_to_the_formula():
     inner = (np.abs(np.sum(T * L, axis=1)) < 0.9) & (np.abs(np.sum(T * V, axis=1)) < 0.9)
     params = hj.ShadingParams(kd=1.0, ks=1.0, shininess=20.0)
     exact = jax.jit(jax.vmap(hj.kajiya_kay, in_axes=(0, 0, 0, None)))(T, L, V, params)
-    err = {n: [np.asarray(a)[:, 0] - np.asarray(e)[:, 0]
-               for a, e in zip(kajiya_kay_lookup(T, L, V, params, n), exact)] for n in (16, 256)}
+    err = {
+        n: [
+            np.asarray(a)[:, 0] - np.asarray(e)[:, 0]
+            for a, e in zip(kajiya_kay_lookup(T, L, V, params, n), exact)
+        ]
+        for n in (16, 256)
+    }
     for term in range(2):  # diffuse, specular
         coarse, fine = err[16][term], err[256][term]
         rms = lambda d: float(np.sqrt(np.mean(d**2)))  # noqa: E731
@@ -77,9 +82,9 @@ def test_zero_vectors_get_no_light_as_in_the_formula():
     e = jnp.eye(3)
     zero = jnp.zeros((1, 3))
     params = hj.ShadingParams(kd=1.0, ks=1.0, shininess=2.0)
-    d, s = kajiya_kay_lookup(zero, e[:1], e[1:2], params, 8)   # zero tangent
+    d, s = kajiya_kay_lookup(zero, e[:1], e[1:2], params, 8)  # zero tangent
     assert float(jnp.abs(d).max()) == 0 and float(jnp.abs(s).max()) == 0
-    d, s = kajiya_kay_lookup(e[:1], zero, e[1:2], params, 8)   # point light at the point
+    d, s = kajiya_kay_lookup(e[:1], zero, e[1:2], params, 8)  # point light at the point
     assert float(jnp.abs(d).max()) == 0 and float(jnp.abs(s).max()) == 0
 
 
@@ -115,15 +120,18 @@ def test_gradients_in_kd_ks_shininess_match_finite_differences():
 
 def test_scene_checks_lookup_size(tmp_path):
     scene = lookup_scene()
-    for bad in (1, 5000, 2.5, True):
+    for bad in (1, 5000, True):
         with pytest.raises(SceneError, match="lookup_size"):
             hj.KajiyaKayLookup(scene.params, size=bad)
+    with refused("size", "lookup_size"):  # not an integer
+        hj.KajiyaKayLookup(scene.params, size=2.5)
     path = tmp_path / "s.toml"
     path.write_text('[hair]\nsource = "furball"\nstrands = 3\n[shading]\nlookup_size = 32\n')
     with pytest.raises(SceneError, match=r"shading\.lookup_size is not a key of model = 'kajiya-kay'"):
         hj.load_scene(path)
-    path.write_text('[hair]\nsource = "furball"\nstrands = 3\n'
-                    '[shading]\nmodel = "kajiya-kay-lookup"\nlookup_size = 32\n')
+    path.write_text(
+        '[hair]\nsource = "furball"\nstrands = 3\n[shading]\nmodel = "kajiya-kay-lookup"\nlookup_size = 32\n'
+    )
     loaded = hj.load_scene(path)
     assert loaded.shading == hj.KajiyaKayLookup(loaded.params, size=32)
 
@@ -224,12 +232,14 @@ def test_fit_terms_and_derivatives_for_the_lookup_model():
     analytic = np.asarray(hj.render(scene.replace(shading=hj.KajiyaKay(scene.params)), TRUE))
     assert np.abs(analytic[..., :3].reshape(-1, 3) - exact).max() > 1e-3  # the table shows
 
-    args = (jnp.asarray([0.3, 0.5, 0.2]), jnp.asarray([0.4, 0.4, 0.4]), jnp.asarray(25.0),
-            jnp.asarray(2.5))
-    tangent = (jnp.asarray([0.1, -0.2, 0.3]), jnp.asarray([0.5, 0.1, -0.1]), jnp.asarray(3.0),
-               jnp.asarray(-0.7))
+    args = (jnp.asarray([0.3, 0.5, 0.2]), jnp.asarray([0.4, 0.4, 0.4]), jnp.asarray(25.0), jnp.asarray(2.5))
+    tangent = (
+        jnp.asarray([0.1, -0.2, 0.3]),
+        jnp.asarray([0.5, 0.1, -0.1]),
+        jnp.asarray(3.0),
+        jnp.asarray(-0.7),
+    )
     _, jvp_f = jax.jvp(lambda *a: fit_image(terms, *a, ambient=TRUE.ambient), args, tangent)
     _, jvp_g = jax.jvp(lambda *a: fit_image(terms, *a, ambient=TRUE.ambient, plain=True), args, tangent)
     np.testing.assert_allclose(jvp_f, jvp_g, rtol=1e-10, atol=1e-13)
     assert np.abs(np.asarray(jvp_g)).max() > 0
-

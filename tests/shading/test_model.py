@@ -23,16 +23,16 @@ class ToyParams(eqx.Module):
     power: Float[Array, ""]
     kappa: Float[Array, ""]
 
-    def __init__(self, kd: ArrayLike = 0.5, ambient: ArrayLike = 0.05, power: ArrayLike = 2.0,
-                 kappa: ArrayLike = 1.0):
+    def __init__(
+        self, kd: ArrayLike = 0.5, ambient: ArrayLike = 0.05, power: ArrayLike = 2.0, kappa: ArrayLike = 1.0
+    ):
         self.kd = jnp.broadcast_to(jnp.asarray(kd, dtype=float), (3,))
         self.ambient = jnp.broadcast_to(jnp.asarray(ambient, dtype=float), (3,))
         self.power = jnp.asarray(power, dtype=float)
         self.kappa = jnp.asarray(kappa, dtype=float)
 
     def __check_init__(self):
-        hj.check_params(self, colors=("kd", "ambient"), positive=("power",),
-                            non_negative=("kappa",))
+        hj.check_params(self, colors=("kd", "ambient"), positive=("power",), non_negative=("kappa",))
 
 
 class Toy(hj.AbstractShadingModel):
@@ -49,21 +49,28 @@ class Toy(hj.AbstractShadingModel):
     def reflectance(self, points, params):
         cos = jnp.sum(points.tangent * points.to_light, axis=1)
         fall_off = jnp.exp(-params.power * cos * cos)
-        return hj.Reflectance(ambient={"ambient": points.base_color},
-                              lit={"kd": fall_off[:, None] * points.base_color})
+        return hj.Reflectance(
+            ambient={"ambient": points.base_color}, lit={"kd": fall_off[:, None] * points.base_color}
+        )
 
     @classmethod
     def from_table(cls, table):
-        return cls(ToyParams(**table.given(kd=table.rgb("kd", scalar=True),
-                                           ambient=table.rgb("ambient", scalar=True),
-                                           power=table.number("power"),
-                                           kappa=table.number("kappa"))))
+        return cls(
+            ToyParams(
+                **table.given(
+                    kd=table.rgb("kd", scalar=True),
+                    ambient=table.rgb("ambient", scalar=True),
+                    power=table.number("power"),
+                    kappa=table.number("kappa"),
+                )
+            )
+        )
 
 
 @pytest.fixture
 def toy(monkeypatch):
     """The toy model registered for one test only (the registry restored afterwards)."""
-    monkeypatch.setattr(_model, "_REGISTRY", dict(_model._REGISTRY))
+    monkeypatch.setattr(_model.SHADING_MODELS, "classes", dict(_model.SHADING_MODELS.classes))
     hj.register_shading_model(Toy)
     return Toy
 
@@ -79,11 +86,9 @@ def test_renders_through_both_stages(toy):
     scene = toy_scene()
     image = np.asarray(hj.render(scene))
     assert image[..., 3].max() > 0.5 and image[..., :3].max() > 0.05
-    other = np.asarray(hj.render(scene, ToyParams(kd=(0.6, 0.4, 0.3), ambient=0.05, power=0.2,
-                                                  kappa=1.5)))
+    other = np.asarray(hj.render(scene, ToyParams(kd=(0.6, 0.4, 0.3), ambient=0.05, power=0.2, kappa=1.5)))
     assert np.abs(other - image).max() > 1e-2  # the exponent reaches the image
-    np.testing.assert_array_equal(image, np.asarray(hj.shading_stage(hj.geometry_stage(scene),
-                                                                     scene.params)))
+    np.testing.assert_array_equal(image, np.asarray(hj.shading_stage(hj.geometry_stage(scene), scene.params)))
 
 
 def test_is_fitted_through_its_own_terms(toy):
@@ -101,18 +106,19 @@ def test_is_fitted_through_its_own_terms(toy):
 
 def test_is_read_from_a_scene_file(toy, tmp_path):
     path = tmp_path / "toy.toml"
-    path.write_text('[hair]\nsource = "furball"\nstrands = 20\n'
-                    '[shading]\nmodel = "toy-test"\nkd = 0.25\npower = 4\n')
+    path.write_text(
+        '[hair]\nsource = "furball"\nstrands = 20\n[shading]\nmodel = "toy-test"\nkd = 0.25\npower = 4\n'
+    )
     scene = hj.load_scene(path)
     assert isinstance(scene.shading, Toy)
     np.testing.assert_allclose(scene.params.kd, 0.25)
     assert float(scene.params.power) == 4.0
-    path.write_text('[hair]\nsource = "furball"\nstrands = 20\n'
-                    '[shading]\nmodel = "toy-test"\npower = -1\n')
+    path.write_text('[hair]\nsource = "furball"\nstrands = 20\n[shading]\nmodel = "toy-test"\npower = -1\n')
     with pytest.raises(hj.SceneError, match=r"toy\.toml: shading\.power must be > 0, got -1"):
         hj.load_scene(path)
-    path.write_text('[hair]\nsource = "furball"\nstrands = 20\n'
-                    '[shading]\nmodel = "toy-test"\nshininess = 4\n')
+    path.write_text(
+        '[hair]\nsource = "furball"\nstrands = 20\n[shading]\nmodel = "toy-test"\nshininess = 4\n'
+    )
     with pytest.raises(hj.SceneError, match=r"shading\.shininess is not a key of model = 'toy-test'"):
         hj.load_scene(path)
 

@@ -63,8 +63,7 @@ def test_diffuse_is_the_seeds_lerp_saturated():
 
 def test_shift_tangent_values():
     # T = x, N = y, shift ¾: (1, ¾)/1.25 = (0.8, 0.6); shift 0 leaves T.
-    np.testing.assert_allclose(shift_tangent(unit(1, 0, 0), unit(0, 1, 0), 0.75), [0.8, 0.6, 0.0],
-                               atol=1e-15)
+    np.testing.assert_allclose(shift_tangent(unit(1, 0, 0), unit(0, 1, 0), 0.75), [0.8, 0.6, 0.0], atol=1e-15)
     np.testing.assert_allclose(shift_tangent(unit(1, 0, 0), unit(0, 1, 0), 0.0), [1, 0, 0])
     assert np.all(shift_tangent(jnp.zeros(3), jnp.zeros(3), 0.3) == 0)  # no tangent stays 0
 
@@ -93,10 +92,16 @@ def test_strand_specular_values():
     assert float(strand_specular(T, jnp.zeros(3), 3.0)) == 0.0
 
 
-PARAMS = ScheuermannParams(kd=(0.5, 0.4, 0.3), ambient=0.1, primary_color=(1.0, 0.5, 0.25),
-                           primary_exponent=7.0, primary_shift=0.0,
-                           secondary_color=(0.2, 0.4, 0.8), secondary_exponent=2.0,
-                           secondary_shift=1.0)
+PARAMS = ScheuermannParams(
+    kd=(0.5, 0.4, 0.3),
+    ambient=0.1,
+    primary_color=(1.0, 0.5, 0.25),
+    primary_exponent=7.0,
+    primary_shift=0.0,
+    secondary_color=(0.2, 0.4, 0.8),
+    secondary_exponent=2.0,
+    secondary_shift=1.0,
+)
 
 
 def test_full_point_against_hand_values():
@@ -132,9 +137,20 @@ def test_shift_texture_adds_to_both_shifts():
 
 
 def _fields(p):
-    return {k: getattr(p, k) for k in ("kd", "ambient", "primary_color", "primary_exponent",
-                                       "primary_shift", "secondary_color", "secondary_exponent",
-                                       "secondary_shift", "kappa")}
+    return {
+        k: getattr(p, k)
+        for k in (
+            "kd",
+            "ambient",
+            "primary_color",
+            "primary_exponent",
+            "primary_shift",
+            "secondary_color",
+            "secondary_exponent",
+            "secondary_shift",
+            "kappa",
+        )
+    }
 
 
 # --------------------------------------------------------------------------- shift direction
@@ -160,7 +176,8 @@ def test_positive_shift_moves_the_highlight_towards_the_tip(shift):
     phi, _, t, n = _arc()
     H = jnp.asarray([np.sin(psi), np.cos(psi), 0.0])
     spec = jax.vmap(lambda ti, ni: strand_specular(shift_tangent(ti, ni, shift), H, 200.0))(
-        jnp.asarray(t), jnp.asarray(n))
+        jnp.asarray(t), jnp.asarray(n)
+    )
     peak = phi[int(jnp.argmax(spec))]
     # The grid step is (π/2)/800 ≈ 2e-3 rad.
     assert abs(peak - (psi + np.arctan(shift))) < 2e-3
@@ -177,14 +194,23 @@ def test_shift_direction_in_a_rendered_strand(shift):
     h = np.array([np.sin(psi), np.cos(psi), 0.0])
     scene = hj.Scene(
         hj.Strands.from_list([p], alpha=1.0),
-        camera=hj.Camera(eye=tuple(1e4 * h), target=(0.0, 0.0, 0.0), up=(0.0, 0.0, 1.0),
-                         fov=1.0, width=8, height=8),
+        camera=hj.Camera(
+            eye=tuple(1e4 * h), target=(0.0, 0.0, 0.0), up=(0.0, 0.0, 1.0), fov=1.0, width=8, height=8
+        ),
         light=hj.Light(direction=tuple(-h)),
         shading=hj.Scheuermann(
-            ScheuermannParams(kd=0.0, ambient=0.0, primary_color=1.0, primary_exponent=300.0,
-                              primary_shift=shift, secondary_color=0.0),
-            ScheuermannMaps(normal_center=(0.0, 0.0, 0.0), shift_noise=0.0)),
-        shadows=hj.Shadows("none"))
+            ScheuermannParams(
+                kd=0.0,
+                ambient=0.0,
+                primary_color=1.0,
+                primary_exponent=300.0,
+                primary_shift=shift,
+                secondary_color=0.0,
+            ),
+            ScheuermannMaps(normal_center=(0.0, 0.0, 0.0), shift_noise=0.0),
+        ),
+        shadows=hj.Shadows("none"),
+    )
     colours = point_colors(geometry_stage(scene), scene.params)[:, 0]
     peak = phi[int(jnp.argmax(colours))]
     # Grid step (π/2)/400 ≈ 4e-3 rad; V differs from H by ≤ 1e-4 rad (eye 10⁴ away).
@@ -196,10 +222,12 @@ def test_shift_direction_in_a_rendered_strand(shift):
 
 
 def test_strand_position_is_arc_length_fraction():
-    strands = hj.Strands.from_list([[[0, 0, 0], [1, 0, 0], [3, 0, 0]], [[5, 5, 5], [5, 5, 6]],
-                                    [[1, 1, 1]], [[2, 2, 2], [2, 2, 2]]])
-    np.testing.assert_allclose(strand_position(strands.points, strands.offsets),
-                               [0, 1 / 3, 1, 0, 1, 0, 0, 0], atol=1e-15)
+    strands = hj.Strands.from_list(
+        [[[0, 0, 0], [1, 0, 0], [3, 0, 0]], [[5, 5, 5], [5, 5, 6]], [[1, 1, 1]], [[2, 2, 2], [2, 2, 2]]]
+    )
+    np.testing.assert_allclose(
+        strand_position(strands.points, strands.offsets), [0, 1 / 3, 1, 0, 1, 0, 0, 0], atol=1e-15
+    )
 
 
 def test_strand_normals_point_away_from_the_centre():
@@ -213,8 +241,11 @@ def test_strand_normals_point_away_from_the_centre():
     np.testing.assert_allclose(np.sum(n * t, axis=1), 0.0, atol=1e-14)
     assert np.all(np.sum(n * (p - centre), axis=1) > 0)
     # A radial strand (r ∥ T) and a point at the centre still get a unit N ⟂ T; T = 0 gets 0.
-    radial = strand_normals(np.array([[2.0, 0, 0], [0.0, 0, 0], [1.0, 1, 1]]),
-                            np.array([[1.0, 0, 0], [0.0, 1, 0], [0.0, 0, 0]]), np.zeros(3))
+    radial = strand_normals(
+        np.array([[2.0, 0, 0], [0.0, 0, 0], [1.0, 1, 1]]),
+        np.array([[1.0, 0, 0], [0.0, 1, 0], [0.0, 0, 0]]),
+        np.zeros(3),
+    )
     np.testing.assert_allclose(np.linalg.norm(radial[:2], axis=1), 1.0, rtol=1e-14)
     np.testing.assert_allclose(np.sum(radial[:2] * np.array([[1.0, 0, 0], [0.0, 1, 0]]), axis=1), 0.0)
     assert np.all(radial[2] == 0)
@@ -222,8 +253,14 @@ def test_strand_normals_point_away_from_the_centre():
 
 def test_textures_and_noise_are_sampled_along_the_strand():
     strands = hj.Strands.from_list([[[0, 0, 0], [1, 0, 0], [2, 0, 0], [4, 0, 0]]] * 2)
-    maps = ScheuermannMaps(base_texture=((0.0, 1.0, 2.0), (1.0, 1.0, 0.0)), occlusion=(0.5, 1.0),
-                           alpha_texture=(1.0, 0.0), texture_seed=3, shift_noise=0.4, mask_noise=0.5)
+    maps = ScheuermannMaps(
+        base_texture=((0.0, 1.0, 2.0), (1.0, 1.0, 0.0)),
+        occlusion=(0.5, 1.0),
+        alpha_texture=(1.0, 0.0),
+        texture_seed=3,
+        shift_noise=0.4,
+        mask_noise=0.5,
+    )
     tangent = np.tile([1.0, 0, 0], (8, 1))
     pts, factor, segment_alpha = scheuermann_inputs(strands, tangent, maps)
     u = np.array([0, 0.25, 0.5, 1.0] * 2)
@@ -246,8 +283,7 @@ def test_base_texture_and_occlusion_scale_the_colour():
     part of the image by their product, per channel (black background, no occluder)."""
     plain = np.asarray(hj.render(scheuermann_scene()))
     scaled = np.asarray(hj.render(scheuermann_scene(base_texture=((0.5, 0.25, 1.0),), occlusion=(0.5,))))
-    np.testing.assert_allclose(scaled[..., :3], plain[..., :3] * [0.25, 0.125, 0.5], rtol=1e-12,
-                               atol=1e-15)
+    np.testing.assert_allclose(scaled[..., :3], plain[..., :3] * [0.25, 0.125, 0.5], rtol=1e-12, atol=1e-15)
     np.testing.assert_array_equal(scaled[..., 3], plain[..., 3])
     assert plain[..., :3].max() > 0.05
 
@@ -308,27 +344,40 @@ def test_invalid_parameters_are_refused():
         hj.Scene(hair, shading=hj.Scheuermann()).replace(params=hj.ShadingParams())
     with pytest.raises(TypeError, match="takes ShadingParams"):
         hj.Scene(hair).replace(params=ScheuermannParams())
-    for bad in (dict(primary_exponent=0.0), dict(secondary_exponent=-1.0),
-                dict(primary_color=-0.1), dict(secondary_shift=np.nan), dict(kappa=-1.0)):
+    for bad in (
+        dict(primary_exponent=0.0),
+        dict(secondary_exponent=-1.0),
+        dict(primary_color=-0.1),
+        dict(secondary_shift=np.nan),
+        dict(kappa=-1.0),
+    ):
         with pytest.raises(SceneError, match=next(iter(bad))):
             ScheuermannParams(**bad)
-    for bad, key in ((dict(alpha_texture=(1.2,)), "alpha_texture"), (dict(occlusion=()), "occlusion"),
-                     (dict(base_texture=((1.0, 1.0),)), "base_texture"), (dict(mask_noise=2.0), "mask_noise"),
-                     (dict(shift_noise=-1.0), "shift_noise"), (dict(texture_seed=-1), "texture_seed"),
-                     (dict(normal_center=(0.0, 1.0)), "normal_center")):
+    for bad, key in (
+        (dict(alpha_texture=(1.2,)), "alpha_texture"),
+        (dict(occlusion=()), "occlusion"),
+        (dict(base_texture=((1.0, 1.0),)), "base_texture"),
+        (dict(mask_noise=2.0), "mask_noise"),
+        (dict(shift_noise=-1.0), "shift_noise"),
+        (dict(texture_seed=-1), "texture_seed"),
+        (dict(normal_center=(0.0, 1.0)), "normal_center"),
+    ):
         with pytest.raises(SceneError, match=key):
             ScheuermannMaps(**bad)
 
 
-@pytest.mark.parametrize("shading, message", [
-    ({"model": "scheuermann", "ks": 0.3}, r"shading\.ks is not a key of model = 'scheuermann'"),
-    ({"primary_shift": 0.1}, r"shading\.primary_shift is not a key of model = 'kajiya-kay'"),
-    ({"model": "scheuermann", "primary_exponent": 0}, r"shading\.primary_exponent must be > 0"),
-    ({"model": "scheuermann", "alpha_texture": [1, 2]}, r"shading\.alpha_texture must be"),
-    ({"model": "scheuermann", "alpha_texture": [True]}, r"shading\.alpha_texture must be"),
-    ({"model": "scheuermann", "base_texture": [1, 1, 1]}, r"shading\.base_texture must be"),
-    ({"model": "scheuermann", "mask_noise": 1.5}, r"shading\.mask_noise must be in \[0, 1\]"),
-])
+@pytest.mark.parametrize(
+    "shading, message",
+    [
+        ({"model": "scheuermann", "ks": 0.3}, r"shading\.ks is not a key of model = 'scheuermann'"),
+        ({"primary_shift": 0.1}, r"shading\.primary_shift is not a key of model = 'kajiya-kay'"),
+        ({"model": "scheuermann", "primary_exponent": 0}, r"shading\.primary_exponent must be > 0"),
+        ({"model": "scheuermann", "alpha_texture": [1, 2]}, r"shading\.alpha_texture must be"),
+        ({"model": "scheuermann", "alpha_texture": [True]}, r"shading\.alpha_texture must be"),
+        ({"model": "scheuermann", "base_texture": [1, 1, 1]}, r"shading\.base_texture must be"),
+        ({"model": "scheuermann", "mask_noise": 1.5}, r"shading\.mask_noise must be in \[0, 1\]"),
+    ],
+)
 def test_scene_file_errors(tmp_path, shading, message):
     data = {"hair": {"source": "scalp", "strands": 3, "points": 3}, "shading": shading}
     with pytest.raises(SceneError, match=r"^inline: " + message):
@@ -350,12 +399,22 @@ def test_example_scene_reads_every_key():
 def gl_scene():
     """The example scene's settings (all textures, occluder, shadows) on fewer strands, 64²."""
     scene = hj.load_scene(EXAMPLE)
-    hair = hj.scalp(strands=300, points=12, seed=2, length=1.0, gravity=(0.0, -0.5, 0.0),
-                    radius=0.5, coverage=0.6, alpha=0.6)
+    hair = hj.scalp(
+        strands=300,
+        points=12,
+        seed=2,
+        length=1.0,
+        gravity=(0.0, -0.5, 0.0),
+        radius=0.5,
+        coverage=0.6,
+        alpha=0.6,
+    )
     cam = scene.camera
-    return scene.replace(strands=hair, camera=hj.Camera(eye=cam.eye, target=cam.target, fov=cam.fov,
-                                                        width=64, height=64),
-                         shadows=hj.Shadows("opacity-maps", maps=16, resolution=64))
+    return scene.replace(
+        strands=hair,
+        camera=hj.Camera(eye=cam.eye, target=cam.target, fov=cam.fov, width=64, height=64),
+        shadows=hj.Shadows("opacity-maps", maps=16, resolution=64),
+    )
 
 
 @pytest.fixture(scope="module")
@@ -365,8 +424,12 @@ def gl_reference():
 
     scene = gl_scene()
     geom = geometry_stage(scene)
-    return (scene, np.asarray(hj.shading_stage(geom, scene.params)), np.asarray(geom.omega),
-            occluder_light(scene, geom))
+    return (
+        scene,
+        np.asarray(hj.shading_stage(geom, scene.params)),
+        np.asarray(geom.omega),
+        occluder_light(scene, geom),
+    )
 
 
 def test_gl_matches_jax(gl, gl_reference):
@@ -389,8 +452,9 @@ def test_gl_matches_jax(gl, gl_reference):
 def test_a_wrong_scheuermann_shader_fails_the_check(gl, gl_reference):
     """Flip the sign of the tangent shift in GLSL: the cross-check must catch it."""
     scene, jax_image, omega, occluder = gl_reference
-    wrong = render_gl_with_edited_shader(scene, omega, "(T + shift * N)", "(T - shift * N)",
-                                         occluder=occluder)
+    wrong = render_gl_with_edited_shader(
+        scene, omega, "(T + shift * N)", "(T - shift * N)", occluder=occluder
+    )
     bad, _ = unexplained_pixels(scene, wrong, jax_image)
     assert bad.size > 50
 
@@ -410,10 +474,17 @@ def test_float32_power_is_accurate_near_the_peak():
     h = np.stack([cos, np.sqrt(1 - cos**2), np.zeros(300)], axis=1)
     t32, h32 = t.astype(np.float32), h.astype(np.float32)
     with jax.enable_x64(False):
-        got = np.asarray(jax.vmap(strand_specular, in_axes=(0, 0, None))(
-            jnp.asarray(t32), jnp.asarray(h32), jnp.float32(p)), np.float64)
-    ref = np.asarray(jax.vmap(strand_specular, in_axes=(0, 0, None))(
-        jnp.asarray(t32, jnp.float64), jnp.asarray(h32, jnp.float64), jnp.float64(p)))
+        got = np.asarray(
+            jax.vmap(strand_specular, in_axes=(0, 0, None))(
+                jnp.asarray(t32), jnp.asarray(h32), jnp.float32(p)
+            ),
+            np.float64,
+        )
+    ref = np.asarray(
+        jax.vmap(strand_specular, in_axes=(0, 0, None))(
+            jnp.asarray(t32, jnp.float64), jnp.asarray(h32, jnp.float64), jnp.float64(p)
+        )
+    )
     assert ref.min() > np.exp(-5.5)
     np.testing.assert_allclose(got, ref, rtol=1e-4)
 
@@ -423,8 +494,13 @@ def test_value_and_gradients_finite_at_the_special_points():
     without tangent, and p = 0.5 or 10⁴: value and every parameter gradient finite, in
     float64 and float32."""
     x, y, z = unit(1, 0, 0), unit(0, 1, 0), unit(0, 0, 1)
-    cases = [(x, y, z, z), (x, y, x, x), (x, y, y, -y), (x, y, unit(1, -1 / 3, 0), z),
-             (jnp.zeros(3), jnp.zeros(3), y, z)]
+    cases = [
+        (x, y, z, z),
+        (x, y, x, x),
+        (x, y, y, -y),
+        (x, y, unit(1, -1 / 3, 0), z),
+        (jnp.zeros(3), jnp.zeros(3), y, z),
+    ]
 
     def total(p, t, n, light, eye):
         d, s = scheuermann(t, n, light, eye, 0.0, 0.5, p)
@@ -434,9 +510,15 @@ def test_value_and_gradients_finite_at_the_special_points():
         with jax.enable_x64(dtype == "float64"):
             f = jax.jit(jax.value_and_grad(total))
             for exponent in (0.5, 1e4):
-                params = jax.tree.map(lambda a: jnp.asarray(a, dtype), ScheuermannParams(
-                    primary_exponent=exponent, secondary_exponent=exponent, primary_shift=0.0,
-                    secondary_shift=0.0))
+                params = jax.tree.map(
+                    lambda a: jnp.asarray(a, dtype),
+                    ScheuermannParams(
+                        primary_exponent=exponent,
+                        secondary_exponent=exponent,
+                        primary_shift=0.0,
+                        secondary_shift=0.0,
+                    ),
+                )
                 for t, n, light, eye in cases:
                     args = [jnp.asarray(np.asarray(a), dtype) for a in (t, n, light, eye)]
                     value, grads = f(params, *args)
@@ -468,11 +550,23 @@ def test_numpy_exact_omega_equals_the_renderers():
 
     s = scheuermann_scene(strands=60).strands
     segs = s.segments()
-    setup = shadow_setup(s.points, segs, s.strand_of_point[segs[:, 0]], s.width,
-                         hj.Light(direction=(0.3, -1.0, 0.2)), hj.Shadows("exact", resolution=32))
+    setup = shadow_setup(
+        s.points,
+        segs,
+        s.strand_of_point[segs[:, 0]],
+        s.width,
+        hj.Light(direction=(0.3, -1.0, 0.2)),
+        hj.Shadows("exact", resolution=32),
+    )
     alpha = s.alpha[setup.frag_strand] * setup.frag_coverage
-    ref = np.asarray(jax.jit(exact_opacity)(jnp.asarray(alpha), jnp.asarray(setup.frag_first),
-                                            jnp.asarray(setup.index), jnp.asarray(setup.weight)))
+    ref = np.asarray(
+        jax.jit(exact_opacity)(
+            jnp.asarray(alpha),
+            jnp.asarray(setup.frag_first),
+            jnp.asarray(setup.index),
+            jnp.asarray(setup.weight),
+        )
+    )
     assert ref.max() > 1.0  # the points are really occluded
     np.testing.assert_allclose(exact_omega_numpy(setup, alpha), ref, rtol=1e-12, atol=1e-12)
 
@@ -503,7 +597,8 @@ def test_gl_matches_jax_point_light(gl):
     from hairjax.gl import render_gl
 
     scene = scheuermann_scene(size=48, strands=80, shadows="exact").replace(
-        light=hj.Light(kind="point", position=(1.2, 1.5, 1.8)))
+        light=hj.Light(kind="point", position=(1.2, 1.5, 1.8))
+    )
     geom = geometry_stage(scene)
     jax_image = np.asarray(hj.shading_stage(geom, scene.params))
     result = render_gl(scene, omega=np.asarray(geom.omega))
@@ -548,10 +643,12 @@ def test_equals_the_seeds_shader_on_random_inputs():
     diffuse = np.clip(0.25 + nl * (1.0 - 0.25), 0, 1)[:, None] * np.asarray(p.kd)
     s1 = strand_specular_seed(t1, eye, light, float(p.primary_exponent))
     s2 = strand_specular_seed(t2, eye, light, float(p.secondary_exponent))
-    specular = (np.asarray(p.primary_color) * s1[:, None]
-                + np.asarray(p.secondary_color) * (mask * s2)[:, None])
+    specular = (
+        np.asarray(p.primary_color) * s1[:, None] + np.asarray(p.secondary_color) * (mask * s2)[:, None]
+    )
     d, s = jax.vmap(scheuermann, in_axes=(0, 0, 0, 0, 0, 0, None))(
-        *(jnp.asarray(x) for x in (t, nrm, light, eye, shift_tex, mask)), p)
+        *(jnp.asarray(x) for x in (t, nrm, light, eye, shift_tex, mask)), p
+    )
     np.testing.assert_allclose(d, diffuse, rtol=1e-13, atol=1e-15)
     np.testing.assert_allclose(s, specular, rtol=1e-9, atol=1e-13)
     assert specular.max() > 0.5 and np.mean(specular[:, 0] > 1e-3) > 0.2  # lobes are hit

@@ -53,6 +53,7 @@ import hairjax as hj
 
 # --- the cases -----------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("shininess", [0.5, 1e4])
 @pytest.mark.parametrize("case", ["mixed", "flat"])
@@ -136,8 +137,11 @@ def test_highlight_accuracy_at_p_1e4(request, backend, model):
         got = glsl_highlight(request.getfixturevalue("gl"), t, light, eye, model, p)[:, 0]
     else:
         with precision("float32"):
-            power = jax.jit(jax.vmap(lambda a, b, c: specular_power(kajiya_kay_terms(a, b, c, cone(model))[1],
-                                                                    jnp.float32(p))))
+            power = jax.jit(
+                jax.vmap(
+                    lambda a, b, c: specular_power(kajiya_kay_terms(a, b, c, cone(model))[1], jnp.float32(p))
+                )
+            )
             got = np.asarray(power(t, light, eye))
         assert got.dtype == np.float32
     err = np.max(np.abs(got.astype(np.float64) - exact) / exact)
@@ -148,8 +152,10 @@ def test_highlight_accuracy_at_p_1e4(request, backend, model):
     assert b.dtype == np.float32
     old = np.exp(np.float32(p) * np.log(b))
     old_err = np.max(np.abs(old.astype(np.float64) - exact) / exact)
-    print(f"\n{backend} {model}, p = 1e4, b^p ≥ e^-2: max relative error {err:.3g} "
-          f"(bound {bound:.3g}); old exp(p·log b) in float32: {old_err:.3g}")
+    print(
+        f"\n{backend} {model}, p = 1e4, b^p ≥ e^-2: max relative error {err:.3g} "
+        f"(bound {bound:.3g}); old exp(p·log b) in float32: {old_err:.3g}"
+    )
     assert err <= bound, (err, bound)
     assert old_err > bound, (old_err, bound)
 
@@ -191,16 +197,18 @@ def test_tangents_parallel_to_light_and_view(request, backend):
             eye = (EYE - pts[i]) / np.linalg.norm(EYE - pts[i])
             sin_tl, b = kajiya_kay_by_hand(tangent, light, eye)
             expected = DEFAULT["ambient"] * c[i] + tau[i] * rgb * (
-                DEFAULT["kd"] * sin_tl * c[i] + DEFAULT["ks"] * max(b, 0.0) ** p)
+                DEFAULT["kd"] * sin_tl * c[i] + DEFAULT["ks"] * max(b, 0.0) ** p
+            )
             np.testing.assert_allclose(res.colors[i], expected, rtol=rtol, atol=rtol)
     # Seen from the light, the strand along L is a row of zero-length ribbons: it draws
     # nothing there and casts no shadow, not even on itself.
-    np.testing.assert_array_equal(res.omega[s.offsets[ALONG_L]:s.offsets[ALONG_L + 1]], 0.0)
+    np.testing.assert_array_equal(res.omega[s.offsets[ALONG_L] : s.offsets[ALONG_L + 1]], 0.0)
 
 
 # --- the guards ----------------------------------------------------------------------------
 # One test per guard (the table in the module docstring): inputs that make it fire, and the
 # guarded result checked against the model's value.
+
 
 @pytest.mark.parametrize("dtype", ["float64", "float32"])
 def test_guard_safe_norm_at_zero(dtype):
@@ -289,9 +297,13 @@ def test_guard_kajiya_kay_gap_on_the_far_side(dtype):
 
     x, y = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
     w = np.array([0.6614378, 0.75, 0.0])  # T·w = 0.75 for T = y (w unit to 1e-8; exact b)
-    cases = [("kajiya-kay", x, x, -x, -1.0), ("kajiya-kay-mirror", x, x, x, -1.0),
-             ("kajiya-kay", x, y, x, 0.0), ("kajiya-kay", y, w, -y, -0.75),
-             ("kajiya-kay-mirror", y, w, y, -0.75)]
+    cases = [
+        ("kajiya-kay", x, x, -x, -1.0),
+        ("kajiya-kay-mirror", x, x, x, -1.0),
+        ("kajiya-kay", x, y, x, 0.0),
+        ("kajiya-kay", y, w, -y, -0.75),
+        ("kajiya-kay-mirror", y, w, y, -0.75),
+    ]
     with precision(dtype):
         for model, t, light, eye, b in cases:
             t, light, eye = (jnp.asarray(a) for a in (t, light, eye))
@@ -304,6 +316,8 @@ def test_guard_kajiya_kay_gap_on_the_far_side(dtype):
             value, grads = jax.value_and_grad(power, argnums=(0, 1, 2, 3))(t, light, eye, jnp.asarray(1e4))
             assert float(value) == 0.0
             assert all(np.all(np.asarray(g) == 0.0) for g in grads), (model, grads)
-            grad_gap = jax.grad(lambda t, light, eye, model=model: kajiya_kay_terms(
-                t, light, eye, cone(model))[1], argnums=(0, 1, 2))(t, light, eye)
+            grad_gap = jax.grad(
+                lambda t, light, eye, model=model: kajiya_kay_terms(t, light, eye, cone(model))[1],
+                argnums=(0, 1, 2),
+            )(t, light, eye)
             assert finite(grad_gap)

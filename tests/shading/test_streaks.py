@@ -42,7 +42,8 @@ def test_narrow_span_is_the_interpolated_texture_and_no_contrast_is_one():
     flat = streak_texture(Streaks(texels=5, contrast=0.0))
     np.testing.assert_array_equal(flat, 1.0)
     f = jax.vmap(streak_factor, in_axes=(None, None, 0, None))(
-        jnp.asarray(flat), jnp.asarray(streak_prefix(flat)), jnp.linspace(0, 0.999, 50), 0.2)
+        jnp.asarray(flat), jnp.asarray(streak_prefix(flat)), jnp.linspace(0, 0.999, 50), 0.2
+    )
     np.testing.assert_allclose(f, 1.0, rtol=1e-13)
 
 
@@ -59,9 +60,9 @@ def test_streaks_scale_each_hairs_whole_colour():
     assert np.unique(factor).size == scene.strands.num_strands
     assert 0.2 <= factor.min() and factor.max() <= 1.0  # means of values in [1 − contrast, 1]
     colors = jax.jit(point_colors)
-    np.testing.assert_allclose(colors(geom, scene.params),
-                               np.asarray(colors(geom_plain, scene.params)) * factor[:, None],
-                               rtol=1e-14)
+    np.testing.assert_allclose(
+        colors(geom, scene.params), np.asarray(colors(geom_plain, scene.params)) * factor[:, None], rtol=1e-14
+    )
     # Zero contrast renders the plain image.
     flat = scene.replace(streaks=Streaks(contrast=0.0))
     np.testing.assert_allclose(hj.render(flat), hj.render(plain), rtol=1e-12, atol=1e-14)
@@ -74,9 +75,11 @@ def test_scene_file_streaks_table(tmp_path):
     assert scene.streaks == Streaks(texels=32, width=0.2)
     path.write_text('[hair]\nsource = "furball"\nstrands = 3\n')
     assert hj.load_scene(path).streaks is None
-    for text, message in [("width = 0", r"streaks\.width must be in \(0, 1\], got 0"),
-                          ("contrast = 2", r"streaks\.contrast must be in \[0, 1\], got 2"),
-                          ("texels = 1.5", r"streaks\.texels must be an integer, got 1\.5")]:
+    for text, message in [
+        ("width = 0", r"streaks\.width must be in \(0, 1\], got 0"),
+        ("contrast = 2", r"streaks\.contrast must be in \[0, 1\], got 2"),
+        ("texels = 1.5", r"streaks\.texels must be an integer, got 1\.5"),
+    ]:
         path.write_text(f'[hair]\nsource = "furball"\nstrands = 3\n[streaks]\n{text}\n')
         with pytest.raises(SceneError, match=f"^{path}: {message}"):
             hj.load_scene(path)
@@ -88,8 +91,9 @@ def test_gl_streaks_match_jax(gl):
     PIXEL_TOL; pixels differ by more only in the camera band (hairjax/_disagreement)."""
     from hairjax.gl import render_gl
 
-    scene = small_furball_scene(strands=60, size=48, streaks=Streaks(texels=16, width=0.1,
-                                                                     contrast=0.8, seed=1))
+    scene = small_furball_scene(
+        strands=60, size=48, streaks=Streaks(texels=16, width=0.1, contrast=0.8, seed=1)
+    )
     geom = hj.geometry_stage(scene)
     jax_image = np.asarray(hj.shading_stage(geom, scene.params))
     gl_image = render_gl(scene, omega=np.asarray(geom.omega)).image

@@ -53,8 +53,7 @@ def test_bench_quick_writes_every_figure(tmp_path, capsys):
 
 def test_bench_quick_both_backends(tmp_path, capsys):
     out = tmp_path / "b.json"
-    status = main(["bench", "--quick", "--repeats", "2", "--backend", "both",
-                   "--json", str(out)])
+    status = main(["bench", "--quick", "--repeats", "2", "--backend", "both", "--json", str(out)])
     assert status == 0
     printed = capsys.readouterr().out
     data = json.loads(out.read_text())

@@ -23,7 +23,8 @@ def scene():
 def test_points_and_their_errors(scene, tmp_path, gl):
     points = run_sweep(scene, tmp_path, knobs=KNOBS, repeats=1, progress=False)
     assert {(p["path"], p["knob"], str(p["value"])) for p in points} == {
-        (path, k, str(v)) for path in ("jax", "gl") for k, vs in KNOBS.items() for v in vs}
+        (path, k, str(v)) for path in ("jax", "gl") for k, vs in KNOBS.items() for v in vs
+    }
     for p in points:
         assert p["time_s"] > 0 and len(p["times"]) == 1
         assert np.isfinite(p["rmse"]) and p["max_abs"] >= p["rmse"] >= 0
@@ -36,8 +37,9 @@ def test_points_and_their_errors(scene, tmp_path, gl):
 
 def test_a_point_with_the_reference_settings_has_no_error(scene, tmp_path):
     exact = scene.replace(shadows=hj.Shadows("exact", resolution=16))
-    points = run_sweep(exact, tmp_path, knobs={"bins": ("exact", 4)}, paths=("jax",), repeats=1,
-                       progress=False)
+    points = run_sweep(
+        exact, tmp_path, knobs={"bins": ("exact", 4)}, paths=("jax",), repeats=1, progress=False
+    )
     by_value = {p["value"]: p for p in points}
     assert by_value["exact"]["rmse"] == 0.0 and by_value["exact"]["tau_max"] == 0.0
     assert by_value[4]["rmse"] > 0.0  # four bins do change the order
@@ -73,8 +75,7 @@ def test_interrupted_sweep_keeps_finished_points(scene, tmp_path, monkeypatch):
         run_sweep(scene, tmp_path, knobs={"bins": (1, 4, 16)}, paths=("jax",), repeats=1, progress=False)
     assert [p["value"] for p in load_points(tmp_path)] == [1]
     monkeypatch.setattr(sweep_mod, "_measure", original)
-    points = run_sweep(scene, tmp_path, knobs={"bins": (1, 4, 16)}, paths=("jax",), repeats=1,
-                       progress=False)
+    points = run_sweep(scene, tmp_path, knobs={"bins": (1, 4, 16)}, paths=("jax",), repeats=1, progress=False)
     assert [p["value"] for p in points] == [1, 4, 16]
 
 
@@ -83,16 +84,20 @@ def test_folder_of_another_sweep_is_refused(scene, tmp_path):
     other = scene.replace(params=scene.params.__class__(kd=0.9, ks=0.1, shininess=5.0, kappa=1.0))
     with pytest.raises(SweepError, match="other settings"):
         run_sweep(other, tmp_path, knobs={"bins": (1,)}, paths=("jax",), repeats=1, progress=False)
-    points = run_sweep(other, tmp_path, knobs={"bins": (4,)}, paths=("jax",), repeats=1,
-                       progress=False, restart=True)
+    points = run_sweep(
+        other, tmp_path, knobs={"bins": (4,)}, paths=("jax",), repeats=1, progress=False, restart=True
+    )
     assert [p["value"] for p in points] == [4]
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(knobs={"gamma": (1,)}), "unknown knob"),
-    (dict(paths=("vulkan",)), "unknown path"),
-    (dict(repeats=0), "repeats"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(knobs={"gamma": (1,)}), "unknown knob"),
+        (dict(paths=("vulkan",)), "unknown path"),
+        (dict(repeats=0), "repeats"),
+    ],
+)
 def test_bad_arguments(scene, tmp_path, kwargs, message):
     with pytest.raises(SweepError, match=message):
         run_sweep(scene, tmp_path, **{"knobs": {"bins": (1,)}, **kwargs})
@@ -100,8 +105,9 @@ def test_bad_arguments(scene, tmp_path, kwargs, message):
 
 def test_no_shadow_knobs_without_shadows(tmp_path):
     plain = small_furball_scene(strands=30, size=16, shadows="none")
-    points = run_sweep(plain, tmp_path, knobs={"maps": (1, 2), "bins": (1,)}, paths=("jax",),
-                       repeats=1, progress=False)
+    points = run_sweep(
+        plain, tmp_path, knobs={"maps": (1, 2), "bins": (1,)}, paths=("jax",), repeats=1, progress=False
+    )
     assert [(p["knob"], p["tau_rmse"]) for p in points] == [("bins", None)]
 
 
@@ -121,9 +127,14 @@ POINTS = [
     {"path": "jax", "knob": "bins", "value": 64, "time_s": 1.5, "rel_rmse": 0.009, "rmse": 0.009},
     {"path": "jax", "knob": "bins", "value": "exact", "time_s": 3.0, "rel_rmse": 5e-4, "rmse": 5e-4},
 ]
-CONFIG = {"scene": "s", "size": [8, 8], "repeats": 1, "paths": ["jax"],
-          "knobs": {"maps": [4, 16], "bins": [64, "exact"]},
-          "reference": {"shadows": "exact", "ordering": "exact", "supersampling": 1}}
+CONFIG = {
+    "scene": "s",
+    "size": [8, 8],
+    "repeats": 1,
+    "paths": ["jax"],
+    "knobs": {"maps": [4, 16], "bins": [64, "exact"]},
+    "reference": {"shadows": "exact", "ordering": "exact", "supersampling": 1},
+}
 
 
 def test_cheapest_settings():
@@ -146,9 +157,11 @@ def test_report_files(tmp_path):
 
 def test_cli_sweep(tmp_path, capsys):
     toml = tmp_path / "tiny.toml"
-    toml.write_text('name = "tiny"\n[hair]\nsource = "furball"\nstrands = 40\npoints = 5\n'
-                    "[camera]\nwidth = 16\nheight = 16\n"
-                    '[shadows]\nmethod = "opacity-maps"\nmaps = 4\nresolution = 16\n')
+    toml.write_text(
+        'name = "tiny"\n[hair]\nsource = "furball"\nstrands = 40\npoints = 5\n'
+        "[camera]\nwidth = 16\nheight = 16\n"
+        '[shadows]\nmethod = "opacity-maps"\nmaps = 4\nresolution = 16\n'
+    )
     out = tmp_path / "sweep"
     args = [str(toml), "--out", str(out), "--paths", "jax", "--knobs", "bins", "--quick", "--repeats", "1"]
     assert cli.main(["sweep", *args]) == 0
@@ -170,8 +183,7 @@ def test_a_refused_setting_is_recorded_and_the_sweep_goes_on(scene, tmp_path, mo
         return original(run, variant, s, repeats)
 
     monkeypatch.setattr(sweep_mod, "_measure", refuse_four)
-    points = run_sweep(scene, tmp_path, knobs={"bins": (1, 4, 16)}, paths=("jax",), repeats=1,
-                       progress=False)
+    points = run_sweep(scene, tmp_path, knobs={"bins": (1, 4, 16)}, paths=("jax",), repeats=1, progress=False)
     assert [p["value"] for p in points] == [1, 4, 16]
     assert points[1]["skipped"] == "4 bins exceed the test's budget" and "rmse" not in points[1]
     config = json.loads((tmp_path / "sweep.json").read_text())

@@ -28,8 +28,9 @@ class AbstractOrdering(abc.ABC):
     method: ClassVar[str]
 
     @abc.abstractmethod
-    def order(self, strands, segments: np.ndarray | None, seg_depth: np.ndarray,
-              drawable: np.ndarray) -> np.ndarray:
+    def order(
+        self, strands, segments: np.ndarray | None, seg_depth: np.ndarray, drawable: np.ndarray
+    ) -> np.ndarray:
         """The draw order (`int64`, the first drawn first) of the segments whose indices
         are in `drawable` (both ends beyond the near plane), given every segment's
         camera depth `seg_depth` (`[E]`, the farther endpoint's, kim-2003 §3). An ordering

@@ -27,9 +27,27 @@ from ._opacity_maps import point_opacity as point_opacity
 from ._opacity_maps import point_planes as point_planes
 
 
-def shadow_setup(points, segments, seg_strand, width, light, shadows: AbstractShadowMethod, *,
-                 receivers=None, segment_alpha=None, width_units: str = "pixels"):
+def shadow_setup(
+    points,
+    segments,
+    seg_strand,
+    width,
+    light,
+    shadows: AbstractShadowMethod,
+    *,
+    receivers=None,
+    segment_alpha=None,
+    width_units: str = "pixels",
+):
     """`shadows.setup(...)`: what Ω needs from the geometry alone, for the strand points
     and then the `receivers` (docs/model.md §7, §13)."""
-    return shadows.setup(points, segments, seg_strand, width, light, receivers=receivers,
-                         segment_alpha=segment_alpha, width_units=width_units)
+    return shadows.setup(
+        points,
+        segments,
+        seg_strand,
+        width,
+        light,
+        receivers=receivers,
+        segment_alpha=segment_alpha,
+        width_units=width_units,
+    )

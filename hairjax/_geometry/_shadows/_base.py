@@ -19,8 +19,14 @@ from jaxtyping import Array, Float
 from ..._errors import SceneError
 from ..._registry import Registry
 
-__all__ = ["AbstractShadowMethod", "register_shadow_method", "shadow_method_class",
-           "shadow_method_names", "Shadows", "check_resolution"]
+__all__ = [
+    "AbstractShadowMethod",
+    "register_shadow_method",
+    "shadow_method_class",
+    "shadow_method_names",
+    "Shadows",
+    "check_resolution",
+]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -34,9 +40,18 @@ class AbstractShadowMethod(abc.ABC):
     casts: ClassVar[bool] = True
 
     @abc.abstractmethod
-    def setup(self, points, segments, seg_strand, width, light, *,
-              receivers: np.ndarray | None = None, segment_alpha: np.ndarray | None = None,
-              width_units: str = "pixels") -> Any:
+    def setup(
+        self,
+        points,
+        segments,
+        seg_strand,
+        width,
+        light,
+        *,
+        receivers: np.ndarray | None = None,
+        segment_alpha: np.ndarray | None = None,
+        width_units: str = "pixels",
+    ) -> Any:
         """What Ω needs that does not depend on opacity (NumPy), for the strand points and
         then the `receivers` (`[Q, 3]`, the occluder's surface points, §13)."""
 

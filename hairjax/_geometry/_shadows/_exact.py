@@ -47,11 +47,30 @@ class ExactShadows(AbstractShadowMethod):
     def __post_init__(self):
         object.__setattr__(self, "resolution", check_resolution(self.resolution))
 
-    def setup(self, points, segments, seg_strand, width, light, *, receivers=None,
-              segment_alpha=None, width_units="pixels") -> ExactSetup:
+    def setup(
+        self,
+        points,
+        segments,
+        seg_strand,
+        width,
+        light,
+        *,
+        receivers=None,
+        segment_alpha=None,
+        width_units="pixels",
+    ) -> ExactSetup:
         resolution = self.resolution
-        lf = light_fragments(points, segments, seg_strand, width, light, resolution,
-                             receivers=receivers, segment_alpha=segment_alpha, width_units=width_units)
+        lf = light_fragments(
+            points,
+            segments,
+            seg_strand,
+            width,
+            light,
+            resolution,
+            receivers=receivers,
+            segment_alpha=segment_alpha,
+            width_units=width_units,
+        )
         frags, frame, tx, ty = lf.frags, lf.frame, lf.tx, lf.ty
         depth, seen, zmin, span = frame.depth, frame.seen, frame.zmin, frame.span
         common = dict(frag_strand=lf.frag_strand, frag_coverage=lf.frag_coverage)
@@ -81,14 +100,24 @@ class ExactShadows(AbstractShadowMethod):
         has_any = valid & (stop > start)
         common["frag_strand"] = common["frag_strand"][order]
         common["frag_coverage"] = common["frag_coverage"][order]
-        return ExactSetup(view=frame.view, frag_first=first,
-                          index=np.where(has_any, stop - 1, 0),
-                          weight=np.where(has_any, 1.0 / (2 * r + 1) ** 2, 0.0), **common)
+        return ExactSetup(
+            view=frame.view,
+            frag_first=first,
+            index=np.where(has_any, stop - 1, 0),
+            weight=np.where(has_any, 1.0 / (2 * r + 1) ** 2, 0.0),
+            **common,
+        )
 
     def omega(self, setup: ExactSetup, alpha):
         dtype = jnp.result_type(float)
-        return _exact_opacity(alpha, setup.frag_strand, jnp.asarray(setup.frag_coverage, dtype),
-                              setup.frag_first, setup.index, jnp.asarray(setup.weight, dtype))
+        return _exact_opacity(
+            alpha,
+            setup.frag_strand,
+            jnp.asarray(setup.frag_coverage, dtype),
+            setup.frag_first,
+            setup.index,
+            jnp.asarray(setup.weight, dtype),
+        )
 
 
 @eqx.filter_jit
@@ -96,8 +125,9 @@ def _exact_opacity(alpha, frag_strand, frag_coverage, frag_first, index, weight)
     return exact_opacity(alpha[frag_strand] * frag_coverage, frag_first, index, weight)
 
 
-def exact_opacity(frag_alpha: Float[Array, " f"], frag_first, index: Int[Array, "p k"],
-                  weight: Float[Array, "p k"]) -> Float[Array, " p"]:
+def exact_opacity(
+    frag_alpha: Float[Array, " f"], frag_first, index: Int[Array, "p k"], weight: Float[Array, "p k"]
+) -> Float[Array, " p"]:
     """Ω̄(z) at each point's own depth from per-texel prefix sums (N → ∞)."""
     if frag_alpha.shape[0] == 0:  # fires when no segment reaches the light's raster: Ω = 0
         return jnp.zeros(index.shape[0], frag_alpha.dtype)

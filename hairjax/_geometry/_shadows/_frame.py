@@ -13,8 +13,7 @@ from ..._constants import PIXEL_HALF_EXTENT, SHADOW_FILTER_RADIUS
 from .._projection import View, light_view
 from .._raster import Fragments, rasterize, ribbon_widths
 
-__all__ = ["LightFrame", "light_frame", "with_receivers", "map_margin", "LightFragments",
-           "light_fragments"]
+__all__ = ["LightFrame", "light_frame", "with_receivers", "map_margin", "LightFragments", "light_fragments"]
 
 
 def map_margin(width: np.ndarray) -> int:
@@ -36,10 +35,12 @@ def _world_width_view(view: View, light, points, width, resolution: int) -> View
     texels = float(np.max(width, initial=0.0)) * scale  # an upper bound per point: the widest strand
     margin = map_margin(texels)
     if 2 * margin >= resolution:
-        raise ValueError(f"ribbons {float(np.max(width)):g} world units wide are up to "
-                         f"{float(np.max(texels, initial=0.0)):.3g} texels wide in the light's "
-                         f"{resolution}² view: too wide for its border; use a higher "
-                         "shadows.resolution or a smaller hair.width")
+        raise ValueError(
+            f"ribbons {float(np.max(width)):g} world units wide are up to "
+            f"{float(np.max(texels, initial=0.0)):.3g} texels wide in the light's "
+            f"{resolution}² view: too wide for its border; use a higher "
+            "shadows.resolution or a smaller hair.width"
+        )
     return light_view(light, points, resolution, margin)
 
 
@@ -66,8 +67,7 @@ class LightFrame:
         return (z - self.zmin) * maps / self.span
 
 
-def light_frame(points, segments, width, light, resolution: int,
-                width_units: str = "pixels") -> LightFrame:
+def light_frame(points, segments, width, light, resolution: int, width_units: str = "pixels") -> LightFrame:
     """The light's view (docs/model.md §7) of strands of per-strand `width` (`[S]` or, in
     pixels, any array whose max matters) in `width_units`."""
     view = light_view(light, points, resolution, map_margin(width))
@@ -98,9 +98,12 @@ def with_receivers(frame: LightFrame, receivers: np.ndarray | None) -> LightFram
     xy, depth = frame.view.project(receivers)
     # Behind a point light's near plane: no shadow, as for strand points.
     seen = depth > frame.view.near if frame.view.perspective else np.ones(len(depth), bool)
-    return dataclasses.replace(frame, xy=np.concatenate([frame.xy, xy]),
-                               depth=np.concatenate([frame.depth, depth]),
-                               seen=np.concatenate([frame.seen, seen]))
+    return dataclasses.replace(
+        frame,
+        xy=np.concatenate([frame.xy, xy]),
+        depth=np.concatenate([frame.depth, depth]),
+        seen=np.concatenate([frame.seen, seen]),
+    )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -121,9 +124,18 @@ class LightFragments:
     inside: np.ndarray
 
 
-def light_fragments(points, segments, seg_strand, width, light, resolution: int, *,
-                    receivers: np.ndarray | None = None, segment_alpha: np.ndarray | None = None,
-                    width_units: str = "pixels") -> LightFragments:
+def light_fragments(
+    points,
+    segments,
+    seg_strand,
+    width,
+    light,
+    resolution: int,
+    *,
+    receivers: np.ndarray | None = None,
+    segment_alpha: np.ndarray | None = None,
+    width_units: str = "pixels",
+) -> LightFragments:
     """Rasterise the strands from the light (same ribbons as the camera pass; width in
     texels = the strand's width in pixels, or its world width seen from the light,
     `ribbon_widths`), then find the texel of every point and of every point of
@@ -133,10 +145,24 @@ def light_fragments(points, segments, seg_strand, width, light, resolution: int,
     frame = light_frame(points, segments, width, light, resolution, width_units)
     seg_ids = frame.drawable
     s0, s1 = segments[seg_ids, 0], segments[seg_ids, 1]
-    widths = ribbon_widths(width[seg_strand[seg_ids]], width_units, frame.depth[s0], frame.depth[s1],
-                           frame.view.focal, frame.view.perspective)
-    frags = rasterize(frame.xy[s0], frame.xy[s1], frame.depth[s0], frame.depth[s1],
-                      widths, resolution, resolution, frame.view.perspective)
+    widths = ribbon_widths(
+        width[seg_strand[seg_ids]],
+        width_units,
+        frame.depth[s0],
+        frame.depth[s1],
+        frame.view.focal,
+        frame.view.perspective,
+    )
+    frags = rasterize(
+        frame.xy[s0],
+        frame.xy[s1],
+        frame.depth[s0],
+        frame.depth[s1],
+        widths,
+        resolution,
+        resolution,
+        frame.view.perspective,
+    )
     frame = with_receivers(frame, receivers)
     xy, seen = frame.xy, frame.seen
     # Clip fires for a light at the hair's centre (near ≈ 1e-303: xy ~1e300, no int64); outside stays outside.
@@ -146,5 +172,12 @@ def light_fragments(points, segments, seg_strand, width, light, resolution: int,
     coverage = frags.coverage
     if segment_alpha is not None:
         coverage = coverage * segment_alpha[seg_ids[frags.segment]]
-    return LightFragments(frame=frame, frags=frags, frag_strand=seg_strand[seg_ids[frags.segment]],
-                          frag_coverage=coverage, tx=tx, ty=ty, inside=inside)
+    return LightFragments(
+        frame=frame,
+        frags=frags,
+        frag_strand=seg_strand[seg_ids[frags.segment]],
+        frag_coverage=coverage,
+        tx=tx,
+        ty=ty,
+        inside=inside,
+    )

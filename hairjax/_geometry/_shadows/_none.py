@@ -17,8 +17,18 @@ class NoShadows(AbstractShadowMethod):
     method = "none"
     casts = False
 
-    def setup(self, points, segments, seg_strand, width, light, *, receivers=None,
-              segment_alpha=None, width_units="pixels"):
+    def setup(
+        self,
+        points,
+        segments,
+        seg_strand,
+        width,
+        light,
+        *,
+        receivers=None,
+        segment_alpha=None,
+        width_units="pixels",
+    ):
         return None
 
     def omega(self, setup, alpha):

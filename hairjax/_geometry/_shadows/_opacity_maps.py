@@ -27,8 +27,15 @@ from .._projection import View
 from ._base import AbstractShadowMethod, check_resolution, register_shadow_method
 from ._frame import LightFrame, light_fragments
 
-__all__ = ["OpacityMaps", "OpacityMapSetup", "point_planes", "box_filter", "opacity_maps",
-           "point_opacity", "MAX_MAP_CELLS"]
+__all__ = [
+    "OpacityMaps",
+    "OpacityMapSetup",
+    "point_planes",
+    "box_filter",
+    "opacity_maps",
+    "point_opacity",
+    "MAX_MAP_CELLS",
+]
 
 # (N + 1) · R² map cells at most: 1 GiB in float32.
 MAX_MAP_CELLS = 1 << 28
@@ -68,29 +75,62 @@ class OpacityMaps(AbstractShadowMethod):
         object.__setattr__(self, "maps", int(n))
         object.__setattr__(self, "resolution", check_resolution(self.resolution))
 
-    def setup(self, points, segments, seg_strand, width, light, *, receivers=None,
-              segment_alpha=None, width_units="pixels") -> OpacityMapSetup:
+    def setup(
+        self,
+        points,
+        segments,
+        seg_strand,
+        width,
+        light,
+        *,
+        receivers=None,
+        segment_alpha=None,
+        width_units="pixels",
+    ) -> OpacityMapSetup:
         maps, resolution = self.maps, self.resolution
         if (maps + 1) * resolution**2 > MAX_MAP_CELLS:
-            raise ValueError(f"{maps} maps of {resolution}² exceed {MAX_MAP_CELLS} cells; "
-                             "use fewer maps or a lower resolution")
-        lf = light_fragments(points, segments, seg_strand, width, light, resolution,
-                             receivers=receivers, segment_alpha=segment_alpha, width_units=width_units)
+            raise ValueError(
+                f"{maps} maps of {resolution}² exceed {MAX_MAP_CELLS} cells; "
+                "use fewer maps or a lower resolution"
+            )
+        lf = light_fragments(
+            points,
+            segments,
+            seg_strand,
+            width,
+            light,
+            resolution,
+            receivers=receivers,
+            segment_alpha=segment_alpha,
+            width_units=width_units,
+        )
         # A fragment in [D_j, D_{j+1}) counts towards planes j + 1 … N (strictly nearer).
         # The clip fires only through rounding (a depth ulps below D₀ → slice 0); D_N gives N.
         j = np.clip(np.floor(lf.frame.slice_coordinate(lf.frags.depth, maps)), 0, maps).astype(np.int64)
         plane, f = point_planes(lf.frame, maps)
-        return OpacityMapSetup(view=lf.frame.view, frag_strand=lf.frag_strand,
-                               frag_coverage=lf.frag_coverage,
-                               frag_cell=(j * resolution**2 + lf.frags.pixel).astype(np.int32),
-                               plane=plane.astype(np.int32), f=f,
-                               texel=np.where(lf.inside, lf.ty * resolution + lf.tx, -1).astype(np.int32))
+        return OpacityMapSetup(
+            view=lf.frame.view,
+            frag_strand=lf.frag_strand,
+            frag_coverage=lf.frag_coverage,
+            frag_cell=(j * resolution**2 + lf.frags.pixel).astype(np.int32),
+            plane=plane.astype(np.int32),
+            f=f,
+            texel=np.where(lf.inside, lf.ty * resolution + lf.tx, -1).astype(np.int32),
+        )
 
     def omega(self, setup: OpacityMapSetup, alpha):
         dtype = jnp.result_type(float)
-        return _map_opacity(alpha, setup.frag_strand, jnp.asarray(setup.frag_coverage, dtype),
-                            setup.frag_cell, setup.plane, jnp.asarray(setup.f, dtype), setup.texel,
-                            self.maps, self.resolution)
+        return _map_opacity(
+            alpha,
+            setup.frag_strand,
+            jnp.asarray(setup.frag_coverage, dtype),
+            setup.frag_cell,
+            setup.plane,
+            jnp.asarray(setup.f, dtype),
+            setup.texel,
+            self.maps,
+            self.resolution,
+        )
 
 
 @eqx.filter_jit
@@ -114,12 +154,13 @@ def box_filter(maps: Float[Array, "n r r"]) -> Float[Array, "n r r"]:
     padded = jnp.pad(maps, ((0, 0), (r, r), (r, r)))
     # Each sum starts from its first term (not 0): an Array throughout, the same values.
     h, w = maps.shape[1], maps.shape[2]
-    rows = sum((padded[:, i:i + h, :] for i in range(1, k)), start=padded[:, :h, :])
-    return sum((rows[:, :, i:i + w] for i in range(1, k)), start=rows[:, :, :w]) / (k * k)
+    rows = sum((padded[:, i : i + h, :] for i in range(1, k)), start=padded[:, :h, :])
+    return sum((rows[:, :, i : i + w] for i in range(1, k)), start=rows[:, :, :w]) / (k * k)
 
 
-def opacity_maps(frag_alpha: Float[Array, " f"], frag_cell: Int[Array, " f"], maps: int,
-                 resolution: int) -> Float[Array, "n1 r r"]:
+def opacity_maps(
+    frag_alpha: Float[Array, " f"], frag_cell: Int[Array, " f"], maps: int, resolution: int
+) -> Float[Array, "n1 r r"]:
     """Box-filtered Ω̄ on the N + 1 planes (plane 0 is empty): kim-2003 Routine 2's
     accumulation, with each slice added to the ones behind it (GL_ONE, GL_ONE)."""
     cells = resolution * resolution
@@ -129,8 +170,9 @@ def opacity_maps(frag_alpha: Float[Array, " f"], frag_cell: Int[Array, " f"], ma
     return box_filter(omega)
 
 
-def point_opacity(maps: Float[Array, "n1 r r"], plane: Int[Array, " p"], f: Float[Array, " p"],
-                  texel: Int[Array, " p"]) -> Float[Array, " p"]:
+def point_opacity(
+    maps: Float[Array, "n1 r r"], plane: Int[Array, " p"], f: Float[Array, " p"], texel: Int[Array, " p"]
+) -> Float[Array, " p"]:
     """Ω at points: linear interpolation between the two planes around each point."""
     flat = maps.reshape(maps.shape[0], -1)
     safe = jnp.maximum(texel, 0)  # fires for texel −1 (outside): any valid index, dropped below
