@@ -14,7 +14,6 @@ from typing import ClassVar
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .._constants import SPECULAR_BASE_EPS
@@ -26,6 +25,8 @@ from ._model import (
     ShadingPoints,
     check_params,
     register_shading_model,
+    rgb_param,
+    rgb_uniform,
 )
 from ._transforms import LOG
 
@@ -39,10 +40,6 @@ __all__ = [
     "specular_power",
     "read_kajiya_kay_params",
 ]
-
-
-def _rgb(x) -> Float[Array, 3]:
-    return jnp.broadcast_to(jnp.asarray(x, dtype=jnp.result_type(float)), (3,))
 
 
 class ShadingParams(eqx.Module):
@@ -69,11 +66,11 @@ class ShadingParams(eqx.Module):
         kappa: ArrayLike = 1.0,
         ambient: RGBLike = 0.0,
     ):
-        self.kd = _rgb(kd)
-        self.ks = _rgb(ks)
+        self.kd = rgb_param(kd)
+        self.ks = rgb_param(ks)
         self.shininess = jnp.asarray(shininess, dtype=jnp.result_type(float))
         self.kappa = jnp.asarray(kappa, dtype=jnp.result_type(float))
-        self.ambient = _rgb(ambient)
+        self.ambient = rgb_param(ambient)
 
     def __check_init__(self):
         check_params(self, colors=("kd", "ks", "ambient"), positive=("shininess",), non_negative=("kappa",))
@@ -200,16 +197,12 @@ class KajiyaKay(AbstractShadingModel):
 
     def gl_uniforms(self, params: ShadingParams) -> dict:
         return {
-            "shading.kd": _vec(params.kd),
-            "shading.ks": _vec(params.ks),
-            "shading.ambient": _vec(params.ambient),
+            "shading.kd": rgb_uniform(params.kd),
+            "shading.ks": rgb_uniform(params.ks),
+            "shading.ambient": rgb_uniform(params.ambient),
             "shading.shininess": float(params.shininess),
         }
 
     @classmethod
     def from_table(cls, table) -> KajiyaKay:
         return cls(params=read_kajiya_kay_params(table))
-
-
-def _vec(v) -> tuple:
-    return tuple(float(x) for x in np.broadcast_to(np.asarray(v, dtype=np.float64), (3,)))

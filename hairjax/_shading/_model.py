@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import equinox as eqx
 import jax
+import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
@@ -39,6 +40,9 @@ if TYPE_CHECKING:  # types only: the scene reader imports the registry, not the 
     from .._scene._file import Table
 
 __all__ = [
+    "rgb_param",
+    "scalar_param",
+    "rgb_uniform",
     "AbstractShadingModel",
     "PointInputs",
     "ShadingPoints",
@@ -54,6 +58,21 @@ __all__ = [
 # What a parameter class takes for an RGB gain: an array or one number (it broadcasts), or
 # a tuple or list of 3 numbers (`ShadingParams(kd=(0.3, 0.5, 0.2))`); it stores `[3]`.
 RGBLike = ArrayLike | Sequence[ArrayLike]
+
+
+def rgb_param(x) -> Float[Array, " 3"]:
+    """A parameter's RGB value as the working dtype (a scalar broadcasts to grey)."""
+    return jnp.broadcast_to(jnp.asarray(x, dtype=jnp.result_type(float)), (3,))
+
+
+def scalar_param(x) -> Float[Array, ""]:
+    """A parameter's scalar value as the working dtype."""
+    return jnp.asarray(x, dtype=jnp.result_type(float))
+
+
+def rgb_uniform(v) -> tuple:
+    """An RGB value as the three Python floats a GL vec3 uniform takes."""
+    return tuple(float(x) for x in np.broadcast_to(np.asarray(v, dtype=np.float64), (3,)))
 
 
 class PointInputs(eqx.Module):

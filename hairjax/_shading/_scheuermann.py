@@ -26,6 +26,9 @@ from ._model import (
     ShadingPoints,
     check_params,
     register_shading_model,
+    rgb_param,
+    rgb_uniform,
+    scalar_param,
 )
 from ._scheuermann_inputs import ScheuermannMaps, ScheuermannPoints, scheuermann_inputs
 from ._transforms import IDENTITY, LOG
@@ -40,14 +43,6 @@ __all__ = [
     "smoothstep_attenuation",
     "scheuermann_diffuse",
 ]
-
-
-def _rgb(x) -> Float[Array, 3]:
-    return jnp.broadcast_to(jnp.asarray(x, dtype=jnp.result_type(float)), (3,))
-
-
-def _scalar(x) -> Float[Array, ""]:
-    return jnp.asarray(x, dtype=jnp.result_type(float))
 
 
 class ScheuermannParams(eqx.Module):
@@ -83,15 +78,15 @@ class ScheuermannParams(eqx.Module):
         secondary_shift: ArrayLike = -0.1,
         kappa: ArrayLike = 1.0,
     ):
-        self.kd = _rgb(kd)
-        self.ambient = _rgb(ambient)
-        self.primary_color = _rgb(primary_color)
-        self.primary_exponent = _scalar(primary_exponent)
-        self.primary_shift = _scalar(primary_shift)
-        self.secondary_color = _rgb(secondary_color)
-        self.secondary_exponent = _scalar(secondary_exponent)
-        self.secondary_shift = _scalar(secondary_shift)
-        self.kappa = _scalar(kappa)
+        self.kd = rgb_param(kd)
+        self.ambient = rgb_param(ambient)
+        self.primary_color = rgb_param(primary_color)
+        self.primary_exponent = scalar_param(primary_exponent)
+        self.primary_shift = scalar_param(primary_shift)
+        self.secondary_color = rgb_param(secondary_color)
+        self.secondary_exponent = scalar_param(secondary_exponent)
+        self.secondary_shift = scalar_param(secondary_shift)
+        self.kappa = scalar_param(kappa)
 
     def __check_init__(self):
         check_params(
@@ -276,7 +271,7 @@ class Scheuermann(AbstractShadingModel):
 
     def gl_uniforms(self, params: ScheuermannParams) -> dict:
         uniforms: dict[str, Any] = {
-            f"scheuermann.{n}": _vec(getattr(params, n))
+            f"scheuermann.{n}": rgb_uniform(getattr(params, n))
             for n in ("kd", "ambient", "primary_color", "secondary_color")
         }
         for n in ("primary_exponent", "secondary_exponent", "primary_shift", "secondary_shift"):
@@ -322,7 +317,3 @@ class Scheuermann(AbstractShadingModel):
             hair_occlusion=table.number("hair_occlusion"),
         )
         return cls(params=params, maps=ScheuermannMaps(**maps))
-
-
-def _vec(v) -> tuple:
-    return tuple(float(x) for x in np.broadcast_to(np.asarray(v, dtype=np.float64), (3,)))
