@@ -1,0 +1,74 @@
+"""hairjax: differentiable hair shading in JAX (the public names; `__init__.py` loads them lazily).
+
+Strands are drawn as antialiased, alpha-blended ribbons in a bin-sorted visibility order,
+self-shadowed with opacity shadow maps and shaded with Kajiya-Kay or Scheuermann's two
+shifted highlights. The model is written down once, in docs/model.md; how the package is
+laid out, and how to add a shading model, shadow method or ordering, in
+docs/architecture.md.
+"""
+
+from ._animate import load_animation as load_animation
+from ._animate import write_frames as write_frames
+from ._cache import forget as forget
+from ._disagreement import renderer_band as renderer_band
+from ._errors import HairFormatError as HairFormatError
+from ._errors import SceneError as SceneError
+from ._fit import FitError as FitError
+from ._fit import FitResult as FitResult
+from ._fit import fit as fit
+from ._geometry._ordering import AbstractOrdering as AbstractOrdering
+from ._geometry._ordering import Ordering as Ordering
+from ._geometry._ordering import draw_order as draw_order
+from ._geometry._ordering import hair_centre as hair_centre
+from ._geometry._ordering import register_ordering as register_ordering
+from ._geometry._ordering import segment_depth as segment_depth
+from ._geometry._ordering import static_order as static_order
+from ._geometry._projection import camera_view as camera_view
+from ._geometry._setup import prepare as prepare
+from ._geometry._setup import visibility_order as visibility_order
+from ._geometry._shadows import AbstractShadowMethod as AbstractShadowMethod
+from ._geometry._shadows import Shadows as Shadows
+from ._geometry._shadows import register_shadow_method as register_shadow_method
+from ._geometry._stage import Geometry as Geometry
+from ._geometry._stage import geometry_stage as geometry_stage
+from ._io import hair_info as hair_info
+from ._io import load_hair as load_hair
+from ._io._image import read_image as read_image
+from ._io._image import write_image as write_image
+from ._render import render as render
+from ._render import render_profiled as render_profiled
+from ._scene._camera import Camera as Camera
+from ._scene._file import default_scene_path as default_scene_path
+from ._scene._file import load_scene as load_scene
+from ._scene._light import Light as Light
+from ._scene._occluder import Occluder as Occluder
+from ._scene._procedural import furball as furball
+from ._scene._procedural import scalp as scalp
+from ._scene._scene import PatchGeometry as PatchGeometry
+from ._scene._scene import Scene as Scene
+from ._scene._strands import Strands as Strands
+from ._shading import AbstractShadingModel as AbstractShadingModel
+from ._shading import KajiyaKay as KajiyaKay
+from ._shading import KajiyaKayLookup as KajiyaKayLookup
+from ._shading import KajiyaKayMirror as KajiyaKayMirror
+from ._shading import PointInputs as PointInputs
+from ._shading import Reflectance as Reflectance
+from ._shading import Scheuermann as Scheuermann
+from ._shading import ScheuermannMaps as ScheuermannMaps
+from ._shading import ScheuermannParams as ScheuermannParams
+from ._shading import ShadingParams as ShadingParams
+from ._shading import ShadingPoints as ShadingPoints
+from ._shading import Streaks as Streaks
+from ._shading import kajiya_kay as kajiya_kay
+from ._shading import register_shading_model as register_shading_model
+from ._shading import shading_model_class as shading_model_class
+from ._shading import shading_stage as shading_stage
+from ._shading import transmittance as transmittance
+from ._shading._model import check_params as check_params
+from ._shading._transforms import IDENTITY as IDENTITY
+from ._shading._transforms import LOG as LOG
+from ._shading._transforms import SOFTPLUS as SOFTPLUS
+from ._shading._transforms import Transform as Transform
+from ._supersample import supersample as supersample
+
+__version__: str
