@@ -14,12 +14,14 @@ from __future__ import annotations
 import copy
 import dataclasses
 import tomllib
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from ._errors import SceneError
-from ._scene._file import load_scene, scene_from_dict, scene_tables
+from ._scene._file import load_scene, scene_from_dict, scene_tables, with_overrides
 from ._scene._scene import Scene
 from ._scene._table import Table, build
 
@@ -109,16 +111,18 @@ class Animation:
         return scene_from_dict(data, self.base_dir, self.name, source=self.source)
 
 
-def load_animation(path) -> Animation:
+def load_animation(path, overrides: Mapping[str, Any] | None = None) -> Animation:
     """Read a scene file for `hairjax animate`: a fur ball (`hair.source = "furball"`) and
     an optional `[animation]` table (docs/scenes.md; absent keys take `Motion`'s defaults).
+    `overrides`: `"table.key" → value`, as `load_scene`'s.
 
     **Raises:** `SceneError`, naming the file and the key, as `load_scene`."""
     path = Path(path)
-    load_scene(path)  # every check of the still scene, with its messages
+    load_scene(path, overrides)  # every check of the still scene, with its messages
     with open(path, "rb") as f:
         data = tomllib.load(f)
     where = str(path)
+    data = with_overrides(data, overrides or {}, where)
     if data["hair"].get("source") != "furball":
         raise SceneError(
             f"{where}: hair.source must be 'furball' to animate (wenzel-2002's fur "

@@ -35,7 +35,7 @@ from ._occluder import OCCLUDER_KINDS, Occluder
 from ._scene import Scene
 from ._table import Table, build, describe, given
 
-__all__ = ["load_scene", "scene_from_dict", "default_scene_path", "scene_tables"]
+__all__ = ["load_scene", "scene_from_dict", "default_scene_path", "scene_tables", "with_overrides"]
 
 LIGHT_KINDS = ("directional", "point")
 MESH_FILE_SUFFIXES = (".obj",)
@@ -90,11 +90,13 @@ def default_scene_path() -> Path:
     return Path(__file__).parents[1] / "scenes" / "default.toml"
 
 
-def load_scene(path: str | os.PathLike) -> Scene:
+def load_scene(path: str | os.PathLike, overrides: Mapping[str, Any] | None = None) -> Scene:
     """Read a TOML scene file.
 
     Relative hair-file paths in `hair.source` are resolved against the scene file's
-    directory; the scene's name defaults to the file's stem.
+    directory; the scene's name defaults to the file's stem. `overrides` maps
+    `"table.key"` (or `"name"`) to a value that replaces the file's (`hairjax … --set`);
+    an override passes the same checks as the file's own keys.
 
     **Raises:** `SceneError`, naming the file and the offending `table.key`, for an
     unreadable file, invalid TOML, an unknown table or key, a value of the wrong type or
@@ -110,8 +112,35 @@ def load_scene(path: str | os.PathLike) -> Scene:
         raise SceneError(f"{path}: scene file is not valid UTF-8 text: {e}") from e
     except tomllib.TOMLDecodeError as e:
         raise SceneError(f"{path}: invalid TOML: {e}") from e
+    data = with_overrides(data, overrides or {}, str(path))
     # Resolve now so the scene does not depend on the working directory later.
     return scene_from_dict(data, path.resolve().parent, path.stem, source=str(path))
+
+
+def with_overrides(data: Mapping[str, Any], overrides: Mapping[str, Any], where: str) -> dict[str, Any]:
+    """`data` (parsed TOML) with each `"table.key": value` of `overrides` set, in a copy.
+
+    **Raises:** `SceneError` naming the key, and the allowed tables or keys, for a table
+    or key that no scene file may hold (a typo); values are checked later, with the file's.
+    """
+    out: dict[str, Any] = {k: dict(v) if isinstance(v, Mapping) else v for k, v in data.items()}
+    tables = scene_tables()
+    for dotted, value in overrides.items():
+        if dotted in TOP_LEVEL_KEYS:
+            out[dotted] = value
+            continue
+        table, _, key = dotted.partition(".")
+        if table not in tables:
+            raise SceneError(f"{where}: no table [{table}] for {dotted!r}; tables: {', '.join(tables)}")
+        if key not in tables[table]:
+            raise SceneError(
+                f"{where}: [{table}] has no key {key!r} ({dotted!r}); keys: {', '.join(tables[table])}"
+            )
+        entry = out.setdefault(table, {})
+        if not isinstance(entry, dict):  # the file holds `table = value`, not a table: refused later
+            raise SceneError(f"{where}: {table} is not a table, so {dotted!r} cannot be set")
+        entry[key] = value
+    return out
 
 
 def scene_from_dict(
