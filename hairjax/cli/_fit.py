@@ -1,0 +1,110 @@
+"""`hairjax fit`: fit the shading model's parameters to target images (docs/fitting.md).
+
+Exit code 0 when the fit converged, 3 when it stopped without converging (the step
+limit, a diverging loss, a solver's failure), so a script can tell them apart.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from ._main import EXIT_NOT_CONVERGED
+from ._outputs import IMAGE_SUFFIXES, Output, check_outputs, written_together
+
+__all__ = ["run"]
+
+
+def _outputs(args: argparse.Namespace) -> list[Output]:
+    outputs = []
+    if args.json is not None:
+        outputs.append(Output(args.json, (".json",), "--json"))
+    if args.out is not None:
+        outputs.append(Output(args.out, IMAGE_SUFFIXES, "--out"))
+    if args.plot is not None:
+        outputs.append(Output(args.plot, (".png",), "--plot"))
+    return outputs
+
+
+def _table(result, names, fittable) -> str:
+    import numpy as np
+
+    def fmt(v):
+        return " ".join(f"{x:.6g}" for x in np.atleast_1d(np.asarray(v, float)))
+
+    header = ("parameter", "initial", "fitted", "std. error")
+    rows = []
+    for name in fittable:
+        se = result.std_error.get(name)
+        se_text = "undetermined" if name in result.undetermined else "fixed" if name not in names else fmt(se)
+        rows.append((name, fmt(getattr(result.initial, name)), fmt(getattr(result.params, name)), se_text))
+    widths = [max(len(r[i]) for r in [header, *rows]) for i in range(4)]
+    return "\n".join("  ".join(c.ljust(w) for c, w in zip(row, widths)) for row in [header, *rows])
+
+
+def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from .._fit import FitError, fit
+    from .._io._image import read_image
+    from .._progress import reporter
+    from ._scenes import load_cli_scene
+
+    if len(args.scenes) >= len(args.target):
+        raise FitError(
+            f"{1 + len(args.scenes)} scenes for {len(args.target)} targets: "
+            "each extra --scene goes with one extra --target"
+        )
+    outputs = _outputs(args)
+    check_outputs(outputs)
+    # Everything is read and checked before any rendering starts.
+    targets = [read_image(t) for t in args.target]
+    first = load_cli_scene(args, args.scene)
+    extra = [load_cli_scene(args, s) for s in args.scenes]
+    scenes = [first, *extra, *[first] * (len(targets) - 1 - len(extra))]
+    # Each shading model has its parameters (docs/model.md §17 for Scheuermann's).
+    fittable = first.shading.fittable
+    names = fittable if args.fit is None else tuple(n.strip() for n in args.fit.split(",") if n.strip())
+    unknown = [n for n in names if n not in fittable]
+    if unknown or not names:
+        what = f"unknown parameter {unknown[0]!r}" if unknown else "no parameter"
+        raise FitError(f"{what} in --fit; fittable: {', '.join(fittable)}")
+
+    if not args.quiet:
+        print(f"fitting {', '.join(names)} with {args.solver} to {len(targets)} target(s)", file=sys.stderr)
+    with reporter("fit", quiet=args.quiet) as progress:
+
+        def on_step(step, loss, elapsed):
+            progress(step, args.max_steps, f"loss {loss:.6e}")
+
+        result = fit(scenes, targets, fit=names, solver=args.solver, max_steps=args.max_steps, progress=on_step)
+    print(_table(result, names, fittable))
+    restarted = f" ({result.restarts} restarts)" if result.restarts else ""
+    print(
+        f"{result.termination} after {result.steps} steps{restarted}, {result.time_s:.2f} s "
+        f"(+ {result.geometry_s:.2f} s geometry); RMSE {result.rmse:.4g}"
+    )
+
+    fitted_image = None
+    if args.out is not None or args.plot is not None:
+        from .._render import render
+
+        fitted_image = np.asarray(render(first, result.params))
+    with written_together([o.path for o in outputs]) as temps:
+        for out, tmp in zip(outputs, temps):
+            if out.option == "--json":
+                from .._io._files import write_json
+
+                write_json(tmp, result.to_json())
+            elif out.option == "--out":
+                from .._io._image import write_image
+
+                write_image(tmp, fitted_image)
+            else:
+                from .._io._view import side_by_side
+
+                side_by_side(targets[0], fitted_image, tmp, title=f"{first.name}: {result.termination}")
+    if not args.quiet:
+        for out in outputs:
+            print(f"wrote {out.path}")
+    return 0 if result.termination == "converged" else EXIT_NOT_CONVERGED

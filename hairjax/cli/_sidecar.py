@@ -1,0 +1,93 @@
+"""The JSON record `hairjax render` writes beside an image: what made it.
+
+The scene as resolved (every dataclass field, defaults included, after --set), the
+shading model's parameters, the command line, the versions of hairjax and its numerical
+dependencies, and the time of each stage. Arrays of more than a few numbers (the strands'
+points) are summarised by shape and range, so the record stays small and readable.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+import platform
+import sys
+from importlib.metadata import PackageNotFoundError, version
+from pathlib import Path
+from typing import Any
+
+__all__ = ["render_record", "jsonable", "versions"]
+
+_SMALL = 16  # arrays up to this many numbers are written out in full
+_VERSIONED = ("hairjax", "jax", "jaxlib", "numpy", "equinox", "optimistix", "moderngl", "OpenImageIO")
+
+
+def jsonable(value: Any) -> Any:
+    """`value` as JSON data: dataclasses (equinox modules too) as tables of their fields,
+    small arrays as lists, large ones as {shape, dtype, min, max}."""
+    import numpy as np
+
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        table: dict[str, Any] = {"type": type(value).__name__}
+        for field in dataclasses.fields(value):
+            table[field.name] = jsonable(getattr(value, field.name))
+        return table
+    if isinstance(value, (str, bool, int, type(None))):
+        return value
+    if isinstance(value, float):
+        return value if np.isfinite(value) else str(value)  # JSON has no inf or nan
+    if isinstance(value, Path):
+        return str(value)
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v) for v in value]
+    try:
+        array = np.asarray(value)
+    except Exception:  # not array-like (a callable, a texture object): its name only
+        return type(value).__name__
+    if array.dtype == object:
+        return type(value).__name__
+    if array.size <= _SMALL:
+        return jsonable(array.tolist())
+    summary: dict[str, Any] = {"shape": list(array.shape), "dtype": str(array.dtype)}
+    if array.dtype.kind in "fiub":
+        summary["min"], summary["max"] = float(array.min()), float(array.max())
+    return summary
+
+
+def versions() -> dict[str, str]:
+    out = {"python": platform.python_version()}
+    for name in _VERSIONED:
+        try:
+            out[name] = version(name)
+        except PackageNotFoundError:  # an optional dependency that is not installed
+            out[name] = "not installed"
+    return out
+
+
+def render_record(
+    scene, scene_file: Path, overrides: dict[str, Any], backend: str, timings: dict, images: list[Path]
+) -> dict:
+    """The sidecar's content for `scene`, read from `scene_file` with `overrides` (--set,
+    --seed, --size) and rendered by `backend` in `timings` (seconds by stage)."""
+    import numpy as np
+
+    image = {"files": [p.name for p in images], "width": scene.camera.width, "height": scene.camera.height}
+    return {
+        "command": ["hairjax", *sys.argv[1:]],
+        "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "scene_file": str(scene_file),
+        "overrides": jsonable(overrides),
+        "backend": backend,
+        "image": image,
+        "shading": {
+            "model": type(scene.shading).__name__,
+            "params": {
+                f.name: np.asarray(getattr(scene.params, f.name)).tolist() for f in dataclasses.fields(scene.params)
+            },
+        },
+        "scene": jsonable(scene),
+        "timings_s": {k: round(float(v), 6) for k, v in timings.items()},
+        "versions": versions(),
+    }

@@ -1,0 +1,142 @@
+"""Every output a command writes is checked before the work: the bad-output matrix.
+
+For each subcommand that writes, and each way an output can be unwritable — its parent
+is a file, its folder is read-only, its extension is not one the command writes, it is a
+directory (for a folder output: it is a file) — the command exits 2 with one line that
+names the path, shows no traceback, writes nothing, and fails before the work: the
+function that would load the scene (or the image, or start the benchmark) is replaced by
+one that fails the test if called.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import hairjax as hj
+from hairjax.cli import main
+from hairjax.cli._outputs import BadOutput, Output, check_output, check_outputs, written_together
+
+
+@contextlib.contextmanager
+def read_only_folder(tmp_path: Path):
+    """A folder nothing may be written into: chmod 555 for a user; for root (whom
+    permissions do not stop) a read-only bind mount, or skip when mounting is refused."""
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    if os.geteuid() != 0:
+        folder.chmod(0o555)
+        try:
+            yield folder
+        finally:
+            folder.chmod(0o755)
+        return
+    mounted = subprocess.run(["mount", "--bind", "-o", "ro", str(folder), str(folder)], capture_output=True)
+    if mounted.returncode != 0:
+        pytest.skip("root, and a read-only bind mount is refused here")
+    try:
+        assert not os.access(folder, os.W_OK)  # the mount is read-only, or the case proves nothing
+        yield folder
+    finally:
+        subprocess.run(["umount", str(folder)], check=True)
+
+
+# command → (argv before the output, the option naming the output, the output's kind, the
+# function that starts the work). "file" outputs have extensions; "folder" outputs are filled.
+EXR = "t.exr"
+COMMANDS = {
+    "render -o": (["render"], "-o", ".exr", "hairjax.cli._scenes.load_cli_scene"),
+    "render --png": (["render"], "--png", ".png", "hairjax.cli._scenes.load_cli_scene"),
+    "view -o": (["view", EXR], "-o", ".png", "hairjax._io._image.read_image"),
+    "compare --json": (["compare"], "--json", ".json", "hairjax.cli._scenes.load_cli_scene"),
+    "fit --json": (["fit", "--target", EXR], "--json", ".json", "hairjax._io._image.read_image"),
+    "fit --out": (["fit", "--target", EXR], "--out", ".exr", "hairjax._io._image.read_image"),
+    "fit --plot": (["fit", "--target", EXR], "--plot", ".png", "hairjax._io._image.read_image"),
+    "bench --json": (["bench", "--quick"], "--json", ".json", "hairjax.tools.bench_main"),
+    "animate -o": (["animate", "scene.toml"], "-o", "folder", "hairjax._animate.load_animation"),
+    "sweep --out": (["sweep"], "--out", "folder", "hairjax.cli._scenes.load_cli_scene"),
+}
+CASES = ("parent is a file", "read-only folder", "unsupported extension", "directory as output")
+
+
+@pytest.mark.parametrize("case", CASES)
+@pytest.mark.parametrize("command", COMMANDS)
+def test_bad_output_fails_before_the_work(command, case, tmp_path, monkeypatch, capsys):
+    before, option, kind, work = COMMANDS[command]
+    if kind == "folder" and case == "unsupported extension":
+        pytest.skip("a folder output has no extension to refuse (any name is a valid folder)")
+    monkeypatch.chdir(tmp_path)
+    hj.write_image(tmp_path / EXR, np.zeros((4, 4, 4)))
+    (tmp_path / "scene.toml").write_text('[hair]\nsource = "furball"\n')
+    module, name = work.rsplit(".", 1)
+
+    def never(*args, **kwargs):
+        raise AssertionError(f"{work} ran before the output was checked")
+
+    monkeypatch.setattr(f"{module}.{name}", never)
+    suffix = ".exr" if kind == "folder" else kind
+    with contextlib.ExitStack() as stack:
+        if case == "parent is a file":
+            (tmp_path / "afile").write_text("x")
+            target = tmp_path / "afile" / f"out{suffix}"
+        elif case == "read-only folder":
+            target = stack.enter_context(read_only_folder(tmp_path)) / f"out{suffix}"
+        elif case == "unsupported extension":
+            target = tmp_path / "out.jpg"
+        else:
+            target = tmp_path / "adir"
+            if kind == "folder":
+                target.write_text("a file where a folder should be")
+            else:
+                target.mkdir()
+        listing = sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*"))
+        code = main([*before, option, str(target)])
+        err = capsys.readouterr().err
+        assert code == 2
+        lines = err.strip().splitlines()
+        assert len(lines) == 1 and "Traceback" not in err, err
+        assert str(target) in lines[0]
+        assert sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*")) == listing  # nothing written
+
+
+def test_check_output_accepts_a_new_nested_path(tmp_path):
+    check_output(Output(tmp_path / "a" / "b" / "c.exr", (".exr",), "-o"))  # created at write time
+    check_output(Output(tmp_path / "new" / "folder", (), "--out"))
+    assert list(tmp_path.iterdir()) == []  # checking creates nothing
+
+
+def test_extension_check_ignores_case(tmp_path):
+    check_output(Output(tmp_path / "A.EXR", (".exr",), "-o"))
+
+
+def test_the_same_path_twice_is_refused(tmp_path):
+    with pytest.raises(BadOutput, match="named by both -o and --png"):
+        check_outputs([Output(tmp_path / "a.png", (".png",), "-o"), Output(tmp_path / "a.png", (".png",), "--png")])
+
+
+def test_written_together_is_all_or_nothing(tmp_path):
+    a, b = tmp_path / "a.txt", tmp_path / "sub" / "b.txt"
+    with pytest.raises(RuntimeError):
+        with written_together([a, b]) as (ta, tb):
+            ta.write_text("a")
+            tb.write_text("b")
+            raise RuntimeError("the second writer failed")
+    assert not a.exists() and not b.exists()
+    assert [p.name for p in tmp_path.rglob("*") if p.is_file()] == []  # no temporary left
+    with written_together([a, b]) as (ta, tb):
+        ta.write_text("a")
+        tb.write_text("b")
+    assert a.read_text() == "a" and b.read_text() == "b"
+
+
+def test_render_without_output_and_only_png_writes_only_the_png(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    scene = tmp_path / "s.toml"
+    scene.write_text('[hair]\nsource = "furball"\nstrands = 30\npoints = 4\n[camera]\nwidth = 16\nheight = 12\n')
+    assert main(["render", str(scene), "--png", "v.png", "-q"]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.toml", "v.json", "v.png"]
