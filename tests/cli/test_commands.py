@@ -44,16 +44,55 @@ def test_render_writes_exr_and_png(scene_file, tmp_path, capsys):
     # 8-bit sRGB rounding is ≤ ½ step; in linear that is at most the steepest slope of the
     # sRGB decode (2.4/1.055 at 1.0) times 0.5/255.
     np.testing.assert_allclose(view, np.clip(expected[..., :3], 0, 1), atol=2.4 / 1.055 * 0.5 / 255)
-    assert sorted(os.listdir(exr.parent)) == ["a.exr", "a.png"]  # no temporary files left
+    assert sorted(os.listdir(exr.parent)) == ["a.exr", "a.json", "a.png"]  # no temporary files left
     umask = os.umask(0)
     os.umask(umask)
     assert exr.stat().st_mode & 0o777 == 0o666 & ~umask  # as a plain write, not mkstemp's 0600
 
 
+def test_render_sidecar_records_the_scene_as_resolved(scene_file, tmp_path):
+    import json
+
+    import hairjax
+
+    exr = tmp_path / "b.exr"
+    argv = ["render", str(scene_file), "-o", str(exr), "--set", "shading.ks=0.125", "--size", "20", "-q"]
+    assert main(argv) == 0
+    record = json.loads((tmp_path / "b.json").read_text())
+    assert record["overrides"] == {"shading.ks": 0.125, "camera.width": 20, "camera.height": 15}
+    np.testing.assert_allclose(record["shading"]["params"]["ks"], 0.125)
+    assert record["scene"]["camera"]["width"] == 20 and record["scene"]["camera"]["height"] == 15
+    assert record["scene"]["shadows"] == {"type": "OpacityMaps", "maps": 4, "resolution": 32} | {
+        k: v for k, v in record["scene"]["shadows"].items() if k not in ("type", "maps", "resolution")
+    }
+    assert record["scene"]["strands"]["points"]["shape"] == [60 * 5, 3]  # summarised, not listed
+    assert record["versions"]["hairjax"] == hairjax.__version__ and "jax" in record["versions"]
+    assert set(record["timings_s"]) >= {"shading"} and all(t >= 0 for t in record["timings_s"].values())
+    assert hj.read_image(exr).shape == (15, 20, 4)
+    assert main(["render", str(scene_file), "-o", str(tmp_path / "c.exr"), "--no-sidecar", "-q"]) == 0
+    assert not (tmp_path / "c.json").exists()
+
+
+def test_quiet_prints_nothing_on_success(scene_file, tmp_path, capsys):
+    assert main(["render", str(scene_file), "-o", str(tmp_path / "q.exr"), "-q"]) == 0
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err == ""
+
+
+def test_view_tone_maps_with_exposure(tmp_path):
+    image = np.full((4, 6, 4), 0.25, dtype=np.float32)
+    hj.write_image(tmp_path / "i.exr", image)
+    assert main(["view", str(tmp_path / "i.exr"), "--exposure", "1", "-q"]) == 0
+    view = hj.read_image(tmp_path / "i.png")  # decoded back to linear
+    # One stop doubles 0.25 to 0.5; 8-bit sRGB rounding is ≤ ½ step, in linear at most the
+    # decode's steepest slope (2.4/1.055, at 1.0) times 0.5/255.
+    np.testing.assert_allclose(view, 0.5, atol=2.4 / 1.055 * 0.5 / 255)
+
+
 def test_failed_write_leaves_no_file(scene_file, tmp_path, capsys):
     bad = tmp_path / "image.bmpx"
     assert main(["render", str(scene_file), "-o", str(bad)]) == 2
-    assert "unsupported image type" in capsys.readouterr().err
+    assert "unsupported extension" in capsys.readouterr().err
     assert list(tmp_path.iterdir()) == [scene_file]
 
 
@@ -92,7 +131,7 @@ def test_fit_from_the_cli(scene_file, tmp_path, capsys):
         main(["fit", str(scene_file), "--target", str(target), "--json", str(report), "--out", str(out)]) == 0
     )
     captured = capsys.readouterr()
-    assert "step" in captured.err and "loss" in captured.err  # the live progress lines
+    assert "loss" in captured.err  # the progress lines
     assert "fitted" in captured.out and "std. error" in captured.out
     data = json.loads(report.read_text())
     for key in ("params", "initial", "steps", "time_s", "loss", "rmse", "termination"):
@@ -100,6 +139,14 @@ def test_fit_from_the_cli(scene_file, tmp_path, capsys):
     # The target is float32 (EXR), so recovery is to float32 rounding, not 1e-12.
     np.testing.assert_allclose(data["params"]["kappa"], 2.5, rtol=1e-3)
     assert out.exists()
+
+
+def test_fit_that_stops_without_converging_exits_3(scene_file, tmp_path, capsys):
+    scene = hj.load_scene(scene_file)
+    target = tmp_path / "t.exr"
+    hj.write_image(target, np.asarray(hj.render(scene, hj.ShadingParams(kd=0.2, ks=0.5, shininess=40.0, kappa=1.5))))
+    assert main(["fit", str(scene_file), "--target", str(target), "--max-steps", "1", "-q"]) == 3
+    assert "stopped: reached max_steps = 1" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize(
