@@ -32,7 +32,7 @@ system-packages:
 $(STAMP): pyproject.toml | $(BIN)/python system-packages
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[test]'
-	$(BIN)/python -m ipykernel install --user --name hairjax --display-name "hairjax (.venv)" >/dev/null
+	$(BIN)/python -m ipykernel install --sys-prefix --name python3 >/dev/null  # the notebooks' kernelspec
 	touch $(STAMP)
 
 run: $(STAMP)
