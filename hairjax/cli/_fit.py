@@ -77,7 +77,9 @@ def run(args: argparse.Namespace) -> int:
         def on_step(step, loss, elapsed):
             progress(step, args.max_steps, f"loss {loss:.6e}")
 
-        result = fit(scenes, targets, fit=names, solver=args.solver, max_steps=args.max_steps, progress=on_step)
+        result = fit(
+            scenes, targets, fit=names, solver=args.solver, max_steps=args.max_steps, progress=on_step
+        )
     print(_table(result, names, fittable))
     restarted = f" ({result.restarts} restarts)" if result.restarts else ""
     print(

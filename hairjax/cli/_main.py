@@ -85,7 +85,8 @@ def _run(module, args) -> int:
             print(f"hairjax: error: {_one_line(err)}", file=sys.stderr)
             return EXIT_BAD_INPUT
         print(
-            f"hairjax: unexpected error: {type(err).__name__}: {_one_line(err)} (rerun with --debug for the traceback)",
+            f"hairjax: unexpected error: {type(err).__name__}: {_one_line(err)} "
+            "(rerun with --debug for the traceback)",
             file=sys.stderr,
         )
         return EXIT_UNEXPECTED

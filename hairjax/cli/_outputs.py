@@ -56,7 +56,9 @@ def check_output(out: Output) -> None:
             raise BadOutput(f"{where}: is a file; {out.option} takes a folder")
     else:
         if path.is_dir():
-            raise BadOutput(f"{where}: is a directory; give a file name ending in {' or '.join(out.suffixes)}")
+            raise BadOutput(
+                f"{where}: is a directory; give a file name ending in {' or '.join(out.suffixes)}"
+            )
         if path.suffix.lower() not in out.suffixes:
             found = f"'{path.suffix}'" if path.suffix else "no extension"
             raise BadOutput(f"{where}: unsupported extension {found}; use {' or '.join(out.suffixes)}")

@@ -125,10 +125,15 @@ def build_parser() -> argparse.ArgumentParser:
     p = command("render", "render a scene (default: the built-in fur ball) to EXR and/or PNG")
     p.add_argument("scene", nargs="?", type=Path, help=_SCENE_HELP + " (default: the built-in fur ball)")
     p.add_argument(
-        "-o", "--output", type=Path, help="output image, .exr (linear float) or .png (default: out/render.exr)"
+        "-o",
+        "--output",
+        type=Path,
+        help="output image, .exr (linear float) or .png (default: out/render.exr)",
     )
     p.add_argument("--png", type=Path, help="also write an 8-bit sRGB PNG here (alone: only the PNG)")
-    p.add_argument("--profile", action="store_true", help="print the time of each stage, first and second run")
+    p.add_argument(
+        "--profile", action="store_true", help="print the time of each stage, first and second run"
+    )
     p.add_argument("--backend", choices=["jax", "gl"], default="jax", help=_BACKEND_HELP)
     p.add_argument(
         "--no-sidecar",
@@ -175,13 +180,25 @@ def build_parser() -> argparse.ArgumentParser:
         help="scene of the 2nd, 3rd, … --target, in order; targets without one use the first scene",
     )
     p.add_argument(
-        "--fit", help="comma list of parameters to fit (default: the model's fittable ones, e.g. kd,ks,shininess,kappa)"
+        "--fit",
+        help="comma list of the parameters to fit "
+        "(default: all the model's fittable ones, e.g. kd,ks,shininess,kappa)",
     )
-    p.add_argument("--solver", default="lm", choices=SOLVER_NAMES, help="least-squares solver (lm, gn: short names)")
-    p.add_argument("--max-steps", type=positive_int, default=100, help="solver steps before giving up (exit 3)")
-    p.add_argument("--json", type=Path, help="write the fitted and initial parameters, steps, loss, … as JSON")
-    p.add_argument("--out", type=Path, help="render the first scene with the fitted parameters (.exr or .png)")
-    p.add_argument("--plot", type=Path, help="PNG of target, fit and residual side by side (the first target)")
+    p.add_argument(
+        "--solver", default="lm", choices=SOLVER_NAMES, help="least-squares solver (lm, gn: short names)"
+    )
+    p.add_argument(
+        "--max-steps", type=positive_int, default=100, help="solver steps before giving up (exit 3)"
+    )
+    p.add_argument(
+        "--json", type=Path, help="write the fitted and initial parameters, steps, loss, … as JSON"
+    )
+    p.add_argument(
+        "--out", type=Path, help="render the first scene with the fitted parameters (.exr or .png)"
+    )
+    p.add_argument(
+        "--plot", type=Path, help="PNG of target, fit and residual side by side (the first target)"
+    )
 
     p = command("sweep", "error against run time, one quality knob at a time (resumable)")
     p.add_argument("scene", nargs="?", type=Path, help=_SCENE_HELP + " (default: the built-in fur ball)")
@@ -191,7 +208,9 @@ def build_parser() -> argparse.ArgumentParser:
         default=Path("out/sweep"),
         help="folder for points.jsonl, sweep.csv, pareto.png, summary.md",
     )
-    p.add_argument("--knobs", help="comma list among maps, map_resolution, bins, width, supersampling (default: all)")
+    p.add_argument(
+        "--knobs", help="comma list among maps, map_resolution, bins, width, supersampling (default: all)"
+    )
     p.add_argument("--paths", default="jax,gl", help="renderers to time: jax, gl or both")
     p.add_argument("--repeats", type=positive_int, default=3, help="timed renders per point (their median)")
     p.add_argument("--quick", action="store_true", help="a few values per knob")

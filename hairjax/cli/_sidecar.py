@@ -76,7 +76,7 @@ def render_record(
     image = {"files": [p.name for p in images], "width": scene.camera.width, "height": scene.camera.height}
     return {
         "command": ["hairjax", *sys.argv[1:]],
-        "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         "scene_file": str(scene_file),
         "overrides": jsonable(overrides),
         "backend": backend,
@@ -84,7 +84,8 @@ def render_record(
         "shading": {
             "model": type(scene.shading).__name__,
             "params": {
-                f.name: np.asarray(getattr(scene.params, f.name)).tolist() for f in dataclasses.fields(scene.params)
+                f.name: np.asarray(getattr(scene.params, f.name)).tolist()
+                for f in dataclasses.fields(scene.params)
             },
         },
         "scene": jsonable(scene),

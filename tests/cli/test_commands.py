@@ -144,7 +144,9 @@ def test_fit_from_the_cli(scene_file, tmp_path, capsys):
 def test_fit_that_stops_without_converging_exits_3(scene_file, tmp_path, capsys):
     scene = hj.load_scene(scene_file)
     target = tmp_path / "t.exr"
-    hj.write_image(target, np.asarray(hj.render(scene, hj.ShadingParams(kd=0.2, ks=0.5, shininess=40.0, kappa=1.5))))
+    hj.write_image(
+        target, np.asarray(hj.render(scene, hj.ShadingParams(kd=0.2, ks=0.5, shininess=40.0, kappa=1.5)))
+    )
     assert main(["fit", str(scene_file), "--target", str(target), "--max-steps", "1", "-q"]) == 3
     assert "stopped: reached max_steps = 1" in capsys.readouterr().out
 

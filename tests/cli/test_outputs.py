@@ -116,7 +116,9 @@ def test_extension_check_ignores_case(tmp_path):
 
 def test_the_same_path_twice_is_refused(tmp_path):
     with pytest.raises(BadOutput, match="named by both -o and --png"):
-        check_outputs([Output(tmp_path / "a.png", (".png",), "-o"), Output(tmp_path / "a.png", (".png",), "--png")])
+        check_outputs(
+            [Output(tmp_path / "a.png", (".png",), "-o"), Output(tmp_path / "a.png", (".png",), "--png")]
+        )
 
 
 def test_written_together_is_all_or_nothing(tmp_path):
@@ -137,6 +139,8 @@ def test_written_together_is_all_or_nothing(tmp_path):
 def test_render_without_output_and_only_png_writes_only_the_png(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     scene = tmp_path / "s.toml"
-    scene.write_text('[hair]\nsource = "furball"\nstrands = 30\npoints = 4\n[camera]\nwidth = 16\nheight = 12\n')
+    scene.write_text(
+        '[hair]\nsource = "furball"\nstrands = 30\npoints = 4\n[camera]\nwidth = 16\nheight = 12\n'
+    )
     assert main(["render", str(scene), "--png", "v.png", "-q"]) == 0
     assert sorted(p.name for p in tmp_path.iterdir()) == ["s.toml", "v.json", "v.png"]

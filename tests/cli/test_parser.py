@@ -30,9 +30,19 @@ def test_every_option_has_a_help_line_and_shows_its_default(command):
     text = sub.format_help()
     for action in sub._actions:
         assert action.help, f"{command} {action.option_strings or action.dest} has no help"
-        has_default = action.option_strings and action.default not in (None, False, True, [], argparse.SUPPRESS)
+        has_default = action.option_strings and action.default not in (
+            None,
+            False,
+            True,
+            [],
+            argparse.SUPPRESS,
+        )
         if has_default and not isinstance(action, argparse._HelpAction):
-            shown = "x".join(map(str, action.default)) if isinstance(action.default, tuple) else str(action.default)
+            shown = (
+                "x".join(map(str, action.default))
+                if isinstance(action.default, tuple)
+                else str(action.default)
+            )
             assert f"default: {shown}" in " ".join(text.split()), f"{command} {action.option_strings[0]}"
 
 
@@ -51,8 +61,12 @@ def test_help_does_not_import_jax():
         "    try:\n        main(['render', '--help'])\n    except SystemExit:\n        pass\n"
         "print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] in ('jax', 'numpy', 'moderngl'))))"
     )
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in (str(REPO), os.environ.get("PYTHONPATH")) if p))
-    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout
+    env = dict(
+        os.environ, PYTHONPATH=os.pathsep.join(p for p in (str(REPO), os.environ.get("PYTHONPATH")) if p)
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
+    ).stdout
     assert json.loads(out.strip().splitlines()[-1]) == []
 
 
