@@ -1,4 +1,5 @@
-"""Every notebook in notebooks/ runs from top to bottom without an error.
+"""Every notebook in notebooks/ runs from top to bottom without an error, and is stored
+with its outputs, so that a reader browsing it sees the figures.
 
 The notebooks run in a kernel started from this very interpreter (the test writes a
 `python3` kernel spec for `sys.executable` and puts it first on JUPYTER_PATH, so a
@@ -53,6 +54,30 @@ def kernel_env(tmp_path, monkeypatch):
 
 def test_there_are_notebooks():
     assert NOTEBOOKS, "notebooks/ holds no .ipynb"
+
+
+# Stored outputs are small PNGs: a notebook over this is carrying full-size figures.
+MAX_NOTEBOOK_BYTES = 1_000_000
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
+def test_notebook_stored_with_outputs(path):
+    """Fast, executes nothing: every code cell has been run and the figures are stored
+    (at least one image/png output), no stored output is an error, and the kernel spec is
+    the plain `python3` one (not a machine's own kernel name)."""
+    nb = nbformat.read(path, as_version=4)
+    code = [cell for cell in nb.cells if cell.cell_type == "code"]
+    unrun = [
+        i for i, cell in enumerate(nb.cells) if cell.cell_type == "code" and cell.execution_count is None
+    ]
+    assert not unrun, f"code cells {unrun} have not been executed"
+    # Run top to bottom in one kernel: the counts are 1, 2, 3, … in cell order.
+    assert [cell.execution_count for cell in code] == list(range(1, len(code) + 1))
+    outputs = [out for cell in code for out in cell.get("outputs", [])]
+    assert not [out for out in outputs if out.get("output_type") == "error"]
+    assert any("image/png" in out.get("data", {}) for out in outputs), "no figure stored"
+    assert nb.metadata.get("kernelspec", {}).get("name") == "python3"
+    assert path.stat().st_size < MAX_NOTEBOOK_BYTES
 
 
 @pytest.mark.slow
