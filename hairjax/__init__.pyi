@@ -13,6 +13,8 @@ from ._cache import forget as forget
 from ._disagreement import renderer_band as renderer_band
 from ._errors import HairFormatError as HairFormatError
 from ._errors import SceneError as SceneError
+from ._explore import Explorer as Explorer
+from ._explore import explore as explore
 from ._fit import FitError as FitError
 from ._fit import FitResult as FitResult
 from ._fit import fit as fit

@@ -1,6 +1,7 @@
-"""`import hairjax` is the library alone: it loads neither the tools (hairjax.tools: the
-benchmark, the sweep, the reports) nor what only they need (matplotlib, rich). The CLI
-imports the tools inside the subcommands that use them."""
+"""`import hairjax` loads nothing heavy: not JAX (the package is lazy, `__init__.pyi`), not
+the tools (hairjax.tools: the benchmark, the sweep, the reports) nor what only they or the
+notebook panel need (matplotlib, rich, ipywidgets). The CLI imports them inside the
+subcommands that use them, after the arguments parse."""
 
 import json
 import os
@@ -11,7 +12,7 @@ from pathlib import Path
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
-HEAVY = ("matplotlib", "rich", "hairjax.tools")
+HEAVY = ("matplotlib", "rich", "ipywidgets", "hairjax.tools", "jax")
 
 
 def _loaded_after(module: str) -> list[str]:
