@@ -6,6 +6,7 @@ renderers. (The CLI's `compare` command end to end: tests/gl/test_plumbing.py.)"
 from __future__ import annotations
 
 import math
+import re
 import types
 
 import numpy as np
@@ -118,6 +119,43 @@ def test_median_time_skips_a_warm_up_call_and_takes_the_median(monkeypatch):
     assert median_time(fn, 3) == 3.0
     with pytest.raises(StopIteration):
         fn()  # exactly 1 + 3 calls were made
+
+
+def test_median_time_reports_each_call_outside_the_timed_span(monkeypatch):
+    clock = types.SimpleNamespace(now=0.0)
+    monkeypatch.setattr(_compare, "time", types.SimpleNamespace(perf_counter=lambda: clock.now))
+
+    def fn():
+        clock.now += 1.0
+
+    def after(k):
+        calls.append(k)
+        clock.now += 50.0  # a slow report must not enter the timings
+
+    calls: list[int] = []
+    assert median_time(fn, 2, after) == 1.0
+    assert calls == [0, 1, 2]  # 0: the warm-up
+
+
+@pytest.mark.parametrize("repeats", [0, -1, 1.5, True, "3"])
+def test_check_repeats(repeats):
+    with pytest.raises(
+        ValueError, match="^" + re.escape(f"repeats must be a positive integer, got {repeats!r}")
+    ):
+        _compare.check_repeats(repeats)
+    assert _compare.check_repeats(np.int64(2)) == 2 and type(_compare.check_repeats(np.int64(2))) is int
+
+
+@pytest.mark.parametrize("repeats", [0, -1])  # non-integers are beartype's to refuse under pytest
+def test_compare_refuses_bad_repeats_before_rendering(monkeypatch, repeats):
+    def no_render(*args, **kwargs):
+        raise AssertionError("rendered before checking repeats")
+
+    monkeypatch.setattr(_compare, "render", no_render)
+    with pytest.raises(
+        ValueError, match="^" + re.escape(f"repeats must be a positive integer, got {repeats!r}") + "$"
+    ):
+        compare(small_furball_scene(strands=4, size=8), repeats=repeats)
 
 
 # --------------------------------------------------------------------------- compare
