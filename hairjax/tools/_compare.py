@@ -111,7 +111,14 @@ def compare(scene: Scene, repeats: int = 3, *, progress: Progress | None = None)
 
 def format_report(r: dict) -> str:
     # GL reports no Ω without shadows, and for hair patches (it shades them with JAX's colours).
-    tau = "n/a (no Ω from GL)" if r["tau_max_abs"] is None else f"{r['tau_max_abs']:.3g}"
+    # τ = exp(−κΩ) (docs/model.md §7): the share of the light that reaches a strand point
+    # through the hair between it and the light, 0 (fully shadowed) to 1 (fully lit).
+    tau = (
+        "n/a (no Ω from GL)"
+        if r["tau_max_abs"] is None
+        else f"{r['tau_max_abs']:.3g}  (largest JAX−GL difference in τ, the share of light reaching "
+        "a strand point through the hair, 0 to 1; docs/model.md §7)"
+    )
     return "\n".join(
         [
             f"{r['scene']} ({r['size'][0]}x{r['size'][1]}): GL vs JAX",

@@ -94,7 +94,8 @@ def test_format_report_names_every_number():
         "  RMSE                 0.0913",
         "  PSNR                 20.8 dB",
         "  pixels > 1e-4        20.0000 %",
-        "  max |Δτ| per point   3.25e-05",
+        "  max |Δτ| per point   3.25e-05  (largest JAX−GL difference in τ, the share of light "
+        "reaching a strand point through the hair, 0 to 1; docs/model.md §7)",
         "  time, JAX (full)     0.500 s  (median of 3)",
         "  time, GL             0.250 s  (ratio JAX/GL 2.00)",
     ):
