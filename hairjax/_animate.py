@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from ._errors import SceneError
+from ._progress import Progress, progress_of
 from ._scene._file import load_scene, scene_from_dict, scene_tables, with_overrides
 from ._scene._scene import Scene
 from ._scene._table import Table, build
@@ -152,14 +153,18 @@ def write_frames(
     backend: str = "jax",
     png: bool = False,
     gif: bool = False,
-    progress: bool = False,
+    progress: Progress | bool | None = None,
 ) -> list[Path]:
     """Render the loop's frames into `out_dir`: `frame_0000.exr` … (linear float RGBA),
     with `png` also `frame_0000.png` … (8-bit sRGB), with `gif` also `animation.gif`.
 
     `frames` (default the file's `animation.frames`): frame k is at t = k/frames. Every
-    file is written atomically. Returns the paths written."""
-    from ._io._image import linear_to_srgb, write_image
+    file is written atomically. Returns the paths written.
+
+    `progress(k + 1, frames, "frame k")` (`hairjax._progress`) after frame k is written.
+    (True and False, the older flags, are taken for one release: True draws
+    `reporter("frames")`.)"""
+    from ._io._image import srgb8, write_image
 
     frames = animation.motion.frames if frames is None else frames
     if isinstance(frames, bool) or int(frames) != frames or frames < 1:
@@ -172,16 +177,15 @@ def write_frames(
     out_dir.mkdir(parents=True, exist_ok=True)
     render = _renderer(backend)
     written, gif_frames = [], []
-    with _progress(progress, frames) as advance:
+    with progress_of(progress, "frames") as report:
         for k in range(int(frames)):
             image = render(animation.scene(k / frames))
             written.append(write_image(out_dir / f"frame_{k:04d}.exr", image))
             if png:
                 written.append(write_image(out_dir / f"frame_{k:04d}.png", image))
             if gif:
-                rgb = linear_to_srgb(np.asarray(image, np.float64)[..., :3])
-                gif_frames.append(np.round(rgb * 255).astype(np.uint8))
-            advance()
+                gif_frames.append(srgb8(np.asarray(image, np.float64)[..., :3]))
+            report(k + 1, int(frames), f"frame {k}")
     if gif:
         written.append(_write_gif(out_dir / "animation.gif", gif_frames))
     return written
@@ -209,25 +213,3 @@ def _write_gif(path: Path, frames: list[np.ndarray], fps: float = 24.0) -> Path:
             tmp, format="GIF", save_all=True, append_images=images[1:], duration=round(1000 / fps), loop=0
         )
     return path
-
-
-class _progress:
-    """A rich progress bar over the frames (nothing when output is no terminal)."""
-
-    def __init__(self, enabled: bool, total: int):
-        self.enabled, self.total, self.bar = enabled, total, None
-
-    def __enter__(self):
-        if not self.enabled:
-            return lambda: None
-        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-
-        self.bar = Progress(TextColumn("frames"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn())
-        self.bar.start()
-        task = self.bar.add_task("frames", total=self.total)
-        return lambda: self.bar.advance(task)
-
-    def __exit__(self, *exc):
-        if self.bar is not None:
-            self.bar.stop()
-        return False

@@ -11,7 +11,7 @@ import numpy as np
 
 from ._files import atomic_path
 
-__all__ = ["write_image", "read_image", "linear_to_srgb", "srgb_to_linear", "ImageError"]
+__all__ = ["write_image", "read_image", "linear_to_srgb", "srgb_to_linear", "srgb8", "ImageError"]
 
 
 class ImageError(OSError):
@@ -21,6 +21,12 @@ class ImageError(OSError):
 def linear_to_srgb(x: np.ndarray) -> np.ndarray:
     x = np.clip(x, 0.0, 1.0)
     return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+
+
+def srgb8(x: np.ndarray) -> np.ndarray:
+    """Linear values (clipped to 0 … 1) as 8-bit sRGB, rounded to the nearest code: what a
+    PNG holds. Every channel given is encoded; pick the colour channels first."""
+    return np.round(np.clip(linear_to_srgb(np.asarray(x)), 0, 1) * 255).astype(np.uint8)
 
 
 def srgb_to_linear(x: np.ndarray) -> np.ndarray:
@@ -41,8 +47,7 @@ def write_image(path, image) -> Path:
     if suffix == ".exr":
         data, fmt = image, "float"
     elif suffix == ".png":
-        data = linear_to_srgb(image[..., :3] if image.shape[2] >= 3 else image)
-        data = np.round(np.clip(data, 0, 1) * 255).astype(np.uint8)
+        data = srgb8(image[..., :3] if image.shape[2] >= 3 else image)
         fmt = "uint8"
     else:
         raise ImageError(f"{path}: unsupported image type {suffix!r} (use .exr or .png)")

@@ -28,9 +28,10 @@ import jax
 import numpy as np
 
 from .._io._files import atomic_path, write_json, write_text
+from .._progress import Progress, progress_of
 from .._scene._scene import Scene
 from .._supersample import supersample
-from ._compare import image_stats
+from ._compare import check_repeats, image_stats
 from ._knobs import KNOBS, SHADOW_KNOBS, SweepError, knob_scene, reference_scene
 
 __all__ = ["PATHS", "run_sweep", "load_points", "scene_digest"]
@@ -223,7 +224,7 @@ def run_sweep(
     paths: Sequence[str] = PATHS,
     repeats: int = 3,
     restart: bool = False,
-    progress: bool = True,
+    progress: Progress | bool | None = None,
 ) -> list[dict]:
     """Sweep `knobs` (name → values; default `KNOBS`) for `paths` and return all points.
 
@@ -231,7 +232,13 @@ def run_sweep(
     the setting) or rmse, max_abs, rel_rmse (RMSE over the reference's
     peak), tau_rmse and tau_max (per-point τ = exp(−κΩ) against the reference's, None
     without shadows), time_s (median of `repeats`), times. Points already in `out` are
-    kept, not redone."""
+    kept, not redone.
+
+    `progress(done, total, message)` (`hairjax._progress`) after each point, `total` all
+    the sweep's points and `done` counting those a resumed sweep found finished: its first
+    call, "resuming: N of M points already done", has done = N. Each path's reference render
+    is reported too, with `done` unchanged. (True and False, the older flags, are taken
+    for one release: True draws `reporter("sweep")`.)"""
     knobs = dict(KNOBS if knobs is None else knobs)
     for k in knobs:
         if k not in KNOBS:
@@ -239,8 +246,10 @@ def run_sweep(
     for p in paths:
         if p not in PATHS:
             raise SweepError(f"unknown path {p!r}; paths: {', '.join(PATHS)}")
-    if repeats < 1:
-        raise SweepError(f"repeats must be at least 1, got {repeats}")
+    try:
+        repeats = check_repeats(repeats)
+    except ValueError as err:
+        raise SweepError(str(err)) from None
     if not scene.shadows.casts:
         # A scene without shadows has no shadow knobs to turn.
         knobs = {k: v for k, v in knobs.items() if k not in SHADOW_KNOBS}
@@ -264,31 +273,30 @@ def run_sweep(
     finished = load_points(out)
     _rewrite(out, finished)  # drops a line cut short, so the next append starts a fresh line
     done = {(p["path"], p["knob"], json.dumps(p["value"])) for p in finished}
-    todo = [
-        (path, knob, value)
-        for path in paths
-        for knob, values in knobs.items()
-        for value in values
-        if (path, knob, json.dumps(value)) not in done
-    ]
+    planned = [(path, knob, value) for path in paths for knob, values in knobs.items() for value in values]
+    todo = [point for point in planned if (point[0], point[1], json.dumps(point[2])) not in done]
     kappa = float(np.asarray(scene.params.kappa))
-    with _progress(progress, len(todo), len(done)) as advance:
+    total, count = len(planned), len(planned) - len(todo)
+    with progress_of(progress, "sweep") as report:
+        if count:
+            report(count, total, f"resuming: {count} of {total} points already done")
         runs = {}
         references = {}
         for path, knob, value in todo:
             if path not in runs:
                 runs[path] = _renderer(path)
-                advance(f"{path} reference")
                 references[path] = _reference(out, path, runs[path], scene, knobs, repeats)
-            advance(f"{path} {knob} = {value}")
+                report(count, total, f"{path} reference")
             variant, s = knob_scene(scene, knob, value)
+            label = f"{path} {knob} = {value}"
             try:
                 image, omega, median, times = _measure(runs[path], variant, s, repeats)
             except ValueError as err:
                 # A setting the renderer refuses (e.g. JAX's cap on opacity-map memory) is
                 # recorded as skipped, with the reason, and the sweep goes on.
                 _append(out, {"path": path, "knob": knob, "value": value, "skipped": str(err)})
-                advance(None)
+                count += 1
+                report(count, total, f"{label} (skipped)")
                 continue
             point = {
                 "path": path,
@@ -299,38 +307,6 @@ def run_sweep(
                 **_errors(image, omega, references[path], kappa),
             }
             _append(out, point)
-            advance(None)
+            count += 1
+            report(count, total, label)
     return load_points(out)
-
-
-class _progress:
-    """A rich progress bar over the sweep's points (plain lines when output is no terminal)."""
-
-    def __init__(self, enabled: bool, total: int, done: int):
-        self.enabled, self.total, self.done = enabled, total, done
-
-    def __enter__(self):
-        if not self.enabled:
-            return lambda label: None
-        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-
-        self.bar = Progress(
-            TextColumn("{task.description:<28}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn()
-        )
-        self.bar.start()
-        if self.done:
-            self.bar.console.print(f"resuming: {self.done} points already done")
-        task = self.bar.add_task("sweep", total=self.total)
-
-        def advance(label):
-            if label is None:
-                self.bar.advance(task)
-            else:
-                self.bar.update(task, description=label)
-
-        return advance
-
-    def __exit__(self, *exc):
-        if self.enabled:
-            self.bar.stop()
-        return False

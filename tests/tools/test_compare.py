@@ -6,6 +6,7 @@ renderers. (The CLI's `compare` command end to end: tests/gl/test_plumbing.py.)"
 from __future__ import annotations
 
 import math
+import re
 import types
 
 import numpy as np
@@ -93,7 +94,8 @@ def test_format_report_names_every_number():
         "  RMSE                 0.0913",
         "  PSNR                 20.8 dB",
         "  pixels > 1e-4        20.0000 %",
-        "  max |Δτ| per point   3.25e-05",
+        "  max |Δτ| per point   3.25e-05  (largest JAX−GL difference in τ, the share of light "
+        "reaching a strand point through the hair, 0 to 1; docs/model.md §7)",
         "  time, JAX (full)     0.500 s  (median of 3)",
         "  time, GL             0.250 s  (ratio JAX/GL 2.00)",
     ):
@@ -118,6 +120,43 @@ def test_median_time_skips_a_warm_up_call_and_takes_the_median(monkeypatch):
     assert median_time(fn, 3) == 3.0
     with pytest.raises(StopIteration):
         fn()  # exactly 1 + 3 calls were made
+
+
+def test_median_time_reports_each_call_outside_the_timed_span(monkeypatch):
+    clock = types.SimpleNamespace(now=0.0)
+    monkeypatch.setattr(_compare, "time", types.SimpleNamespace(perf_counter=lambda: clock.now))
+
+    def fn():
+        clock.now += 1.0
+
+    def after(k):
+        calls.append(k)
+        clock.now += 50.0  # a slow report must not enter the timings
+
+    calls: list[int] = []
+    assert median_time(fn, 2, after) == 1.0
+    assert calls == [0, 1, 2]  # 0: the warm-up
+
+
+@pytest.mark.parametrize("repeats", [0, -1, 1.5, True, "3"])
+def test_check_repeats(repeats):
+    with pytest.raises(
+        ValueError, match="^" + re.escape(f"repeats must be a positive integer, got {repeats!r}")
+    ):
+        _compare.check_repeats(repeats)
+    assert _compare.check_repeats(np.int64(2)) == 2 and type(_compare.check_repeats(np.int64(2))) is int
+
+
+@pytest.mark.parametrize("repeats", [0, -1])  # non-integers are beartype's to refuse under pytest
+def test_compare_refuses_bad_repeats_before_rendering(monkeypatch, repeats):
+    def no_render(*args, **kwargs):
+        raise AssertionError("rendered before checking repeats")
+
+    monkeypatch.setattr(_compare, "render", no_render)
+    with pytest.raises(
+        ValueError, match="^" + re.escape(f"repeats must be a positive integer, got {repeats!r}") + "$"
+    ):
+        compare(small_furball_scene(strands=4, size=8), repeats=repeats)
 
 
 # --------------------------------------------------------------------------- compare

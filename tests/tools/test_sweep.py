@@ -95,10 +95,14 @@ def test_folder_of_another_sweep_is_refused(scene, tmp_path):
     [
         (dict(knobs={"gamma": (1,)}), "unknown knob"),
         (dict(paths=("vulkan",)), "unknown path"),
-        (dict(repeats=0), "repeats"),
+        (dict(repeats=0), r"^repeats must be a positive integer, got 0$"),
     ],
 )
-def test_bad_arguments(scene, tmp_path, kwargs, message):
+def test_bad_arguments(scene, tmp_path, kwargs, message, monkeypatch):
+    def no_render(path):
+        raise AssertionError("a renderer was made before the arguments were checked")
+
+    monkeypatch.setattr(sweep_mod, "_renderer", no_render)
     with pytest.raises(SweepError, match=message):
         run_sweep(scene, tmp_path, **{"knobs": {"bins": (1,)}, **kwargs})
 
