@@ -121,12 +121,14 @@ def test_cli_animate_and_its_errors(scene_file, tmp_path, capsys, gl):
     bad, _ = unexplained_pixels(scene, hj.read_image(out / "frame_0001.exr"), np.asarray(hj.render(scene)))
     assert bad.size == 0
 
-    assert main(["animate", str(scene_file), "--frames", "0", "-o", str(out)]) == 2
-    assert "frames must be an integer >= 1, got 0" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as refused:  # argparse: refused before anything is read
+        main(["animate", str(scene_file), "--frames", "0", "-o", str(out)])
+    assert refused.value.code == 2
+    assert "argument --frames: expected a positive integer, got '0'" in capsys.readouterr().err
     a_file = tmp_path / "file"
     a_file.write_text("")
     assert main(["animate", str(scene_file), "-o", str(a_file)]) == 2
-    assert "exists and is not a folder" in capsys.readouterr().err
+    assert "is a file; -o takes a folder" in capsys.readouterr().err
     scalp = tmp_path / "scalp.toml"
     scalp.write_text('[hair]\nsource = "scalp"\nstrands = 3\n')
     assert main(["animate", str(scalp), "-o", str(out)]) == 2

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from pathlib import Path
 
 from ._outputs import IMAGE_SUFFIXES, Output, check_outputs, written_together
@@ -14,41 +13,14 @@ __all__ = ["run"]
 DEFAULT_OUTPUT = Path("out/render.exr")
 
 
-def _render_jax(scene, progress):
-    """The staged JAX render, a progress step per stage; returns (image, timings)."""
-    import jax
-
-    from .._geometry._setup import prepare
-    from .._geometry._stage import geometry_stage
-    from .._render import render
-    from .._shading import shading_stage
-
-    if scene.patches is not None:  # hair patches (docs/model.md §18) are one stage
-        t0 = time.perf_counter()
-        image = jax.block_until_ready(render(scene))
-        progress(1, 1, "hair patches")
-        return image, {"patches (four passes)": time.perf_counter() - t0}
-    timings = {}
-    t0 = time.perf_counter()
-    progress(0, 3, "geometry set-up")
-    prepare(scene)
-    t1 = time.perf_counter()
-    progress(1, 3, "geometry stage")
-    geometry = jax.block_until_ready(geometry_stage(scene))
-    t2 = time.perf_counter()
-    progress(2, 3, "shading stage")
-    image = jax.block_until_ready(shading_stage(geometry, scene.params))
-    t3 = time.perf_counter()
-    progress(3, 3, "done")
-    timings["geometry set-up (NumPy)"] = t1 - t0
-    timings["geometry opacity (JAX)"] = t2 - t1
-    timings["shading"] = t3 - t2
-    return image, timings
+def _with_total(timings: dict) -> dict:
+    if "total" in timings:
+        return dict(timings)
+    return {**timings, "total": sum(timings.values())}  # the GL passes, one after another
 
 
 def _print_profile(first: dict, second: dict) -> None:
-    first = {**first, "total": sum(first.values())}
-    second = {**second, "total": sum(second.values())}
+    first, second = _with_total(first), _with_total(second)
     width = max(len(k) for k in first)
     print(f"{'stage':<{width}}  first run  second run")
     for key in first:
@@ -76,16 +48,17 @@ def run(args: argparse.Namespace) -> int:
             result = render_gl(scene)
             progress(1, 1, "GL render")
             image, timings = np.asarray(result.image), dict(result.timings)
-            if args.profile:
-                _print_profile(timings, dict(render_gl(scene).timings))  # the second: shaders built
+            if args.profile:  # the second run, with the shaders built
+                second = dict(render_gl(scene).timings)
         else:
-            image, timings = _render_jax(scene, progress)
-            image = np.asarray(image)
-            if args.profile:
-                from .._cache import forget
+            from .._render import render_profiled
 
-                forget(scene)  # the second run repeats every stage, with compilation out of the way
-                _print_profile(timings, _render_jax(scene, lambda *a: None)[1])
+            image, timings = render_profiled(scene, progress=progress)
+            image = np.asarray(image)
+            if args.profile:  # the second run repeats every stage, with compilation out of the way
+                second = render_profiled(scene)[1]
+    if args.profile:
+        _print_profile(timings, second)
     if not np.all(np.isfinite(image)):
         print("hairjax: warning: the image has non-finite pixels", file=sys.stderr)
 

@@ -126,10 +126,9 @@ def test_fit_from_the_cli(scene_file, tmp_path, capsys):
     true = hj.ShadingParams(kd=(0.3, 0.5, 0.2), ks=0.4, shininess=25.0, kappa=2.5)
     target = tmp_path / "t.exr"
     hj.write_image(target, np.asarray(hj.render(scene, true)))
-    out, report = tmp_path / "fitted.exr", tmp_path / "fit.json"
-    assert (
-        main(["fit", str(scene_file), "--target", str(target), "--json", str(report), "--out", str(out)]) == 0
-    )
+    out, report, plot = tmp_path / "fitted.exr", tmp_path / "fit.json", tmp_path / "fit.png"
+    argv = ["fit", str(scene_file), "--target", str(target), "--json", str(report), "--out", str(out)]
+    assert main([*argv, "--plot", str(plot)]) == 0
     captured = capsys.readouterr()
     assert "loss" in captured.err  # the progress lines
     assert "fitted" in captured.out and "std. error" in captured.out
@@ -139,6 +138,8 @@ def test_fit_from_the_cli(scene_file, tmp_path, capsys):
     # The target is float32 (EXR), so recovery is to float32 rounding, not 1e-12.
     np.testing.assert_allclose(data["params"]["kappa"], 2.5, rtol=1e-3)
     assert out.exists()
+    figure = hj.read_image(plot)  # target | fit | residual, side by side
+    assert figure.shape[1] > 2 * figure.shape[0]
 
 
 def test_fit_that_stops_without_converging_exits_3(scene_file, tmp_path, capsys):
