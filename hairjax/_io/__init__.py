@@ -48,6 +48,8 @@ def load_hair(path, alpha=1.0, width=1.0) -> Strands:
         known = ", ".join(FORMATS)
         raise HairFormatError(path, f"unknown hair file type {path.suffix!r} (known: {known})")
     parse, _ = FORMATS[suffix]
+    if path.is_dir():
+        raise HairFormatError(path, "is a directory, not a hair file")
     try:
         data = path.read_bytes()
     except OSError as error:

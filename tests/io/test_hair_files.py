@@ -680,6 +680,13 @@ def test_malformed(tmp_path, case):
     assert caught.value.path == str(path)
 
 
+def test_a_directory_is_not_a_hair_file(tmp_path):
+    folder = tmp_path / "adir.hair"
+    folder.mkdir()
+    with pytest.raises(HairFormatError, match=rf"^{folder}: is a directory, not a hair file$"):
+        load_hair(folder)
+
+
 def test_unknown_suffix_and_missing_file(tmp_path):
     path = write(tmp_path, "hair.obj", b"v 0 0 0\n")
     with pytest.raises(HairFormatError, match=r"hair\.obj.*unknown hair file type"):

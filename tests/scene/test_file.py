@@ -175,6 +175,14 @@ def test_example_scene_is_framed(name):
     assert_framed(load_scene(EXAMPLES / f"{name}.toml"))
 
 
+def test_a_directory_as_hair_source_says_it_is_one(tmp_path):
+    (tmp_path / "adir.hair").mkdir()
+    path = write(tmp_path, '[hair]\nsource = "adir.hair"\n')
+    with pytest.raises(SceneError) as err:
+        load_scene(path)
+    assert str(err.value) == f"{path}: hair.source {tmp_path / 'adir.hair'}: is a directory, not a hair file"
+
+
 def test_frame_auto_places_the_camera_from_the_hair(tmp_path):
     # A fur ball 10 times the default size, 100 units off the origin: the default camera
     # misses it, frame = "auto" shows all of it.
