@@ -25,3 +25,8 @@ class MeshFormatError(ValueError):
         self.problem = problem
         where = self.path if line is None else f"{self.path}:{line}"
         super().__init__(f"{where}: {problem}")
+
+
+class EmptyViewWarning(UserWarning):
+    """A render's hair covers no pixel of the image (the camera misses it); the message
+    gives the hair's bounding box and the camera, and how to frame the hair."""

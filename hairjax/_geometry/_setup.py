@@ -11,12 +11,14 @@ from __future__ import annotations
 
 import dataclasses
 import time
+import warnings
 from typing import Any
 
 import jax
 import numpy as np
 
 from .._cache import cached
+from .._errors import EmptyViewWarning
 from .._scene._scene import Scene
 from .._scene._strands import tangents, unit_rows
 from .._shading import PointInputs
@@ -25,7 +27,7 @@ from ._ordering import segment_depth, stable_argsort_uint32
 from ._projection import View, camera_view
 from ._raster import rasterize, ribbon_widths
 
-__all__ = ["GeometrySetup", "prepare", "visibility_order", "to_light"]
+__all__ = ["GeometrySetup", "prepare", "visibility_order", "to_light", "warn_empty_view"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -121,6 +123,24 @@ def _given_order(order, n_segments: int) -> np.ndarray:
     return order
 
 
+def warn_empty_view(scene: Scene) -> None:
+    """Warn (`EmptyViewWarning`) that `scene`'s hair covers no pixel, with the hair's
+    bounding box and the camera, so that a black image does not come without a word."""
+    cam, points = scene.camera, scene.strands.points
+
+    def vec(v):
+        return "(" + ", ".join(f"{x:.4g}" for x in v) + ")"
+
+    warnings.warn(
+        f"the hair covers no pixel of the {cam.width}x{cam.height} image: its bounding box is "
+        f"{vec(points.min(axis=0))} .. {vec(points.max(axis=0))}, the camera's eye {vec(cam.eye)}, "
+        f"target {vec(cam.target)}, fov {cam.fov:g} degrees; frame it with "
+        'hairjax.frame_camera(strands) or [camera] frame = "auto"',
+        EmptyViewWarning,
+        stacklevel=2,
+    )
+
+
 def to_light(light, points: np.ndarray) -> np.ndarray:
     """Unit vectors from `points` to the light (`[P, 3]`; 0 at a point light's position)."""
     if light.kind == "directional":
@@ -166,6 +186,10 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
         view.perspective,
     )
     frags = rasterize(xy[s0], xy[s1], depth[s0], depth[s1], widths, cam.width, cam.height, True)
+    # Hair whose segments all have length 0 (or that has none: one-point strands) draws
+    # nothing from any camera; that is not the camera's fault, so no warning then.
+    if frags.pixel.size == 0 and np.any(points[segments[:, 0]] != points[segments[:, 1]]):
+        warn_empty_view(scene)
     lap("rasterize")
 
     hw = cam.width * cam.height

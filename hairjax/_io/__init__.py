@@ -20,9 +20,9 @@ from .._errors import HairFormatError
 from .._scene._strands import Strands
 from ._hair import parse_hair
 from ._ply import parse_ply
-from ._tfx import parse_tfx
+from ._tfx import parse_tfx, tfx_version
 
-__all__ = ["load_hair", "hair_info", "format_info", "FORMATS"]
+__all__ = ["load_hair", "hair_info", "format_info", "file_format", "FORMATS"]
 
 # Suffix (lower case) -> (parser, name of the format for messages).
 FORMATS = {
@@ -48,6 +48,8 @@ def load_hair(path, alpha=1.0, width=1.0) -> Strands:
         known = ", ".join(FORMATS)
         raise HairFormatError(path, f"unknown hair file type {path.suffix!r} (known: {known})")
     parse, _ = FORMATS[suffix]
+    if path.is_dir():
+        raise HairFormatError(path, "is a directory, not a hair file")
     try:
         data = path.read_bytes()
     except OSError as error:
@@ -67,12 +69,33 @@ def load_hair(path, alpha=1.0, width=1.0) -> Strands:
     return Strands(alpha=alpha, width=width, **fields)
 
 
-def hair_info(strands: Strands) -> dict:
+def file_format(path) -> str:
+    """The name of a hair file's format, by its suffix; for TressFX with the version its
+    header declares (e.g. "TressFX 4.0"), read from the file's first 4 bytes."""
+    path = Path(path)
+    name = FORMATS.get(path.suffix.lower(), (None, "unknown format"))[1]
+    if path.suffix.lower() != ".tfx":
+        return name
+    try:
+        with open(path, "rb") as f:
+            version = tfx_version(f.read(4))
+    except OSError:  # fires for a file gone or unreadable since: the name alone
+        return name
+    if version is None:  # fires for a header no reader parses: load_hair says why
+        return name
+    # An f32 4.1 is 4.0999999: 6 significant digits give the number written, ".0" a round one.
+    text = f"{version:.6g}"
+    return f"{name} {text if '.' in text else text + '.0'}"
+
+
+def hair_info(strands: Strands, path=None) -> dict:
     """A summary of `strands` as plain Python values.
 
     Keys: `strands`, `points`; `bbox_min`, `bbox_max` (3 floats each; None without points);
     `segment_length_min`, `segment_length_max` (over all segments; None without segments);
-    `optional`: sorted names of the optional arrays present ("color" and the attributes).
+    `optional`: sorted names of the optional arrays present ("color" and the attributes);
+    with the `path` the strands were read from, `format`: `file_format(path)` (for TressFX
+    with its version, e.g. "TressFX 4.0").
     """
     points = strands.points
     bbox_min: list[float] | None
@@ -91,7 +114,8 @@ def hair_info(strands: Strands) -> dict:
     else:
         seg_min = seg_max = None
     optional = (["color"] if strands.color is not None else []) + list(strands.attributes)
-    return {
+    info: dict = {} if path is None else {"format": file_format(path)}
+    return info | {
         "strands": strands.num_strands,
         "points": strands.num_points,
         "bbox_min": bbox_min,
@@ -103,9 +127,10 @@ def hair_info(strands: Strands) -> dict:
 
 
 def format_info(path, info: dict) -> str:
-    """Readable multi-line text of `hair_info` output, for `hairjax info FILE`."""
+    """Readable multi-line text of `hair_info` output, for `hairjax info FILE`; the format
+    is `info["format"]`, or else `file_format(path)` (which reads a TressFX version)."""
     path = Path(path)
-    kind = FORMATS.get(path.suffix.lower(), (None, "unknown format"))[1]
+    kind = info.get("format") or file_format(path)
 
     def vec(v):
         return "-" if v is None else "(" + ", ".join(f"{x:.6g}" for x in v) + ")"

@@ -69,6 +69,8 @@ def read_image(path) -> np.ndarray:
     import OpenImageIO as oiio
 
     path = Path(path)
+    if path.is_dir():
+        raise ImageError(f"{path}: is a directory, not an image file")
     if not path.is_file():
         raise ImageError(f"{path}: no such file")
     buf = oiio.ImageBuf(str(path))

@@ -44,7 +44,7 @@ import numpy as np
 
 from .._errors import HairFormatError
 
-__all__ = ["parse_tfx"]
+__all__ = ["parse_tfx", "tfx_version"]
 
 HEADER_SIZE_V3 = 296
 HEADER_SIZE_V4 = 160
@@ -67,6 +67,16 @@ _ARRAYS_V4 = [
 ]
 
 
+def tfx_version(data: bytes) -> float | None:
+    """The version a TressFX file's first 4 bytes declare (the f32 at byte 0, as a Python
+    float), or None when it is not a version this reader parses (3.x, 4.x) or the data is
+    shorter than 4 bytes."""
+    if len(data) < 4:
+        return None
+    (version,) = struct.unpack_from("<f", data, 0)
+    return version if math.isfinite(version) and 3.0 <= version < 5.0 else None
+
+
 def parse_tfx(data: bytes, path) -> dict:
     """Parse the bytes of a TressFX 3.x or 4.x file.
 
@@ -81,13 +91,14 @@ def parse_tfx(data: bytes, path) -> dict:
     size = len(data)
     if size < 12:
         fail(f"file is {size} bytes, too short for a TressFX header")
-    (version,) = struct.unpack_from("<f", data, 0)
-    if math.isfinite(version) and 3.0 <= version < 4.0:
+    version = tfx_version(data)
+    if version is None:
+        (declared,) = struct.unpack_from("<f", data, 0)
+        fail(f"unsupported TressFX version {declared!r} at byte 0 (expected 3.x or 4.x)")
+    elif version < 4.0:
         header_size, arrays, offsets_at = HEADER_SIZE_V3, _ARRAYS_V3, 144
-    elif math.isfinite(version) and 4.0 <= version < 5.0:
-        header_size, arrays, offsets_at = HEADER_SIZE_V4, _ARRAYS_V4, 12
     else:
-        fail(f"unsupported TressFX version {version!r} at byte 0 (expected 3.x or 4.x)")
+        header_size, arrays, offsets_at = HEADER_SIZE_V4, _ARRAYS_V4, 12
     if size < header_size:
         fail(f"file is {size} bytes, shorter than the {header_size}-byte TressFX header")
 

@@ -18,6 +18,7 @@ registered model, shadow method or ordering, which reads its own keys.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import tomllib
 from collections.abc import Mapping
@@ -29,6 +30,7 @@ from .._geometry._ordering import ordering_class, ordering_names
 from .._geometry._shadows import shadow_method_class, shadow_method_names
 from .._shading import Streaks, shading_model_class, shading_model_names
 from ._camera import Camera
+from ._framing import frame_camera
 from ._hair_table import HAIR_KEYS, read_hair, read_patches
 from ._light import Light
 from ._occluder import OCCLUDER_KINDS, Occluder
@@ -38,11 +40,12 @@ from ._table import Table, build, describe, given
 __all__ = ["load_scene", "scene_from_dict", "default_scene_path", "scene_tables", "with_overrides"]
 
 LIGHT_KINDS = ("directional", "point")
+CAMERA_FRAMES = ("auto",)
 MESH_FILE_SUFFIXES = (".obj",)
 
 _FIXED_TABLES: dict[str, tuple[str, ...]] = {
     "hair": HAIR_KEYS,
-    "camera": ("eye", "target", "up", "fov", "width", "height", "near"),
+    "camera": ("frame", "eye", "target", "up", "fov", "width", "height", "near"),
     "light": ("kind", "direction", "position", "color"),
     "occluder": ("kind", "center", "radius", "color", "path"),
     "background": ("color",),
@@ -60,8 +63,6 @@ def _union(groups) -> tuple[str, ...]:
 def scene_tables() -> dict[str, tuple[str, ...]]:
     """Every table of a scene file and the keys it may hold. [shading], [shadows] and
     [ordering] take the keys of every registered model, method and ordering."""
-    import dataclasses
-
     tables = dict(_FIXED_TABLES)
     tables["shading"] = ("model",) + _union(shading_model_class(n).table_keys for n in shading_model_names())
     tables["shadows"] = ("method",) + _union(
@@ -163,7 +164,8 @@ def scene_from_dict(
         if not isinstance(scene_name, str) or not scene_name:
             raise SceneError(f"{where}: name must be a non-empty string, got {describe(scene_name)}")
 
-    camera = build(where, Camera, **_read_camera(tables["camera"]))
+    camera_args, frame = _read_camera(tables["camera"])
+    camera = build(where, Camera, **camera_args)
     light = build(where, Light, **_read_light(tables["light"]))
     shading = _read_shading(where, tables["shading"])
     shadows = _read_method(
@@ -181,6 +183,8 @@ def scene_from_dict(
     # the other tables fail first.
     patches = read_patches(tables["hair"])
     strands = read_hair(tables["hair"], Path(base_dir))
+    if frame == "auto":  # eye, target and up from the hair (the table's size, fov, near)
+        camera = build(where, _framed, strands=strands, camera=camera, near=camera_args.get("near"))
 
     scene_args = given(background=background, streaks=streaks, patches=patches)
     return build(
@@ -222,7 +226,17 @@ def _split_tables(data: Mapping[str, Any], where: str) -> dict[str, Table]:
 # --------------------------------------------------------------------------- readers
 
 
-def _read_camera(table: Table) -> dict[str, Any]:
+def _read_camera(table: Table) -> tuple[dict[str, Any], str | None]:
+    """The Camera's keyword arguments, and `frame` ("auto" or None)."""
+    frame = table.choice("frame", CAMERA_FRAMES)
+    if frame == "auto":
+        # The framing sets these three; a given one would be silently replaced.
+        for key in ("eye", "target", "up"):
+            if key in table:
+                raise SceneError(
+                    f"{table.where}: camera.frame = 'auto' and camera.{key} exclude each other: "
+                    f"the framing places the camera; remove one of them"
+                )
     # Ranges (fov, sizes, near, eye != target, up) are Camera's checks.
     return given(
         eye=table.vec3("eye"),
@@ -232,7 +246,13 @@ def _read_camera(table: Table) -> dict[str, Any]:
         width=table.integer("width"),
         height=table.integer("height"),
         near=table.number("near"),
-    )
+    ), frame
+
+
+def _framed(strands, camera: Camera, near: float | None) -> Camera:
+    """`frame_camera` for the strands, with the table's image size and fov (and near)."""
+    framed = frame_camera(strands, width=camera.width, height=camera.height, fov=camera.fov)
+    return framed if near is None else dataclasses.replace(framed, near=near)
 
 
 def _read_light(table: Table) -> dict[str, Any]:
@@ -269,8 +289,6 @@ def _read_method(where: str, table: Table, default: str, names, lookup):
 
 
 def _field_names(cls) -> tuple[str, ...]:
-    import dataclasses
-
     return tuple(f.name for f in dataclasses.fields(cls))
 
 

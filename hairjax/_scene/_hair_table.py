@@ -141,6 +141,8 @@ def _load_hair_file(table: Table, source: str, base_dir: Path, alpha: float, wid
     path = Path(source)
     if not path.is_absolute():
         path = base_dir / path
+    if path.is_dir():
+        raise SceneError(f"{table.where}: hair.source {path}: is a directory, not a hair file")
     if not path.is_file():
         raise SceneError(
             f"{table.where}: hair.source file not found: {path} (from "

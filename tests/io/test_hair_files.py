@@ -680,6 +680,13 @@ def test_malformed(tmp_path, case):
     assert caught.value.path == str(path)
 
 
+def test_a_directory_is_not_a_hair_file(tmp_path):
+    folder = tmp_path / "adir.hair"
+    folder.mkdir()
+    with pytest.raises(HairFormatError, match=rf"^{folder}: is a directory, not a hair file$"):
+        load_hair(folder)
+
+
 def test_unknown_suffix_and_missing_file(tmp_path):
     path = write(tmp_path, "hair.obj", b"v 0 0 0\n")
     with pytest.raises(HairFormatError, match=r"hair\.obj.*unknown hair file type"):
@@ -780,3 +787,41 @@ def test_hair_info_on_real_file():
     assert info["strands"] == 48_113 and info["points"] == 192_452
     # README: bear.tfx has segments as short as 2e-5.
     assert 0 < info["segment_length_min"] < 1e-4 < info["segment_length_max"]
+
+
+@needs_data
+@pytest.mark.parametrize(
+    "name, version",
+    [
+        # Both Ratboy files declare 4.0 at byte 0 (bytes 00 00 80 40), the "v41" one too:
+        # TressFX 4.1 kept the 4.0 file format.
+        ("Ratboy_mohawk_v40.tfx", "4.0"),
+        ("Ratboy_mohawk_v41.tfx", "4.0"),
+        ("ponytail_tail.tfx", "3.0"),  # bytes 00 00 40 40
+    ],
+)
+def test_info_shows_the_tressfx_version(name, version):
+    path = DATA / "tressfx" / name
+    strands = load_hair(path)
+    assert hair_info(strands, path)["format"] == f"TressFX {version}"
+    # `hairjax info` passes no path to hair_info: format_info reads the version itself.
+    assert f"format           TressFX {version}\n" in format_info(path, hair_info(strands))
+
+
+@pytest.mark.parametrize("version, text", [(4.1, "4.1"), (4.0, "4.0"), (3.5, "3.5"), (4.25, "4.25")])
+def test_tressfx_version_as_written(tmp_path, version, text):
+    path = tmp_path / "v.tfx"
+    path.write_bytes(tfx4_bytes(np.zeros((1, 2, 4))) if version >= 4 else tfx3_bytes(np.zeros((1, 2, 3))))
+    data = bytearray(path.read_bytes())
+    data[:4] = struct.pack("<f", version)
+    path.write_bytes(bytes(data))
+    assert hair_info(load_hair(path), path)["format"] == f"TressFX {text}"
+
+
+def test_info_of_other_formats_names_them_without_version(tmp_path):
+    strands = Strands.from_list([[[0, 0, 0], [1, 0, 0]]])
+    assert hair_info(strands, "x.hair")["format"] == "Cem Yuksel HAIR"
+    assert "format" not in hair_info(strands)
+    assert "  format           PLY\n" in format_info("x.ply", hair_info(strands))
+    # A .tfx path that cannot be read (gone since it was loaded) is named without version.
+    assert hair_info(strands, tmp_path / "gone.tfx")["format"] == "TressFX"

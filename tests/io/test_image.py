@@ -138,6 +138,13 @@ def test_reading_a_missing_or_broken_file_is_an_error_naming_it(tmp_path):
     assert issubclass(ImageError, OSError)
 
 
+def test_reading_a_directory_says_it_is_one(tmp_path):
+    folder = tmp_path / "target.png"
+    folder.mkdir()
+    with pytest.raises(ImageError, match=rf"^{folder}: is a directory, not an image file$"):
+        hj.read_image(folder)
+
+
 def failing_oiio(written: list, fail_by: str):
     """A stand-in for OpenImageIO whose write puts half the bytes into the file it was
     given, then fails: by returning False (as OIIO does on a full disk) or by raising."""

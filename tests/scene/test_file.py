@@ -175,6 +175,45 @@ def test_example_scene_is_framed(name):
     assert_framed(load_scene(EXAMPLES / f"{name}.toml"))
 
 
+def test_a_directory_as_hair_source_says_it_is_one(tmp_path):
+    (tmp_path / "adir.hair").mkdir()
+    path = write(tmp_path, '[hair]\nsource = "adir.hair"\n')
+    with pytest.raises(SceneError) as err:
+        load_scene(path)
+    assert str(err.value) == f"{path}: hair.source {tmp_path / 'adir.hair'}: is a directory, not a hair file"
+
+
+def test_frame_auto_places_the_camera_from_the_hair(tmp_path):
+    # A fur ball 10 times the default size, 100 units off the origin: the default camera
+    # misses it, frame = "auto" shows all of it.
+    hair = HAIR + "scale = 10.0\ntranslate = [100.0, -50.0, 20.0]\n"
+    unframed = load_scene(write(tmp_path, hair, "plain.toml"))
+    rel = unframed.strands.points - np.asarray(unframed.camera.eye)
+    assert np.all(rel @ [0.0, 0.0, -1.0] < 0)  # all behind the default eye's view direction
+    text = hair + '[camera]\nframe = "auto"\nfov = 30\nwidth = 64\nheight = 48\nnear = 0.25\n'
+    scene = load_scene(write(tmp_path, text))
+    assert_framed(scene)
+    assert (scene.camera.fov, scene.camera.width, scene.camera.height, scene.camera.near) == (
+        30.0,
+        64,
+        48,
+        0.25,
+    )
+    centre = 0.5 * (scene.strands.points.min(axis=0) + scene.strands.points.max(axis=0))
+    np.testing.assert_allclose(scene.camera.target, centre, atol=1e-9)  # float64 rounding at ~100
+    assert scene.camera.up == (0.0, 1.0, 0.0)
+
+
+def test_frame_auto_frames_a_real_file(tmp_path):
+    real_load_hair()
+    text = f'[hair]\nsource = "{PONYTAIL_TAIL}"\n[camera]\nframe = "auto"\nwidth = 32\nheight = 32\n'
+    scene = load_scene(write(tmp_path, text))
+    assert_framed(scene)
+    # Without frame the file (in its own units, above the origin) is not in view.
+    with pytest.raises(AssertionError):
+        assert_framed(load_scene(write(tmp_path, f'[hair]\nsource = "{PONYTAIL_TAIL}"\n', "plain.toml")))
+
+
 def test_tressfx_example_is_scaled():
     real_load_hair()
     scene = load_scene(EXAMPLES / "tressfx_ponytail.toml")
@@ -513,6 +552,19 @@ ERROR_CASES = [
     ("camera-eye-target", HAIR + "[camera]\neye = [0, 0, 0]\n", ["camera.eye and camera.target must differ"]),
     ("camera-up-parallel", HAIR + "[camera]\nup = [0, 0, 1]\n", ["camera.up must not be parallel"]),
     ("camera-near-negative", HAIR + "[camera]\nnear = -1\n", ["camera.near must be positive"]),
+    (
+        "camera-frame-value",
+        HAIR + '[camera]\nframe = "manual"\n',
+        ["camera.frame must be one of 'auto'", "'manual'"],
+    ),
+    *(
+        (
+            f"camera-frame-{key}",
+            HAIR + f'[camera]\nframe = "auto"\n{key} = [0, 1, 5]\n',
+            [f"camera.frame = 'auto' and camera.{key} exclude each other"],
+        )
+        for key in ("eye", "target", "up")
+    ),
     # [light]
     (
         "light-kind",

@@ -5,6 +5,8 @@ Scheuermann scene: tests/fit/test_scheuermann_fit.py."""
 
 from __future__ import annotations
 
+import warnings
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -22,7 +24,7 @@ from helpers import (
 
 import hairjax as hj
 from hairjax import geometry_stage, prepare
-from hairjax._errors import SceneError
+from hairjax._errors import EmptyViewWarning, SceneError
 from hairjax._scene._file import scene_from_dict
 from hairjax._shading import point_colors
 from hairjax._shading._scheuermann import (
@@ -211,7 +213,11 @@ def test_shift_direction_in_a_rendered_strand(shift):
         ),
         shadows=hj.Shadows("none"),
     )
-    colours = point_colors(geometry_stage(scene), scene.params)[:, 0]
+    # Only the point colours are read: the arc, 1/20 pixel across at this distance, draws
+    # no fragment, which the set-up reports (EmptyViewWarning); the image is not the test's.
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", EmptyViewWarning)
+        colours = point_colors(geometry_stage(scene), scene.params)[:, 0]
     peak = phi[int(jnp.argmax(colours))]
     # Grid step (π/2)/400 ≈ 4e-3 rad; V differs from H by ≤ 1e-4 rad (eye 10⁴ away).
     assert abs(peak - (psi + np.arctan(shift))) < 5e-3
