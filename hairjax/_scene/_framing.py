@@ -10,14 +10,15 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from .._errors import SceneError
 from .._geometry._projection import camera_view
 from ._camera import Camera
-from ._hair_table import DEFAULT_HAIR_ALPHA
 from ._light import Light
 from ._scene import Scene
 from ._strands import Strands
@@ -98,23 +99,42 @@ def key_light(camera: Camera) -> Light:
     return Light(kind="directional", direction=tuple(view.right - view.up + view.forward))
 
 
-def scene_for_hair(path: str | os.PathLike, *, width: int = 512, height: int = 512) -> Scene:
-    """A scene that shows the hair file at `path` (`.hair`, `.tfx` or `.ply`).
+def scene_for_hair(
+    path: str | os.PathLike,
+    *,
+    width: int = 512,
+    height: int = 512,
+    overrides: Mapping[str, Any] | None = None,
+) -> Scene:
+    """A scene that shows the hair file at `path` (`.hair`, `.tfx` or `.ply`): what
+    `hairjax render FILE` draws.
 
-    The strands as `hairjax._io.load_hair` reads them, semi-transparent like a scene
-    file's (alpha 0.5), `WIDTH_FRACTION` (1/128) of their bounding radius wide in world
-    units; `frame_camera` with a `width` × `height` image, its `key_light`, and the
-    defaults of `Scene` otherwise (Kajiya-Kay shading, opacity-map shadows). The name is
-    the file's stem. Raises `HairFormatError` for a file that cannot be read.
+    It is the scene file `hair.source = path`, `camera.frame = "auto"` (`frame_camera`
+    with a `width` × `height` image) with `overrides` (`"table.key" → value`, as
+    `load_scene`'s, e.g. from `--set`) on top, so the strands are semi-transparent like a
+    scene file's (alpha 0.5). Unless overridden: the ribbons are `WIDTH_FRACTION` (1/128)
+    of the bounding radius wide in world units, the light is the camera's `key_light`,
+    and an override of camera.eye, target or up replaces the framing. The name is the
+    file's stem. Raises `HairFormatError` for a file that cannot be read, `SceneError`
+    for a bad override.
     """
-    from .._io import load_hair  # Lazy: the readers import this package's Strands.
+    from ._file import scene_from_dict, with_overrides  # Lazy: _file imports this module
 
-    strands = load_hair(path, alpha=DEFAULT_HAIR_ALPHA)
-    _, radius = bounding_sphere(strands.points)
-    # Fires when every point coincides: frame_camera then frames one world unit.
-    radius = radius if radius > 0 else 1.0
-    strands = strands.replace(
-        width=np.full(strands.num_strands, WIDTH_FRACTION * radius), width_units="world"
-    )
-    camera = frame_camera(strands, width=width, height=height)
-    return Scene(strands=strands, camera=camera, light=key_light(camera), name=Path(path).stem)
+    path = Path(path)
+    overrides = dict(overrides or {})
+    camera: dict[str, Any] = {"width": width, "height": height}
+    if not any(f"camera.{key}" in overrides for key in ("eye", "target", "up")):
+        camera["frame"] = "auto"
+    data = with_overrides({"hair": {"source": str(path.resolve())}, "camera": camera}, overrides, str(path))
+    scene = scene_from_dict(data, path.resolve().parent, path.stem, source=str(path))
+    if not any(key.startswith("hair.width") for key in overrides):
+        _, radius = bounding_sphere(scene.strands.points)
+        # Fires when every point coincides: frame_camera then frames one world unit.
+        radius = radius if radius > 0 else 1.0
+        strands = scene.strands.replace(
+            width=np.full(scene.strands.num_strands, WIDTH_FRACTION * radius), width_units="world"
+        )
+        scene = scene.replace(strands=strands)
+    if not any(key.startswith("light.") for key in overrides):
+        scene = scene.replace(light=key_light(scene.camera))
+    return scene

@@ -174,3 +174,29 @@ def test_fit_target_size_mismatch(scene_file, tmp_path, capsys):
     hj.write_image(target, np.zeros((10, 10, 4)))
     assert main(["fit", str(scene_file), "--target", str(target)]) == 2
     assert "renders 40x30" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(not DATA.is_dir(), reason="shared/data is not beside the checkout")
+def test_render_a_bare_hair_file_frames_it(tmp_path, capsys):
+    """`hairjax render FILE.hair` frames the asset (the default camera shows it black) and
+    takes --set and --size like a scene file."""
+    out = tmp_path / "bangs.exr"
+    argv = ["render", str(DATA / "hair" / "Bangs_100.hair"), "--size", "64", "-o", str(out), "-q"]
+    assert main([*argv, "--set", "shading.ks=0.125"]) == 0
+    image = hj.read_image(out)
+    assert image.shape == (64, 64, 4)
+    assert (image[..., 3] > 0).mean() >= 0.05  # the issue's acceptance threshold: 5 % of the pixels
+    import json
+
+    record = json.loads((tmp_path / "bangs.json").read_text())
+    np.testing.assert_allclose(record["shading"]["params"]["ks"], 0.125)
+    assert "warning" not in capsys.readouterr().err
+
+
+def test_a_camera_that_misses_the_hair_warns_once(scene_file, tmp_path, capsys):
+    out = tmp_path / "away.exr"
+    argv = ["render", str(scene_file), "-o", str(out), "-q", "--set", "camera.target=[0, 0, 10]"]
+    assert main(argv) == 0
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("hairjax: warning: the hair covers no pixel")
+    assert "bounding box" in lines[0] and "eye" in lines[0]
