@@ -43,9 +43,9 @@ from ._render import render_profiled as render_profiled
 from ._scene._camera import Camera as Camera
 from ._scene._file import default_scene_path as default_scene_path
 from ._scene._file import load_scene as load_scene
+from ._scene._file import scene_for_hair as scene_for_hair
 from ._scene._framing import frame_camera as frame_camera
 from ._scene._framing import key_light as key_light
-from ._scene._framing import scene_for_hair as scene_for_hair
 from ._scene._light import Light as Light
 from ._scene._occluder import Occluder as Occluder
 from ._scene._procedural import furball as furball

@@ -25,19 +25,28 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from .._errors import SceneError
 from .._geometry._ordering import ordering_class, ordering_names
 from .._geometry._shadows import shadow_method_class, shadow_method_names
 from .._shading import Streaks, shading_model_class, shading_model_names
 from ._camera import Camera
-from ._framing import frame_camera
+from ._framing import WIDTH_FRACTION, bounding_sphere, frame_camera, key_light
 from ._hair_table import HAIR_KEYS, read_hair, read_patches
 from ._light import Light
 from ._occluder import OCCLUDER_KINDS, Occluder
 from ._scene import Scene
 from ._table import Table, build, describe, given
 
-__all__ = ["load_scene", "scene_from_dict", "default_scene_path", "scene_tables", "with_overrides"]
+__all__ = [
+    "load_scene",
+    "scene_from_dict",
+    "default_scene_path",
+    "scene_tables",
+    "with_overrides",
+    "scene_for_hair",
+]
 
 LIGHT_KINDS = ("directional", "point")
 CAMERA_FRAMES = ("auto",)
@@ -334,3 +343,42 @@ def _read_occluder(table: Table, base_dir: Path) -> dict[str, Any]:
 
 
 # --------------------------------------------------------------------------- helpers
+
+
+def scene_for_hair(
+    path: str | os.PathLike,
+    *,
+    width: int = 512,
+    height: int = 512,
+    overrides: Mapping[str, Any] | None = None,
+) -> Scene:
+    """A scene that shows the hair file at `path` (`.hair`, `.tfx` or `.ply`): what
+    `hairjax render FILE` draws.
+
+    It is the scene file `hair.source = path`, `camera.frame = "auto"` (`frame_camera`
+    with a `width` × `height` image) with `overrides` (`"table.key" → value`, as
+    `load_scene`'s, e.g. from `--set`) on top, so the strands are semi-transparent like a
+    scene file's (alpha 0.5). Unless overridden: the ribbons are `_framing.WIDTH_FRACTION` (1/128)
+    of the bounding radius wide in world units, the light is the camera's `key_light` (`_framing.py`),
+    and an override of camera.eye, target or up replaces the framing. The name is the
+    file's stem. Raises `HairFormatError` for a file that cannot be read, `SceneError`
+    for a bad override.
+    """
+    path = Path(path)
+    overrides = dict(overrides or {})
+    camera: dict[str, Any] = {"width": width, "height": height}
+    if not any(f"camera.{key}" in overrides for key in ("eye", "target", "up")):
+        camera["frame"] = "auto"
+    data = with_overrides({"hair": {"source": str(path.resolve())}, "camera": camera}, overrides, str(path))
+    scene = scene_from_dict(data, path.resolve().parent, path.stem, source=str(path))
+    if not any(key.startswith("hair.width") for key in overrides):
+        _, radius = bounding_sphere(scene.strands.points)
+        # Fires when every point coincides: frame_camera then frames one world unit.
+        radius = radius if radius > 0 else 1.0
+        strands = scene.strands.replace(
+            width=np.full(scene.strands.num_strands, WIDTH_FRACTION * radius), width_units="world"
+        )
+        scene = scene.replace(strands=strands)
+    if not any(key.startswith("light.") for key in overrides):
+        scene = scene.replace(light=key_light(scene.camera))
+    return scene

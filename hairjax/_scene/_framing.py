@@ -3,16 +3,12 @@
 Real assets come in their own units and places (centimetres, a head's height above the
 origin), which the default camera (eye (0, 0, 4) looking at the origin) misses. Here the
 camera is placed from the strands' bounding sphere, so any asset fills the view; the
-scene file's `[camera] frame = "auto"` and `scene_for_hair` use it (docs/scenes.md).
+scene file's `[camera] frame = "auto"` and `_file.scene_for_hair` use it (docs/scenes.md).
 """
 
 from __future__ import annotations
 
 import math
-import os
-from collections.abc import Mapping
-from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -20,13 +16,11 @@ from .._errors import SceneError
 from .._geometry._projection import camera_view
 from ._camera import Camera
 from ._light import Light
-from ._scene import Scene
 from ._strands import Strands
 
 __all__ = [
     "frame_camera",
     "key_light",
-    "scene_for_hair",
     "bounding_sphere",
     "FRAME_AZIMUTH",
     "FRAME_ELEVATION",
@@ -97,44 +91,3 @@ def key_light(camera: Camera) -> Light:
     light travels, docs/model.md §3) is right − up + forward."""
     view = camera_view(camera)
     return Light(kind="directional", direction=tuple(view.right - view.up + view.forward))
-
-
-def scene_for_hair(
-    path: str | os.PathLike,
-    *,
-    width: int = 512,
-    height: int = 512,
-    overrides: Mapping[str, Any] | None = None,
-) -> Scene:
-    """A scene that shows the hair file at `path` (`.hair`, `.tfx` or `.ply`): what
-    `hairjax render FILE` draws.
-
-    It is the scene file `hair.source = path`, `camera.frame = "auto"` (`frame_camera`
-    with a `width` × `height` image) with `overrides` (`"table.key" → value`, as
-    `load_scene`'s, e.g. from `--set`) on top, so the strands are semi-transparent like a
-    scene file's (alpha 0.5). Unless overridden: the ribbons are `WIDTH_FRACTION` (1/128)
-    of the bounding radius wide in world units, the light is the camera's `key_light`,
-    and an override of camera.eye, target or up replaces the framing. The name is the
-    file's stem. Raises `HairFormatError` for a file that cannot be read, `SceneError`
-    for a bad override.
-    """
-    from ._file import scene_from_dict, with_overrides  # Lazy: _file imports this module
-
-    path = Path(path)
-    overrides = dict(overrides or {})
-    camera: dict[str, Any] = {"width": width, "height": height}
-    if not any(f"camera.{key}" in overrides for key in ("eye", "target", "up")):
-        camera["frame"] = "auto"
-    data = with_overrides({"hair": {"source": str(path.resolve())}, "camera": camera}, overrides, str(path))
-    scene = scene_from_dict(data, path.resolve().parent, path.stem, source=str(path))
-    if not any(key.startswith("hair.width") for key in overrides):
-        _, radius = bounding_sphere(scene.strands.points)
-        # Fires when every point coincides: frame_camera then frames one world unit.
-        radius = radius if radius > 0 else 1.0
-        strands = scene.strands.replace(
-            width=np.full(scene.strands.num_strands, WIDTH_FRACTION * radius), width_units="world"
-        )
-        scene = scene.replace(strands=strands)
-    if not any(key.startswith("light.") for key in overrides):
-        scene = scene.replace(light=key_light(scene.camera))
-    return scene

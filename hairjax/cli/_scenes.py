@@ -74,7 +74,7 @@ def load_cli_scene(args: argparse.Namespace, path: Path | None):
     path = scene_path(path)
     overrides = scene_overrides(args, path)
     if path.suffix.lower() in HAIR_FILE_SUFFIXES:
-        from .._scene._framing import scene_for_hair
+        from .._scene._file import scene_for_hair
 
         return scene_for_hair(path, overrides=overrides)
     return load_scene(path, overrides)

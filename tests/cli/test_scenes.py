@@ -75,7 +75,7 @@ def test_a_bad_set_is_one_line_naming_the_key(scene_file, assignment, message, c
 
 def test_a_typo_lists_the_allowed_keys(scene_file, capsys):
     main(["render", str(scene_file), "--set", "camera.widht=3"])
-    assert "keys: eye, target" in capsys.readouterr().err
+    assert "keys: frame, eye, target" in capsys.readouterr().err
 
 
 def test_seed_changes_procedural_hair(scene_file):

@@ -13,7 +13,8 @@ from helpers import DATA
 import hairjax as hj
 from hairjax._errors import SceneError
 from hairjax._geometry._projection import camera_view
-from hairjax._scene._framing import frame_camera, key_light, scene_for_hair
+from hairjax._scene._file import scene_for_hair
+from hairjax._scene._framing import frame_camera, key_light
 from hairjax._scene._strands import Strands
 
 ASSETS = (
