@@ -36,7 +36,9 @@ def cloud(seed: int = 0, n: int = 200) -> Strands:
 @pytest.mark.parametrize("path", ASSETS, ids=lambda p: p.name)
 def test_every_asset_is_framed(path):
     scene = scene_for_hair(path, width=96, height=96)
-    alpha = np.asarray(hj.render(scene))[..., 3]
+    # Coverage is alpha, which the shadow maps do not change (they darken colour only):
+    # rendered without them, for time.
+    alpha = np.asarray(hj.render(scene.replace(shadows=hj.Shadows("none"))))[..., 3]
     assert np.mean(alpha > 0) >= MIN_COVERAGE
     # The bounding sphere stays inside: no hair on the image's outer rows and columns...
     assert not alpha[[0, -1], :].any() and not alpha[:, [0, -1]].any()
