@@ -44,7 +44,7 @@ test: $(STAMP)
 	$(BIN)/python -m ruff check hairjax tests experiments notebooks
 	$(BIN)/python -m ruff format --check hairjax tests experiments notebooks
 	$(BIN)/python -m mypy
-	$(BIN)/python -m pytest -q -n 2 --dist worksteal  # both cores (pytest-xdist), idle one steals queued tests: keeps make test under 10 minutes
+	$(BIN)/python -m pytest -q -n 2  # both cores (pytest-xdist): keeps make test under 10 minutes
 
 bench: $(STAMP)
 	$(BIN)/hairjax bench
