@@ -14,9 +14,9 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-__all__ = ["scene_overrides", "load_cli_scene", "scene_path"]
+from .._scene._hair_table import HAIR_FILE_SUFFIXES  # the suffixes the scene reader takes as hair files
 
-HAIR_FILE_SUFFIXES = (".hair", ".tfx", ".ply")
+__all__ = ["scene_overrides", "load_cli_scene", "scene_path"]
 
 
 def _toml_value(text: str) -> Any:
