@@ -1,0 +1,140 @@
+"""Batched views and lights: one scene's strands seen by V cameras (or lit by V lights)
+rendered as one `[V, H, W, 4]` array, with one compilation for all of them, sharded over
+every available device (docs/model.md §6, docs/architecture.md "Batched views").
+
+Each view's geometry stage is the scene's own (`geometry_stage`, cached per view's scene).
+Their fragment and occluder arrays differ in length, so each is padded to the longest
+(power-of-two buckets, `bucket`): a padded fragment has weight 0 and pixel H·W,
+which the composite's scatter drops; a padded occluder pixel is H·W, which the backdrop's
+scatter drops. The stacked `Geometry` then goes through the one shading stage under
+`vmap`, and its view axis is laid out over a one-axis device mesh (`NamedSharding`), so
+the output sits on every device.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax.sharding import Mesh, NamedSharding, PartitionSpec
+from jaxtyping import Array, Float
+
+from ._geometry._stage import Geometry, geometry_stage
+from ._scene._camera import Camera
+from ._scene._light import Light
+from ._scene._scene import Scene
+from ._shading import shading_stage
+
+__all__ = ["render_views", "view_scenes", "stack_geometries", "view_mesh", "bucket"]
+
+# Per-fragment fields, padded with (value): a padded fragment adds nothing to any pixel.
+_FRAGMENT_FIELDS = ("frag_pixel", "frag_i0", "frag_t", "frag_weight", "frag_alpha")
+# Per occluder pixel fields (Q), padded with 0 (the pixel index with H·W, dropped).
+_OCCLUDER_FIELDS = ("occluder_pixel", "occluder_direct", "occluder_omega", "occluder_visibility")
+
+
+def view_scenes(
+    scene: Scene, cameras: Sequence[Camera] | None = None, lights: Sequence[Light] | None = None
+) -> list[Scene]:
+    """The scene once per view: camera i (default the scene's) with light i (default the
+    scene's). Cameras and lights, where both are given, pair up and must be as many; every
+    camera must have the scene camera's size (one image array)."""
+    if cameras is None and lights is None:
+        raise ValueError("render_views needs cameras, lights or both")
+    n = len(cameras) if cameras is not None else len(lights)  # type: ignore[arg-type]
+    if cameras is not None and lights is not None and len(lights) != n:
+        raise ValueError(f"render_views pairs cameras and lights: got {n} cameras and {len(lights)} lights")
+    if n == 0:
+        raise ValueError("render_views needs at least one view")
+    cams = list(cameras) if cameras is not None else [scene.camera] * n
+    lits = list(lights) if lights is not None else [scene.light] * n
+    size = (scene.camera.width, scene.camera.height)
+    for i, cam in enumerate(cams):
+        if (cam.width, cam.height) != size:
+            raise ValueError(
+                f"camera {i} is {cam.width}x{cam.height}, the scene's {size[0]}x{size[1]}: "
+                "the views of one batch share the image size"
+            )
+    if scene.patches is not None:
+        raise ValueError("render_views draws strands; a hair-patch scene renders with hairjax.render")
+    return [scene.replace(camera=c, light=lt) for c, lt in zip(cams, lits)]
+
+
+def bucket(n: int) -> int:
+    """`n` rounded up to a power of two: the padded length of a batch's arrays."""
+    return 1 << max(int(n) - 1, 0).bit_length()
+
+
+def _pad(x, n: int, value):
+    if x.shape[0] == n:
+        return x
+    fill = jnp.full((n - x.shape[0],) + x.shape[1:], value, x.dtype)
+    return jnp.concatenate([x, fill])
+
+
+def stack_geometries(geometries: Sequence[Geometry]) -> Geometry:
+    """One `Geometry` with a leading view axis: fragment and occluder arrays padded to the
+    longest of the views (a power-of-two bucket, so that batches compile rarely)."""
+    first = geometries[0]
+    hw = first.height * first.width
+    f = bucket(max(int(g.frag_pixel.shape[0]) for g in geometries))
+    padded = []
+    for g in geometries:
+        values = {"frag_pixel": hw, "frag_i0": 0, "frag_t": 0.0, "frag_weight": 0.0, "frag_alpha": 0.0}
+        changes = [_pad(getattr(g, k), f, v) for k, v in values.items()]
+        g = eqx.tree_at(lambda g: tuple(getattr(g, k) for k in _FRAGMENT_FIELDS), g, tuple(changes))
+        padded.append(g)
+    if first.occluder_pixel is not None:
+        q = bucket(max(int(g.occluder_pixel.shape[0]) for g in padded))
+        out = []
+        for g in padded:
+            present = [k for k in _OCCLUDER_FIELDS if getattr(g, k) is not None]
+            values = [_pad(getattr(g, k), q, hw if k == "occluder_pixel" else 0) for k in present]
+            out.append(eqx.tree_at(lambda g, ks=present: tuple(getattr(g, k) for k in ks), g, tuple(values)))
+        padded = out
+    return jax.tree.map(lambda *xs: jnp.stack(xs), *padded)
+
+
+def view_mesh(devices=None) -> Mesh:
+    """A one-axis mesh (`"views"`) over `devices` (default every available device)."""
+    return Mesh(np.asarray(jax.devices() if devices is None else list(devices)), ("views",))
+
+
+@eqx.filter_jit
+def _shade_views(geometry: Geometry, params) -> Float[Array, "V H W 4"]:
+    return jax.vmap(lambda g: shading_stage(g, params))(geometry)
+
+
+def render_views(
+    scene: Scene,
+    cameras: Sequence[Camera] | None = None,
+    params=None,
+    *,
+    lights: Sequence[Light] | None = None,
+    devices=None,
+) -> Float[Array, "V H W 4"]:
+    """Render `scene` from each of `cameras` (and/or under each of `lights`) to linear
+    RGBA `[V, H, W, 4]`, view i equal to `render(scene.replace(camera=cameras[i],
+    light=lights[i]))`.
+
+    One compilation of the shading stage serves all V views; the view axis is sharded
+    over `devices` (default every device, `jax.devices()`), so with D devices each holds
+    V/D views (V is padded to a multiple of D). Differentiable in `params` (default the scene's), like
+    `render`. Each view's geometry stage runs once and is cached with its scene.
+    """
+    params = scene.params if params is None else params
+    scenes = view_scenes(scene, cameras, lights)
+    geometry = stack_geometries([geometry_stage(s) for s in scenes])
+    v = len(scenes)
+    mesh = view_mesh(devices)
+    d = mesh.devices.size
+    padded = -(-v // d) * d
+    if padded != v:  # fires when V is not a multiple of the device count: repeat the last view
+        geometry = jax.tree.map(lambda x: jnp.concatenate([x, jnp.repeat(x[-1:], padded - v, axis=0)]), geometry)
+    sharding = NamedSharding(mesh, PartitionSpec("views"))
+    geometry = jax.tree.map(lambda x: jax.device_put(x, sharding), geometry)
+    image = _shade_views(geometry, params)
+    return image[:v] if padded != v else image
