@@ -16,10 +16,11 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array, ArrayLike, Float
+from jaxtyping import Array, Float
 
 from .._errors import SceneError
 from .._vectors import safe_norm
+from ._model import RGBLike  # an array, a number or 3 numbers
 
 if TYPE_CHECKING:
     from .._geometry._stage import Geometry
@@ -43,7 +44,7 @@ class LightParams(eqx.Module):
     direction: Float[Array, " 3"] | None
     color: Float[Array, " 3"] | None
 
-    def __init__(self, direction: ArrayLike | None = None, color: ArrayLike | None = None):
+    def __init__(self, direction: RGBLike | None = None, color: RGBLike | None = None):
         dtype = jnp.result_type(float)
         self.direction = None if direction is None else jnp.asarray(direction, dtype=dtype)
         self.color = None if color is None else jnp.broadcast_to(jnp.asarray(color, dtype=dtype), (3,))
