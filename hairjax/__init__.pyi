@@ -58,6 +58,7 @@ from ._shading import AbstractShadingModel as AbstractShadingModel
 from ._shading import KajiyaKay as KajiyaKay
 from ._shading import KajiyaKayLookup as KajiyaKayLookup
 from ._shading import KajiyaKayMirror as KajiyaKayMirror
+from ._shading import LightParams as LightParams
 from ._shading import PointInputs as PointInputs
 from ._shading import Reflectance as Reflectance
 from ._shading import Scheuermann as Scheuermann

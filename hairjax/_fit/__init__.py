@@ -5,10 +5,12 @@ solver's parameter space), `_problem` (targets, weights, the residuals), `_varpr
 `_nnls` (the gains solved for), `_solvers`, `_convergence` (the solve loop),
 `_uncertainty` (standard errors), `_model` (what the fit asks of a shading model) and
 `_shading_fit` (that, for any registered shading model, from the model's own terms), with
-`_dependence` (which images a fitted parameter reaches).
+`_dependence` (which images a fitted parameter reaches); `_lit` and `_light_fit` add the
+light's direction and colour to a fit.
 """
 
 from ._entry import fit as fit
+from ._lit import LIGHT_NAMES as LIGHT_NAMES
 from ._result import FitError as FitError
 from ._result import FitResult as FitResult
 from ._solvers import SOLVERS as SOLVERS

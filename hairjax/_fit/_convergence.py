@@ -67,7 +67,7 @@ def plateau_exit(residuals: Callable, z, problem, effect, loss: float, rtol: flo
     if plateau is None or plateau.gain not in problem.linear or plateau.exponent not in problem.solved:
         return None
     before = problem.solved[: problem.solved.index(plateau.exponent)]
-    i = sum(entries(n, problem.model.colours, problem.scalar) for n in before)
+    i = sum(entries(n, problem.model.colours, problem.scalar, problem.model.transforms) for n in before)
     if not effect[i] <= NULL_RATIO * effect.max():
         return None
     candidates = [z.at[i].set(v) for v in plateau.scan]

@@ -17,8 +17,10 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._scene._scene import Scene
-from .._shading import AbstractShadingModel
+from .._shading import AbstractShadingModel, LightParams
 from ._convergence import half_square, plateau_exit, solve
+from ._light_fit import lit_fit_model, start_light
+from ._lit import LIGHT_NAMES, LitParams
 from ._model import FitModel
 from ._problem import (
     Problem,
@@ -50,6 +52,7 @@ def fit(
     weights=None,
     scalar: Sequence[str] = (),
     max_steps: int = 100,
+    light: LightParams | None = None,
     separable: bool = True,
     rtol: float | None = None,
     atol: float | None = None,
@@ -63,13 +66,18 @@ def fit(
     - `fit`: the parameters to fit, among the shading model's `fittable` (default: all of
       them): kd, ks, shininess, kappa for Kajiya-Kay; kd, primary_color, primary_exponent,
       primary_shift, secondary_color, secondary_exponent, secondary_shift, kappa for
-      Scheuermann (docs/model.md §17); the rest stay at `init`.
+      Scheuermann (docs/model.md §17); and, for any model, the light's light_direction (a
+      directional light's) and light_color (docs/fitting.md, "Fitting the light"); the rest
+      stay at `init` and `light`.
     - `init`: starting (and fixed) parameters, the model's parameter type; default the
       first scene's.
     - `solver`: levenberg-marquardt (lm), gauss-newton, dogleg, or bfgs (on ½‖r‖²).
+    - `light`: the light's starting (and held) `LightParams`; default the scenes' light.
+      Given, or with a light name in `fit`, the image is the shading stage's with this
+      light (Ω and V stay the scenes' light's).
     - `masks`, `weights`: optional per-target `[H, W]` pixel masks and weights.
-    - `scalar`: among the fitted gains (kd, ks; Scheuermann's colours), those fitted as one
-      grey value instead of RGB.
+    - `scalar`: among the fitted gains (kd, ks; Scheuermann's colours) and light_color,
+      those fitted as one grey value instead of RGB.
     - `separable`: solve the fitted gains by non-negative linear least squares at every
       step (variable projection; the image is linear in them) so that the solver iterates
       on the model's searched parameters (shininess, κ, …) only; a fit of gains alone is
@@ -90,8 +98,11 @@ def fit(
     weight_list = [None] * len(scenes) if weights is None else list(weights)
     if any(s.patches is not None for s in scenes):  # docs/model.md §18: not wired into the fit
         raise FitError("fit does not support hair-patch scenes (hair.geometry = 'patches')")
-    model = _model_of(scenes)
-    names = check_names(model.fittable if fit is None else fit, scalar, model)
+    lit = light is not None or (fit is not None and any(n in LIGHT_NAMES for n in fit))
+    model = _model_of(scenes, lit)
+    names = check_names(
+        tuple(n for n in model.fittable if n not in LIGHT_NAMES) if fit is None else fit, scalar, model
+    )
     scalar = tuple(scalar)
     double = jnp.result_type(float) == jnp.float64
     rtol = (1e-8 if double else 1e-5) if rtol is None else rtol
@@ -103,6 +114,10 @@ def fit(
         raise FitError(
             f"a {model.label} scene is fitted from {model.params_type.__name__}, got {type(init).__name__}"
         )
+    initial, initial_light = init, None
+    if lit:  # the light joins the model's parameters (docs/fitting.md, "Fitting the light")
+        initial_light = start_light(scenes, names, light)
+        init = LitParams(init, initial_light)
 
     start = time.perf_counter()
     data = [model.prepare(s, init, names, t, sw) for s, (t, sw) in zip(scenes, arrays)]
@@ -142,6 +157,7 @@ def fit(
             plateau=lambda z, effect, loss: plateau_exit(residuals, z, problem, effect, loss, rtol, atol),
         )
     fitted = jit_point(z, problem)[0]
+    params, fitted_light = (fitted.shading, fitted.light) if lit else (fitted, None)
     elapsed = time.perf_counter() - start - geometry_s
 
     std_error, undetermined = standard_errors(model, data, fitted, names, scalar)
@@ -150,8 +166,8 @@ def fit(
     final_loss = float(half_square(residuals, z, problem)) if diverged else losses[-1]
     rmse = float(np.sqrt(2 * final_loss / max(n_pixels, 1.0)))
     return FitResult(
-        params=fitted,
-        initial=init,
+        params=params,
+        initial=initial,
         fitted=names,
         loss=losses,
         steps=steps,
@@ -162,14 +178,17 @@ def fit(
         undetermined=undetermined,
         rmse=rmse,
         restarts=restarts,
+        light=fitted_light,
+        initial_light=initial_light,
     )
 
 
-def _model_of(scenes) -> FitModel:
-    """The fit of the scenes' shading model (`fit_model`); FitError where they differ."""
+def _model_of(scenes, lit: bool) -> FitModel:
+    """The fit of the scenes' shading model (`fit_model`; with the light, `lit_fit_model`);
+    FitError where they differ."""
     classes: list[type[AbstractShadingModel]] = list(dict.fromkeys(type(s.shading) for s in scenes))
     if len(classes) > 1:
         raise FitError(
             "scenes of one fit share a shading model; got " + " and ".join(c.name for c in classes)
         )
-    return fit_model(classes[0])  # a class: hashable, cached by identity
+    return (lit_fit_model if lit else fit_model)(classes[0])  # a class: hashable, cached by identity

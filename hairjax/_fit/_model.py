@@ -7,6 +7,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable, Mapping
 
+from ._lit import RelativeTransform
 from ._space import Transform
 
 __all__ = ["FitModel", "Plateau"]
@@ -33,7 +34,7 @@ class FitModel:
       `params_type`: its parameters' class (ShadingParams, ScheuermannParams).
     - `fittable`: the names `fit` takes (all of them by default); `colours`: the RGB ones,
       which may also be fitted as one grey value; `transforms`: name → `Transform` from the
-      solver's z (`_space.py`).
+      solver's z (`_space.py`), or a `RelativeTransform` (the light's direction, `_lit.py`).
     - `prepare(scene, params, names, target, sqrt_weight) -> data`: per target, everything
       a step needs that no fitted parameter reaches (runs the geometry stage); `data` has
       `target` `[HW, 3]` and `sqrt_weight` `[HW, 1]`, as `target_arrays` gives them.
@@ -49,7 +50,7 @@ class FitModel:
     params_type: type
     fittable: tuple[str, ...]
     colours: tuple[str, ...]
-    transforms: Mapping[str, Transform]
+    transforms: Mapping[str, Transform | RelativeTransform]
     prepare: Callable
     image: Callable
     linear: tuple[str, ...] = ()

@@ -11,6 +11,7 @@ import numpy as np
 
 from .._constants import FIT_TRANSMITTANCE_CUTOFF
 from .._scene._scene import Scene
+from ._lit import LIGHT_NAMES
 from ._model import FitModel
 from ._result import FitError
 from ._space import from_flat
@@ -37,8 +38,10 @@ def check_names(names, scalar, model: FitModel) -> tuple[str, ...]:
     names = tuple(names)
     for n in (*names, *scalar):
         if n not in model.fittable:
+            also = [x for x in LIGHT_NAMES if x not in model.fittable]
             raise FitError(
-                f"unknown parameter {n!r} for a {model.label} scene; fittable: {', '.join(model.fittable)}"
+                f"unknown parameter {n!r} for a {model.label} scene; fittable: "
+                + ", ".join((*model.fittable, *also))
             )
     if len(set(names)) != len(names) or not names:
         raise FitError(f"fit needs distinct parameter names, got {names!r}")

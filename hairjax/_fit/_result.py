@@ -7,6 +7,8 @@ from typing import Any
 
 import numpy as np
 
+from ._lit import light_field
+
 __all__ = ["FitResult", "FitError"]
 
 
@@ -25,7 +27,10 @@ class FitResult:
     decrease, and the solver was started afresh from its point (docs/fitting.md);
     `std_error`: name → standard error (array like the parameter) from (JᵀJ)⁻¹σ², or
     None where it is not defined; `undetermined`: names the data cannot determine;
-    `rmse` over the fitted pixels; `geometry_s`: time of the geometry stages.
+    `rmse` over the fitted pixels; `geometry_s`: time of the geometry stages;
+    `light`, `initial_light`: the fitted and the start's `LightParams` where the fit fitted
+    or held the light (docs/fitting.md, "Fitting the light"), else None. `get(name)`
+    reads any fitted name, the light's included.
     """
 
     params: Any  # the shading model's parameters (its `params_type`)
@@ -40,6 +45,17 @@ class FitResult:
     undetermined: tuple[str, ...]
     rmse: float
     restarts: int = 0
+    light: Any = None
+    initial_light: Any = None
+
+    def get(self, name: str, initial: bool = False):
+        """The fitted (or, with `initial`, the start's) value of `name`: a field of the
+        model's parameters, or light_direction, light_color (None without a light)."""
+        params, light = (self.initial, self.initial_light) if initial else (self.params, self.light)
+        field = light_field(name)
+        if field is None:
+            return getattr(params, name)
+        return None if light is None else getattr(light, field)
 
     def to_json(self) -> dict:
         def value(p, name):
@@ -48,6 +64,12 @@ class FitResult:
 
         # The parameters' fields: kd, ks, shininess, kappa, ambient for ShadingParams.
         names = [f.name for f in dataclasses.fields(self.params)]
+
+        def light(p):
+            if p is None:
+                return None
+            return {f: None if getattr(p, f) is None else value(p, f) for f in ("direction", "color")}
+
         return {
             "params": {n: value(self.params, n) for n in names},
             "initial": {n: value(self.initial, n) for n in names},
@@ -63,4 +85,6 @@ class FitResult:
             "rmse": self.rmse,
             "termination": self.termination,
             "restarts": self.restarts,
+            "light": light(self.light),
+            "initial_light": light(self.initial_light),
         }

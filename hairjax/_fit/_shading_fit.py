@@ -14,6 +14,11 @@ parameters. The geometry stage runs once per target; a gain image that no fitted
 parameter reaches (`_dependence.py` reads that off the model's jaxpr) is composited once;
 the others, and their derivatives in the fitted parameters, in one composite pass per step.
 Nothing here is specific to one model: the model is never transcribed a second time.
+
+With the light given (`LightParams`: a fit that fits or holds the light, `_light_fit.py`)
+the lit images are those of a white light, the light's colour multiplies them afterwards,
+and L is the light's direction; where that direction is fitted, the images it reaches are
+recomputed each step through plain autodiff instead of the one-pass rule.
 """
 
 from __future__ import annotations
@@ -29,6 +34,7 @@ import numpy as np
 from .._composite import composite
 from .._geometry._stage import geometry_stage
 from .._shading import AbstractShadingModel, occluder_colors, transmittance
+from .._shading._light import LightParams, lit_to_light
 from .._shading._stage import shading_points
 from ._dependence import dependence
 from ._model import FitModel, Plateau
@@ -61,7 +67,8 @@ class TargetTerms(eqx.Module):
     parameter reaches, at the start's values; `bases`: the per-point terms (A_g or L_g) of
     varying gains that only κ reaches, computed once; `constant`: T·backdrop; `varying`
     (static): the gains whose image is recomputed per step; `searched` (static): the
-    fitted searched parameters the custom derivative rule differentiates in."""
+    fitted searched parameters the custom derivative rule differentiates in; `direction`
+    (static): the light's direction is fitted (L comes from the light at every step)."""
 
     geometry: Any
     ambient_scale: jax.Array
@@ -77,12 +84,13 @@ class TargetTerms(eqx.Module):
     # (gain, fitted searched parameter) pairs where the parameter reaches the gain's term:
     # the derivative images composited; every other pair's is 0 by structure.
     pairs: tuple[tuple[str, str], ...] = eqx.field(static=True, default=())
+    direction: bool = eqx.field(static=True, default=False)
 
 
-def _columns(terms: TargetTerms, params, gains, reflectance=None) -> jax.Array:
+def _columns(terms: TargetTerms, params, gains, reflectance=None, light=None) -> jax.Array:
     """The per-point colours of `gains`' images before compositing, `[P, 3·len(gains)]`:
     streak·A_g for an ambient term, streak·light·τ·V·L_g for a lit one. `reflectance`:
-    the model's terms at `params`, if known."""
+    the model's terms at `params`, if known; `light`: L from its direction, if any."""
     g = terms.geometry
     if reflectance is None and all(n in terms.bases for n in gains):
         # Only κ moves them: the terms are known.
@@ -90,7 +98,7 @@ def _columns(terms: TargetTerms, params, gains, reflectance=None) -> jax.Array:
         ambient = {n: b for n, b in terms.bases.items() if n not in lit}
     else:
         if reflectance is None:
-            reflectance = g.shading.reflectance(shading_points(g), params)
+            reflectance = g.shading.reflectance(shading_points(g, light), params)
         ambient, lit = reflectance.ambient, reflectance.lit
     lit_scale = terms.light
     if g.omega is not None:
@@ -101,11 +109,12 @@ def _columns(terms: TargetTerms, params, gains, reflectance=None) -> jax.Array:
     return jnp.concatenate(columns, axis=1)
 
 
-def gain_images_plain(terms: TargetTerms, params, reflectance=None) -> dict:
-    """{gain: its image K_g `[HW, 3]`} at `params` (the fixed ones pass through)."""
+def gain_images_plain(terms: TargetTerms, params, reflectance=None, light=None) -> dict:
+    """{gain: its image K_g `[HW, 3]`} at `params` (the fixed ones pass through); `light`:
+    L from its direction, if any (`_columns`)."""
     images = dict(terms.fixed)
     if terms.varying:
-        stacked = composite(terms.geometry, _columns(terms, params, terms.varying, reflectance))
+        stacked = composite(terms.geometry, _columns(terms, params, terms.varying, reflectance, light))
         images.update(zip(terms.varying, jnp.split(stacked, len(terms.varying), axis=1)))
     return images
 
@@ -167,30 +176,38 @@ def gain_images(terms: TargetTerms, params) -> dict:
     return _gain_images(terms, params, _searched_values(terms, params))
 
 
-def fixed_image(terms: TargetTerms, params) -> jax.Array:
-    """T·backdrop + T·(the occluder's colour at the held ambient and κ, `occluder_colors`):
-    the image without the gains' terms."""
+def fixed_image(terms: TargetTerms, params, light: LightParams | None = None) -> jax.Array:
+    """T·backdrop + T·(the occluder's colour at the held ambient and κ, and `light`'s
+    colour, `occluder_colors`): the image without the gains' terms."""
     g = terms.geometry
     if g.occluder_pixel is None:
         return terms.constant
-    occluder = occluder_colors(g, params)
+    occluder = occluder_colors(g, params, light)
     return terms.constant.at[g.occluder_pixel].add(g.transmittance[g.occluder_pixel][:, None] * occluder)
 
 
-def _image_of(model_gains, terms: TargetTerms, params, images) -> jax.Array:
-    out = fixed_image(terms, params)
+def image_of(model_gains, terms: TargetTerms, params, images, light: LightParams | None = None) -> jax.Array:
+    """fixed_image + Σ_g g ⊙ images[g] over `model_gains`."""
+    # (Without a light, called exactly as before the light was an input.)
+    out = fixed_image(terms, params) if light is None else fixed_image(terms, params, light)
     for n in model_gains:
         out = out + getattr(params, n)[None, :] * images[n]
     return out
 
 
-def prepare_terms(gains: tuple[str, ...], scene, params, names, target, sqrt_weight) -> TargetTerms:
+def prepare_terms(
+    gains: tuple[str, ...], scene, params, names, target, sqrt_weight, light: LightParams | None = None
+) -> TargetTerms:
     """One target's terms: the geometry stage, its visible fragments, and the images of the
     gains no fitted parameter reaches, at `params` — composited with every fragment, as
     the rest of the fixed image; `target` `[HW, 3]` and `sqrt_weight` `[HW, 1]` as
-    `target_arrays` gives them."""
+    `target_arrays` gives them. `light`: the light's start (or held) direction and colour;
+    the lit images are then a white light's (the caller multiplies them by the colour)."""
     full = geometry_stage(scene)
+    if light is not None and light.direction is not None:  # L of the light's direction
+        full = eqx.tree_at(lambda g: g.to_light, full, lit_to_light(full, light))
     geom = visible_fragments(full)
+    direction = light is not None and "light_direction" in names
     model: AbstractShadingModel = geom.shading
     searched = tuple(n for n in model.searched if n in names)
     # §16: the streak factor scales a point's whole colour: it rides on both scales.
@@ -199,18 +216,19 @@ def prepare_terms(gains: tuple[str, ...], scene, params, names, target, sqrt_wei
         if geom.streak is None
         else geom.streak[:, None]
     )
-    light = geom.light_rgb[None, :] * streak
+    white = light is not None  # the colour multiplies the images instead
+    light_scale = jnp.broadcast_to(streak, geom.tangent.shape) if white else geom.light_rgb[None, :] * streak
     points = shading_points(geom)
-    reached, lit = _reaches(model, points, params, searched)
+    reached, lit = _reaches(model, points, params, searched, direction)
     if "kappa" in searched and geom.omega is not None:  # τ moves every lit term
         reached = {n: p | ({"kappa"} if n in lit else set()) for n, p in reached.items()}
-    by_searched = {n: bool(p - {"kappa"}) for n, p in reached.items()}
+    by_searched = {n: bool(p - {"kappa"}) for n, p in reached.items()}  # the light's direction too
     varying = tuple(n for n in gains if reached[n])
     pairs = tuple((n, p) for n in varying for p in searched if p in reached[n])
     fixed_terms = TargetTerms(
         full,
         streak,
-        light,
+        light_scale,
         {},
         {},
         jnp.zeros(()),
@@ -229,7 +247,7 @@ def prepare_terms(gains: tuple[str, ...], scene, params, names, target, sqrt_wei
     return TargetTerms(
         geom,
         streak,
-        light,
+        light_scale,
         fixed,
         bases,
         constant,
@@ -239,21 +257,25 @@ def prepare_terms(gains: tuple[str, ...], scene, params, names, target, sqrt_wei
         searched,
         lit,
         pairs,
+        direction,
     )
 
 
-def _reaches(model: AbstractShadingModel, points, params, searched):
+def _reaches(model: AbstractShadingModel, points, params, searched, direction: bool = False):
     """({gain: the fitted searched parameters other than κ that reach its term}, the lit
-    gains), by `dependence` on the model's `reflectance` (κ enters through τ alone)."""
+    gains), by `dependence` on the model's `reflectance` (κ enters through τ alone). With
+    `direction`, "light_direction" reaches the terms that L reaches."""
     names = [n for n in searched if n != "kappa"]
 
     def terms_of(*values):
-        r = model.reflectance(points, with_values(params, dict(zip(names, values)), ()))
+        at = points if not direction else eqx.tree_at(lambda p: p.to_light, points, values[-1])
+        r = model.reflectance(at, with_values(params, dict(zip(names, values)), ()))
         return r.ambient, r.lit
 
     values = [jnp.reshape(getattr(params, n), ()) for n in names]
-    ambient, lit = dependence(terms_of, *values)
-    reached = {n: {names[i] for i in d} for n, d in {**ambient, **lit}.items()}
+    inputs = [*names, "light_direction"] if direction else names
+    ambient, lit = dependence(terms_of, *values, *([points.to_light] if direction else []))
+    reached = {n: {inputs[i] for i in d} for n, d in {**ambient, **lit}.items()}
     return reached, tuple(lit)
 
 
@@ -270,7 +292,7 @@ def fit_model(cls: type[AbstractShadingModel]) -> FitModel:
         plateau = Plateau(gain=gain, exponent=exponent, scan=tuple(np.log(p) for p in SHININESS_SCAN))
 
     def image(terms, params):
-        return _image_of(all_gains, terms, params, gain_images(terms, params))
+        return image_of(all_gains, terms, params, gain_images(terms, params))
 
     def images(terms, params):
         found = gain_images(terms, params)
@@ -296,4 +318,4 @@ def target_image(terms: TargetTerms, params, plain: bool = False) -> jax.Array:
     instead of the one-pass derivative rule; the tests compare the two)."""
     images = gain_images_plain(terms, params) if plain else gain_images(terms, params)
     names = tuple(images)
-    return _image_of(names, terms, params, images)
+    return image_of(names, terms, params, images)

@@ -7,6 +7,7 @@ import equinox as eqx
 import jax
 import numpy as np
 
+from ._lit import RelativeTransform
 from ._model import FitModel
 from ._problem import residuals_at
 from ._solvers import NULL_RATIO
@@ -54,14 +55,17 @@ def standard_errors(model: FitModel, data, fitted, names, scalar):
     Parameters with weight in a direction the data do not determine (`covariance`: one unit
     along it, an e-fold of an exponent or κ or a unit of gain, moves the residuals by under
     1e-6 RMS, or it is numerically singular) get no error. An RGB parameter's error is an
-    array of 3, a grey value's or a scalar's a float."""
+    array of 3, a grey value's or a scalar's a float. The light's direction has one error,
+    an angle in radians: J is taken in its tangent plane at the fitted direction
+    (`_lit.PLANE`), where (a, b) are the angles along e₁, e₂ to first order, and the error
+    is √(σ_a² + σ_b²), the RMS angle between the fitted direction and the truth."""
     space = error_space(model.transforms)
     flat = to_flat(fitted, names, scalar, space)
     cov = covariance(*error_jacobian(flat, fitted, model, data, tuple(names), tuple(scalar)))
     if cov is None:
         return {name: None for name in names}, tuple(names)
     var_u, in_null = cov
-    u = unflatten(flat, names, model.colours, scalar)
+    u = unflatten(flat, names, model.colours, scalar, space)
     std: dict[str, np.ndarray | float | None] = {}
     undetermined: list[str] = []
     i = 0
@@ -71,6 +75,9 @@ def standard_errors(model: FitModel, data, fitted, names, scalar):
         if in_null[sl].any():
             std[name] = None
             undetermined.append(name)
+            continue
+        if isinstance(space[name], RelativeTransform):
+            std[name] = float(np.sqrt(np.sum(np.maximum(var_u[sl], 0.0))))
             continue
         dxdu = np.asarray(jax.vmap(jax.grad(space[name].forward))(u[name]))
         se = np.abs(dxdu) * np.sqrt(np.maximum(var_u[sl], 0.0))

@@ -8,7 +8,7 @@ import jax
 import jax.numpy as jnp
 
 from ._nnls import nnls
-from ._space import with_values
+from ._space import value, with_values
 
 __all__ = ["design", "unpack_linear", "project"]
 
@@ -21,7 +21,7 @@ def design(data, fixed, images, params, linear, scalar):
     columns = []
     for name, image in images:
         if name not in linear:
-            fixed = fixed + getattr(params, name)[None, :] * image
+            fixed = fixed + value(params, name)[None, :] * image
         elif name in scalar:
             columns.append(image)
         else:

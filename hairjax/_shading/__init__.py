@@ -3,7 +3,8 @@
 Importing this package registers the built-in models: `KajiyaKay` (kim-2003's cone),
 `KajiyaKayMirror` (the mirror cone), `KajiyaKayLookup` (wenzel-2002's table) and
 `Scheuermann` (scheuermann-2004's two shifted highlights). Streaks (wenzel-2002) are a
-modifier of any model, `Scene.streaks`.
+modifier of any model, `Scene.streaks`. `LightParams`: the light's direction and colour as
+inputs of the shading stage.
 """
 
 from ._kajiya_kay import KajiyaKay as KajiyaKay
@@ -12,6 +13,7 @@ from ._kajiya_kay import kajiya_kay as kajiya_kay
 from ._kajiya_kay import kajiya_kay_terms as kajiya_kay_terms
 from ._kajiya_kay import seed_cone as seed_cone
 from ._kajiya_kay import specular_power as specular_power
+from ._light import LightParams as LightParams
 from ._lookup import KajiyaKayLookup as KajiyaKayLookup
 from ._mirror import KajiyaKayMirror as KajiyaKayMirror
 from ._mirror import mirror_cone as mirror_cone

@@ -6,6 +6,11 @@ and the image they composite to (docs/model.md §6, §8, §13).
 with the model's `Reflectance` terms, τ = exp(−κΩ) (§7) and V the occluder's visibility
 (§13). Nothing here depends on which model shades: the model object in the geometry
 (`Geometry.shading`) supplies its terms.
+
+Every function takes an optional `light` (`LightParams`, `_light.py`): its direction and
+colour replace the geometry's L, light colour and the occluder's Lambert term, and the
+image is differentiable in them; Ω and V stay those of the scene's light (docs/model.md §3).
+With `light=None` everything is the geometry's, as computed by the geometry stage.
 """
 
 from __future__ import annotations
@@ -17,6 +22,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from .._composite import composite
+from ._light import LightParams, light_rgb, lit_to_light, occluder_direct
 from ._model import Reflectance, ShadingPoints
 from ._transmittance import transmittance
 
@@ -26,25 +32,27 @@ if TYPE_CHECKING:
 __all__ = ["shading_points", "light_factor", "combine", "point_colors", "occluder_colors", "shading_stage"]
 
 
-def shading_points(geometry: Geometry) -> ShadingPoints:
-    """The per-point inputs every model reads, from the geometry stage."""
+def shading_points(geometry: Geometry, light: LightParams | None = None) -> ShadingPoints:
+    """The per-point inputs every model reads, from the geometry stage (L from `light`'s
+    direction where it has one)."""
     return ShadingPoints(
         tangent=geometry.tangent,
-        to_light=geometry.to_light,
+        to_light=lit_to_light(geometry, light),
         to_eye=geometry.to_eye,
         base_color=geometry.base_color,
         extra=geometry.shading_inputs,
     )
 
 
-def light_factor(geometry: Geometry, kappa) -> Float[Array, "P 3"]:
-    """light · τ · V per point: what the lit terms are multiplied by (§7, §13)."""
-    light = jnp.broadcast_to(geometry.light_rgb[None, :], geometry.tangent.shape)
+def light_factor(geometry: Geometry, kappa, light: LightParams | None = None) -> Float[Array, "P 3"]:
+    """light · τ · V per point: what the lit terms are multiplied by (§7, §13); the light's
+    colour is `light`'s where it has one."""
+    factor = jnp.broadcast_to(light_rgb(geometry, light)[None, :], geometry.tangent.shape)
     if geometry.omega is not None:
-        light = light * transmittance(kappa, geometry.omega)[:, None]
+        factor = factor * transmittance(kappa, geometry.omega)[:, None]
     if geometry.light_visibility is not None:
-        light = light * geometry.light_visibility[:, None]
-    return light
+        factor = factor * geometry.light_visibility[:, None]
+    return factor
 
 
 def combine(reflectance: Reflectance, params, light: Float[Array, "P 3"]) -> Float[Array, "P 3"]:
@@ -56,26 +64,30 @@ def combine(reflectance: Reflectance, params, light: Float[Array, "P 3"]) -> Flo
     return weighted(reflectance.ambient) + light * weighted(reflectance.lit)
 
 
-def point_colors(geometry: Geometry, params) -> Float[Array, "P 3"]:
+def point_colors(geometry: Geometry, params, light: LightParams | None = None) -> Float[Array, "P 3"]:
     """Shaded colour at every strand point (Gouraud, kim-2003 §5): the model's reflectance
-    lit by `light_factor`, times the streak factor (§16) where the scene has streaks."""
+    lit by `light_factor`, times the streak factor (§16) where the scene has streaks.
+    `light`: the light's direction and colour instead of the geometry's (module docstring)."""
     model = geometry.shading
     if not isinstance(params, model.params_type):
         raise TypeError(
             f"shading model {model.name!r} takes {model.params_type.__name__}, got {type(params).__name__}"
         )
     colors = combine(
-        model.reflectance(shading_points(geometry), params), params, light_factor(geometry, params.kappa)
+        model.reflectance(shading_points(geometry, light), params),
+        params,
+        light_factor(geometry, params.kappa, light),
     )
     if geometry.streak is not None:  # §16: the streak texture modulates the whole colour
         colors = colors * geometry.streak[:, None]
     return colors
 
 
-def occluder_colors(geometry: Geometry, params) -> Float[Array, "Q 3"]:
+def occluder_colors(geometry: Geometry, params, light: LightParams | None = None) -> Float[Array, "Q 3"]:
     """The occluder's colour at the pixels it covers (docs/model.md §13):
-    k·ambient + τ·k·light·max(N·L, 0)·V, τ = exp(−κΩ) at its surface point."""
-    direct, color = geometry.occluder_direct, geometry.occluder_color
+    k·ambient + τ·k·light·max(N·L, 0)·V, τ = exp(−κΩ) at its surface point. `light`: its
+    colour instead of the geometry's (a direction is refused: `occluder_direct`)."""
+    direct, color = occluder_direct(geometry, light), geometry.occluder_color
     if direct is None or color is None:
         raise ValueError("occluder_colors: the geometry has no occluder")
     if geometry.occluder_omega is not None:
@@ -86,14 +98,23 @@ def occluder_colors(geometry: Geometry, params) -> Float[Array, "Q 3"]:
 
 
 @eqx.filter_jit
-def shading_stage(geometry: Geometry, params) -> Float[Array, "H W 4"]:
+def shading_stage(geometry: Geometry, params, light: LightParams | None = None) -> Float[Array, "H W 4"]:
     """The image from the geometry stage and the shading parameters (`[H, W, 4]`):
     the composite of the point colours over the backdrop (the occluder's colour where it
-    covers the pixel), alpha from the geometry stage."""
-    rgb = composite(geometry, point_colors(geometry, params))
+    covers the pixel), alpha from the geometry stage.
+
+    **Arguments:** `geometry` (`geometry_stage(scene)`); `params`, the shading model's
+    parameters; `light` (`LightParams`, optional): the light's direction and colour instead
+    of the scene's, differentiable. A direction makes the light directional, L the same at
+    every point: give one only for a scene with a directional light (the geometry does not
+    record the light's kind; `LightParams.from_light` gives a point light's colour alone),
+    and not for one with an occluder (ValueError). Ω and V stay the scene light's
+    (docs/model.md §3). `light=None`: the scene's light, exactly as without the argument.
+    """
+    rgb = composite(geometry, point_colors(geometry, params, light))
     backdrop = geometry.backdrop
     if geometry.occluder_pixel is not None:
-        backdrop = backdrop.at[geometry.occluder_pixel].set(occluder_colors(geometry, params))
+        backdrop = backdrop.at[geometry.occluder_pixel].set(occluder_colors(geometry, params, light))
     rgb = rgb + geometry.transmittance[:, None] * backdrop
     image = jnp.concatenate([rgb, geometry.alpha_channel[:, None]], axis=1)
     return image.reshape(geometry.height, geometry.width, 4)

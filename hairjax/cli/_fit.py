@@ -27,6 +27,8 @@ def _outputs(args: argparse.Namespace) -> list[Output]:
 
 
 def _table(result, names, fittable) -> str:
+    """The model's parameters, then the light's where fitted (light_direction's error is an
+    angle in radians, docs/fitting.md)."""
     import numpy as np
 
     def fmt(v):
@@ -34,10 +36,10 @@ def _table(result, names, fittable) -> str:
 
     header = ("parameter", "initial", "fitted", "std. error")
     rows = []
-    for name in fittable:
+    for name in (*fittable, *(n for n in names if n not in fittable)):
         se = result.std_error.get(name)
         se_text = "undetermined" if name in result.undetermined else "fixed" if name not in names else fmt(se)
-        rows.append((name, fmt(getattr(result.initial, name)), fmt(getattr(result.params, name)), se_text))
+        rows.append((name, fmt(result.get(name, initial=True)), fmt(result.get(name)), se_text))
     widths = [max(len(r[i]) for r in [header, *rows]) for i in range(4)]
     return "\n".join("  ".join(c.ljust(w) for c, w in zip(row, widths)) for row in [header, *rows])
 
@@ -45,7 +47,7 @@ def _table(result, names, fittable) -> str:
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from .._fit import FitError, fit
+    from .._fit import LIGHT_NAMES, FitError, fit
     from .._io._image import read_image
     from .._progress import reporter
     from ._scenes import load_cli_scene
@@ -62,13 +64,14 @@ def run(args: argparse.Namespace) -> int:
     first = load_cli_scene(args, args.scene)
     extra = [load_cli_scene(args, s) for s in args.scenes]
     scenes = [first, *extra, *[first] * (len(targets) - 1 - len(extra))]
-    # Each shading model has its parameters (docs/model.md §17 for Scheuermann's).
+    # Each shading model has its parameters (docs/model.md §17 for Scheuermann's); any model
+    # also fits the light's (docs/fitting.md, "Fitting the light"), when named.
     fittable = first.shading.fittable
     names = fittable if args.fit is None else tuple(n.strip() for n in args.fit.split(",") if n.strip())
-    unknown = [n for n in names if n not in fittable]
+    unknown = [n for n in names if n not in fittable + LIGHT_NAMES]
     if unknown or not names:
         what = f"unknown parameter {unknown[0]!r}" if unknown else "no parameter"
-        raise FitError(f"{what} in --fit; fittable: {', '.join(fittable)}")
+        raise FitError(f"{what} in --fit; fittable: {', '.join(fittable + LIGHT_NAMES)}")
 
     if not args.quiet:
         print(f"fitting {', '.join(names)} with {args.solver} to {len(targets)} target(s)", file=sys.stderr)
@@ -89,9 +92,15 @@ def run(args: argparse.Namespace) -> int:
 
     fitted_image = None
     if args.out is not None or args.plot is not None:
-        from .._render import render
+        if result.light is None:
+            from .._render import render
 
-        fitted_image = np.asarray(render(first, result.params))
+            fitted_image = np.asarray(render(first, result.params))
+        else:  # at the fitted light (its Ω and V the scene's, as in the fit)
+            from .._geometry._stage import geometry_stage
+            from .._shading import shading_stage
+
+            fitted_image = np.asarray(shading_stage(geometry_stage(first), result.params, result.light))
     with written_together([o.path for o in outputs]) as temps:
         for out, tmp in zip(outputs, temps):
             if out.option == "--json":

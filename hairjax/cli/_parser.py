@@ -182,7 +182,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--fit",
         help="comma list of the parameters to fit "
-        "(default: all the model's fittable ones, e.g. kd,ks,shininess,kappa)",
+        "(default: all the model's fittable ones, e.g. kd,ks,shininess,kappa; "
+        "also light_direction, light_color: docs/fitting.md)",
     )
     p.add_argument(
         "--solver", default="lm", choices=SOLVER_NAMES, help="least-squares solver (lm, gn: short names)"

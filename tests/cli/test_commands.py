@@ -164,6 +164,37 @@ def test_fit_that_stops_without_converging_exits_3(scene_file, tmp_path, monkeyp
     assert main(argv) == 0
 
 
+def test_fit_takes_the_light_names(scene_file, tmp_path, monkeypatch, capsys):
+    """--fit accepts light_direction and light_color beside the model's names and passes
+    them on; the table and the JSON report the light (the fit is replaced by its result,
+    as above: no compilation)."""
+    import json
+
+    from hairjax._fit import FitResult
+
+    params = hj.load_scene(scene_file).params
+    fitted = hj.LightParams(direction=(0.1, -0.9, -0.4), color=(1.0, 0.8, 0.6))
+    errors = {"light_direction": 1e-3, "light_color": np.full(3, 1e-3), "ks": np.full(3, 1e-3)}
+    names = ("light_direction", "light_color", "ks")
+    fields = dict(params=params, initial=params, fitted=names, loss=[1.0, 0.5], steps=1, time_s=0.1)
+    fields |= dict(geometry_s=0.1, std_error=errors, undetermined=(), rmse=0.5, termination="converged")
+    result = FitResult(
+        **fields, light=fitted, initial_light=hj.LightParams(direction=(-1, -1, -1), color=1.0)
+    )
+    calls = []
+    monkeypatch.setattr("hairjax._fit.fit", lambda *args, **kwargs: calls.append(kwargs) or result)
+    target, report = tmp_path / "t.exr", tmp_path / "fit.json"
+    hj.write_image(target, np.zeros((30, 40, 4)))
+    argv = ["fit", str(scene_file), "--target", str(target), "--json", str(report), "-q"]
+    assert main([*argv, "--fit", ",".join(names)]) == 0
+    assert calls[0]["fit"] == names
+    rows = {line.split()[0]: line for line in capsys.readouterr().out.splitlines() if line}
+    assert "0.8" in rows["light_color"] and "-0.9" in rows["light_direction"] and "fixed" in rows["kd"]
+    assert json.loads(report.read_text())["light"]["color"] == [1.0, 0.8, 0.6]
+    assert main([*argv, "--fit", "light_gloss"]) == 2
+    assert "light_direction, light_color" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize(
     "args, message",
     [
