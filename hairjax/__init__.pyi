@@ -40,7 +40,6 @@ from ._io._image import read_image as read_image
 from ._io._image import write_image as write_image
 from ._render import render as render
 from ._render import render_profiled as render_profiled
-from ._views import render_views as render_views
 from ._scene._camera import Camera as Camera
 from ._scene._file import default_scene_path as default_scene_path
 from ._scene._file import load_scene as load_scene
@@ -78,5 +77,6 @@ from ._shading._transforms import LOG as LOG
 from ._shading._transforms import SOFTPLUS as SOFTPLUS
 from ._shading._transforms import Transform as Transform
 from ._supersample import supersample as supersample
+from ._views import render_views as render_views
 
 __version__: str

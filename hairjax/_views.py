@@ -92,8 +92,12 @@ def stack_geometries(geometries: Sequence[Geometry]) -> Geometry:
         out = []
         for g in padded:
             present = [k for k in _OCCLUDER_FIELDS if getattr(g, k) is not None]
-            values = [_pad(getattr(g, k), q, hw if k == "occluder_pixel" else 0) for k in present]
-            out.append(eqx.tree_at(lambda g, ks=present: tuple(getattr(g, k) for k in ks), g, tuple(values)))
+            grown = tuple(_pad(getattr(g, k), q, hw if k == "occluder_pixel" else 0) for k in present)
+
+            def fields(g: Geometry, ks: list[str] = present) -> tuple:
+                return tuple(getattr(g, k) for k in ks)
+
+            out.append(eqx.tree_at(fields, g, grown))
         padded = out
     return jax.tree.map(lambda *xs: jnp.stack(xs), *padded)
 
@@ -133,7 +137,8 @@ def render_views(
     d = mesh.devices.size
     padded = -(-v // d) * d
     if padded != v:  # fires when V is not a multiple of the device count: repeat the last view
-        geometry = jax.tree.map(lambda x: jnp.concatenate([x, jnp.repeat(x[-1:], padded - v, axis=0)]), geometry)
+        extra = padded - v
+        geometry = jax.tree.map(lambda x: jnp.concatenate([x, jnp.repeat(x[-1:], extra, axis=0)]), geometry)
     sharding = NamedSharding(mesh, PartitionSpec("views"))
     geometry = jax.tree.map(lambda x: jax.device_put(x, sharding), geometry)
     image = _shade_views(geometry, params)
