@@ -78,5 +78,8 @@ from ._shading._transforms import SOFTPLUS as SOFTPLUS
 from ._shading._transforms import Transform as Transform
 from ._supersample import supersample as supersample
 from ._views import render_views as render_views
+from ._views import shade_views as shade_views
+from ._views import stack_geometries as stack_geometries
+from ._views import view_scenes as view_scenes
 
 __version__: str

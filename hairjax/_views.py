@@ -4,7 +4,7 @@ every available device (docs/model.md §6, docs/architecture.md "Batched views")
 
 Each view's geometry stage is the scene's own (`geometry_stage`, cached per view's scene).
 Their fragment and occluder arrays differ in length, so each is padded to the longest
-(power-of-two buckets, `bucket`): a padded fragment has weight 0 and pixel H·W,
+(to a multiple of 2^16 entries, `bucket`): a padded fragment has weight 0 and pixel H·W,
 which the composite's scatter drops; a padded occluder pixel is H·W, which the backdrop's
 scatter drops. The stacked `Geometry` then goes through the one shading stage under
 `vmap`, and its view axis is laid out over a one-axis device mesh (`NamedSharding`), so
@@ -28,7 +28,7 @@ from ._scene._light import Light
 from ._scene._scene import Scene
 from ._shading import shading_stage
 
-__all__ = ["render_views", "view_scenes", "stack_geometries", "view_mesh", "bucket"]
+__all__ = ["render_views", "view_scenes", "stack_geometries", "shade_views", "view_mesh", "bucket"]
 
 # Per-fragment fields, padded with (value): a padded fragment adds nothing to any pixel.
 _FRAGMENT_FIELDS = ("frag_pixel", "frag_i0", "frag_t", "frag_weight", "frag_alpha")
@@ -63,9 +63,15 @@ def view_scenes(
     return [scene.replace(camera=c, light=lt) for c, lt in zip(cams, lits)]
 
 
+# Padded lengths are multiples of this many entries: batches whose longest view differs by
+# less share a compilation, and at most this many empty fragments are composited.
+PAD_MULTIPLE = 1 << 16
+
+
 def bucket(n: int) -> int:
-    """`n` rounded up to a power of two: the padded length of a batch's arrays."""
-    return 1 << max(int(n) - 1, 0).bit_length()
+    """`n` rounded up to a multiple of `PAD_MULTIPLE` (at least one): the padded length
+    of a batch's arrays."""
+    return max(1, -(-int(n) // PAD_MULTIPLE)) * PAD_MULTIPLE
 
 
 def _pad(x, n: int, value):
@@ -77,7 +83,7 @@ def _pad(x, n: int, value):
 
 def stack_geometries(geometries: Sequence[Geometry]) -> Geometry:
     """One `Geometry` with a leading view axis: fragment and occluder arrays padded to the
-    longest of the views (a power-of-two bucket, so that batches compile rarely)."""
+    longest of the views (rounded up by `bucket`, so that batches compile rarely)."""
     first = geometries[0]
     hw = first.height * first.width
     f = bucket(max(int(g.frag_pixel.shape[0]) for g in geometries))
@@ -108,7 +114,8 @@ def view_mesh(devices=None) -> Mesh:
 
 
 @eqx.filter_jit
-def _shade_views(geometry: Geometry, params) -> Float[Array, "V H W 4"]:
+def shade_views(geometry: Geometry, params) -> Float[Array, "V H W 4"]:
+    """The shading stage of stacked geometries (`stack_geometries`), one compilation for all."""
     return jax.vmap(lambda g: shading_stage(g, params))(geometry)
 
 
@@ -141,5 +148,5 @@ def render_views(
         geometry = jax.tree.map(lambda x: jnp.concatenate([x, jnp.repeat(x[-1:], extra, axis=0)]), geometry)
     sharding = NamedSharding(mesh, PartitionSpec("views"))
     geometry = jax.tree.map(lambda x: jax.device_put(x, sharding), geometry)
-    image = _shade_views(geometry, params)
+    image = shade_views(geometry, params)
     return image[:v] if padded != v else image

@@ -1,0 +1,15 @@
+"""experiments/12_views_batch.py runs end to end (BENCHMARKS.md "Batched views")."""
+
+from __future__ import annotations
+
+import re
+
+from helpers import load_experiment
+
+
+def test_views_batch_runs(capsys):
+    assert load_experiment("12_views_batch").main(["--size", "24", "--views", "2", "--repeats", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "2 views of 24²" in out
+    times = [float(t) for t in re.findall(r": +([0-9.]+) ms", out)]
+    assert len(times) == 2 and all(t > 0 for t in times)
