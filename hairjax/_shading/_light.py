@@ -19,7 +19,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from .._errors import SceneError
-from .._vectors import safe_norm
+from .._vectors import safe_normalize
 from ._model import RGBLike  # an array, a number or 3 numbers
 
 if TYPE_CHECKING:
@@ -72,10 +72,9 @@ class LightParams(eqx.Module):
 
 def directional_to_light(direction: Float[Array, " 3"]) -> Float[Array, " 3"]:
     """L = −direction/‖direction‖, the unit vector towards a directional light (§3)."""
-    norm = safe_norm(direction)
-    # Fires only for a direction of length ≤ SAFE_NORM_EPS (`safe_norm` gives 0 there;
-    # refused at construction, and a fit's direction has length ≥ 1): L = 0, no light.
-    return -direction / jnp.where(norm > 0, norm, 1.0)
+    # safe_normalize's guard fires only for a direction of length ≤ SAFE_NORM_EPS (refused
+    # at construction, and a fit's direction has length ≥ 1): L = 0, no light.
+    return -safe_normalize(direction)
 
 
 def lit_to_light(geometry: Geometry, light: LightParams | None) -> Float[Array, "P 3"]:
