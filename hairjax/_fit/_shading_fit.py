@@ -188,8 +188,7 @@ def fixed_image(terms: TargetTerms, params, light: LightParams | None = None) ->
 
 def image_of(model_gains, terms: TargetTerms, params, images, light: LightParams | None = None) -> jax.Array:
     """fixed_image + Σ_g g ⊙ images[g] over `model_gains`."""
-    # (Without a light, called exactly as before the light was an input.)
-    out = fixed_image(terms, params) if light is None else fixed_image(terms, params, light)
+    out = fixed_image(terms, params, light)
     for n in model_gains:
         out = out + getattr(params, n)[None, :] * images[n]
     return out

@@ -359,8 +359,8 @@ def _overflow_beyond_kappa_5(monkeypatch, scene):
     from 4 towards a target rendered at κ = 40: (target, start)."""
     original = _shading_fit.fixed_image
 
-    def overflowing(terms, params):
-        return jnp.where(params.kappa > 5.0, jnp.inf, original(terms, params))
+    def overflowing(terms, params, light=None):
+        return jnp.where(params.kappa > 5.0, jnp.inf, original(terms, params, light))
 
     monkeypatch.setattr(_shading_fit, "fixed_image", overflowing)
     start = hj.ShadingParams(
