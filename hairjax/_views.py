@@ -2,7 +2,8 @@
 rendered as one `[V, H, W, 4]` array, with one compilation for all of them, sharded over
 every available device (docs/model.md §6, docs/architecture.md "Batched views").
 
-Each view's geometry stage is the scene's own (`geometry_stage`, cached per view's scene).
+Each view's geometry stage is its own (`geometry_stage` of the scene with that view's
+camera and light, a new scene object per call, so computed afresh each call).
 Their fragment and occluder arrays differ in length, so each is padded to the longest
 (to a multiple of 2^16 entries, `bucket`): a padded fragment has weight 0 and pixel H·W,
 which the composite's scatter drops; a padded occluder pixel is H·W, which the backdrop's
@@ -30,10 +31,16 @@ from ._shading import shading_stage
 
 __all__ = ["render_views", "view_scenes", "stack_geometries", "shade_views", "view_mesh", "bucket"]
 
-# Per-fragment fields, padded with (value): a padded fragment adds nothing to any pixel.
-_FRAGMENT_FIELDS = ("frag_pixel", "frag_i0", "frag_t", "frag_weight", "frag_alpha")
-# Per occluder pixel fields (Q), padded with 0 (the pixel index with H·W, dropped).
-_OCCLUDER_FIELDS = ("occluder_pixel", "occluder_direct", "occluder_omega", "occluder_visibility")
+# The per-fragment fields and what pads them: a padded fragment adds nothing to any pixel.
+_FRAGMENT_FILL = {"frag_pixel": None, "frag_i0": 0, "frag_t": 0.0, "frag_weight": 0.0, "frag_alpha": 0.0}
+# The per-occluder-pixel fields (Q) and what pads them: a padded pixel is dropped.
+_OCCLUDER_FILL = {
+    "occluder_pixel": None,
+    "occluder_direct": 0.0,
+    "occluder_omega": 0.0,
+    "occluder_visibility": 0.0,
+}
+# (None: the pixel index H·W, past every pixel, which the composite's scatters drop.)
 
 
 def view_scenes(
@@ -81,30 +88,22 @@ def _pad(x, n: int, value):
     return jnp.concatenate([x, fill])
 
 
+def _padded(g: Geometry, fill: dict, n: int) -> Geometry:
+    """`g` with the fields of `fill` present in it grown to `n` entries."""
+    hw = g.height * g.width
+    names = [k for k in fill if getattr(g, k) is not None]
+    grown = tuple(_pad(getattr(g, k), n, hw if fill[k] is None else fill[k]) for k in names)
+    return eqx.tree_at(lambda g: tuple(getattr(g, k) for k in names), g, grown)
+
+
 def stack_geometries(geometries: Sequence[Geometry]) -> Geometry:
     """One `Geometry` with a leading view axis: fragment and occluder arrays padded to the
     longest of the views (rounded up by `bucket`, so that batches compile rarely)."""
-    first = geometries[0]
-    hw = first.height * first.width
     f = bucket(max(int(g.frag_pixel.shape[0]) for g in geometries))
-    padded = []
-    for g in geometries:
-        values = {"frag_pixel": hw, "frag_i0": 0, "frag_t": 0.0, "frag_weight": 0.0, "frag_alpha": 0.0}
-        changes = [_pad(getattr(g, k), f, v) for k, v in values.items()]
-        g = eqx.tree_at(lambda g: tuple(getattr(g, k) for k in _FRAGMENT_FIELDS), g, tuple(changes))
-        padded.append(g)
-    if first.occluder_pixel is not None:
-        q = bucket(max(int(g.occluder_pixel.shape[0]) for g in padded))
-        out = []
-        for g in padded:
-            present = [k for k in _OCCLUDER_FIELDS if getattr(g, k) is not None]
-            grown = tuple(_pad(getattr(g, k), q, hw if k == "occluder_pixel" else 0) for k in present)
-
-            def fields(g: Geometry, ks: list[str] = present) -> tuple:
-                return tuple(getattr(g, k) for k in ks)
-
-            out.append(eqx.tree_at(fields, g, grown))
-        padded = out
+    padded = [_padded(g, _FRAGMENT_FILL, f) for g in geometries]
+    if geometries[0].occluder_pixel is not None:
+        q = bucket(max(np.shape(g.occluder_pixel)[0] for g in geometries if g.occluder_pixel is not None))
+        padded = [_padded(g, _OCCLUDER_FILL, q) for g in padded]
     return jax.tree.map(lambda *xs: jnp.stack(xs), *padded)
 
 
@@ -133,8 +132,10 @@ def render_views(
 
     One compilation of the shading stage serves all V views; the view axis is sharded
     over `devices` (default every device, `jax.devices()`), so with D devices each holds
-    V/D views (V is padded to a multiple of D). Differentiable in `params` (default the scene's), like
-    `render`. Each view's geometry stage runs once and is cached with its scene.
+    V/D views (V is padded to a multiple of D). Differentiable in `params` (default the
+    scene's), like `render`. Each call runs every view's geometry stage; to shade many
+    parameters, keep `stack_geometries([geometry_stage(s) for s in view_scenes(...)])` and
+    call `shade_views` on it.
     """
     params = scene.params if params is None else params
     scenes = view_scenes(scene, cameras, lights)
