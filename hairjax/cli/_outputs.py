@@ -3,7 +3,8 @@
 Every path a command will write is declared up front as an `Output` (a file with the
 extensions it may have, or a folder) and checked by `check_outputs` before anything is
 loaded or rendered: the extension, that the target is not a directory (or, for a folder,
-not a file), that the nearest existing ancestor is a directory we may write into. A
+not a file), that the nearest existing ancestor is a directory a file can be created in
+(tried, and removed). A
 failure is a `BadOutput`, one line naming the path. `written_together` then writes a
 command's files so that either all of them appear under their names or none does.
 """
@@ -13,6 +14,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import os
+import tempfile
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
@@ -48,7 +50,8 @@ def _nearest_existing(path: Path) -> Path:
 
 
 def check_output(out: Output) -> None:
-    """Raise `BadOutput` if `out` cannot be written; create nothing."""
+    """Raise `BadOutput` if `out` cannot be written; leave nothing behind (the folder's
+    writability is probed with a file that is removed at once)."""
     path = out.path
     where = f"{path} ({out.option})"
     if out.is_folder:
@@ -69,8 +72,19 @@ def check_output(out: Output) -> None:
             raise BadOutput(f"{where}: {existing} is not a directory")
     elif not existing.is_dir():
         raise BadOutput(f"{where}: {existing} is a file, so the folder cannot be created")
-    if not os.access(existing, os.W_OK | os.X_OK):
-        raise BadOutput(f"{where}: {existing} is not writable")
+    _probe(existing, where)
+
+
+def _probe(folder: Path, where: str) -> None:
+    """Create and remove an empty file in `folder`: the one test of writability that holds
+    for root and for file systems whose permission bits say yes and whose writes fail
+    (`os.access` passes /proc, a read-only mount's folder for some users, …)."""
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".hairjax-probe-", dir=folder)
+    except OSError as err:
+        raise BadOutput(f"{where}: {folder} is not writable ({err.strerror or err})") from None
+    os.close(fd)
+    os.unlink(probe)
 
 
 def check_outputs(outputs: Sequence[Output]) -> None:

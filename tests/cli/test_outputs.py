@@ -104,6 +104,17 @@ def test_bad_output_fails_before_the_work(command, case, tmp_path, monkeypatch, 
         assert sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*")) == listing  # nothing written
 
 
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="needs Linux's /proc")
+def test_a_folder_that_refuses_files_is_refused_before_the_work(tmp_path):
+    """/proc passes `os.access(W_OK)` for root, but no file can be created there: the probe
+    finds that before the work, and names the path (it used to fail after a whole fit, naming
+    a temporary file)."""
+    with pytest.raises(BadOutput, match=r"^/proc/x\.json \(--json\): /proc is not writable"):
+        check_output(Output(Path("/proc/x.json"), (".json",), "--json"))
+    check_output(Output(tmp_path / "x.json", (".json",), "--json"))
+    assert list(tmp_path.iterdir()) == []  # the probe leaves nothing
+
+
 def test_check_output_accepts_a_new_nested_path(tmp_path):
     check_output(Output(tmp_path / "a" / "b" / "c.exr", (".exr",), "-o"))  # created at write time
     check_output(Output(tmp_path / "new" / "folder", (), "--out"))
