@@ -41,16 +41,16 @@ def check_supported(scene: Scene) -> None:
     """`SceneError` naming the first feature of `scene` that the reference cannot show."""
     if scene.patches is not None:
         raise SceneError(
-            f"{scene.name}: hair.geometry = 'patches' (polygon cards with an alpha texture, "
+            f"scene {scene.name!r}: hair.geometry = 'patches' (polygon cards with an alpha texture, "
             "docs/model.md §18) has no fibre counterpart; the reference needs geometry = 'strands'"
         )
     if scene.streaks is not None:
         raise SceneError(
-            f"{scene.name}: [streaks] (wenzel-2002's streak texture, docs/model.md §16) has no "
+            f"scene {scene.name!r}: [streaks] (wenzel-2002's streak texture, docs/model.md §16) has no "
             "counterpart on a fibre; remove [streaks] to render the reference"
         )
     if scene.camera.offset != (0.0, 0.0):
         raise SceneError(
-            f"{scene.name}: camera.offset {scene.camera.offset} (a sub-pixel shift for supersampling, "
+            f"scene {scene.name!r}: camera.offset {scene.camera.offset} (a sub-pixel shift for supersampling, "
             "docs/model.md §12) is not taken: the reference samples the whole pixel; use offset (0, 0)"
         )
