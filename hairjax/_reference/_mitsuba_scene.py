@@ -5,7 +5,8 @@ Each part maps to its Mitsuba counterpart (docs/reference.md, "The mapping"):
 - camera (docs/model.md §2): `perspective` with `look_at(eye, target, up)`, `fov` on the
   vertical axis (`fov_axis = "y"`; Mitsuba's default is x), `near_clip` = camera.near; an
   `hdrfilm` of W × H pixels, pixel (i, j) covering [i, i + 1) × [j, j + 1), row 0 at the top,
-  with a box filter (the pixel box of §5's coverage), RGBA so that alpha is coverage;
+  with a box filter (the pixel box of §5's coverage), RGBA so that alpha is coverage, and
+  stratified samples (`multijitter`);
 - light (§3): hairjax's light colour is the radiance a white Lambertian surface facing the
   light reflects (§9: an occluder of colour k shows k·light·max(N·L, 0)), and a Lambertian
   BRDF is k/π, so the directional emitter's irradiance is π·colour; `direction` is the way
@@ -31,11 +32,21 @@ from .._scene._framing import bounding_sphere
 from .._scene._reference import ReferenceSettings
 from .._scene._scene import Scene
 
-__all__ = ["mitsuba_scene", "light_emitter", "hair_bsdf", "obj_text", "FAR_FACTOR"]
+__all__ = ["mitsuba_scene", "light_emitter", "hair_bsdf", "obj_text", "sample_count", "FAR_FACTOR"]
 
 # The far clipping plane sits this many times beyond the farthest point of the scene
 # (strands, occluder), so that nothing the camera sees is clipped, whatever the units.
 FAR_FACTOR = 10.0
+
+
+def sample_count(spp: int) -> int:
+    """The samples per pixel Mitsuba's `multijitter` sampler takes for `spp`: a grid of
+    ⌊√spp⌋ rows and as many columns as cover spp (16, 48, 64, 256 stay; 32 becomes 35). The
+    grid stratifies the samples over the pixel, so a fibre's coverage is far less noisy than
+    with independent samples (measured: a 1-pixel fibre's IoU with its ribbon 0.89–0.90 at
+    16 spp, against 0.81–0.86)."""
+    rows = math.isqrt(spp)
+    return rows * -(-spp // rows)
 
 
 def _floats(value) -> list[float]:
@@ -126,7 +137,7 @@ def mitsuba_scene(
                 "pixel_format": "rgba",
                 "rfilter": {"type": "box"},
             },
-            "sampler": {"type": "independent", "sample_count": spp},
+            "sampler": {"type": "multijitter", "sample_count": sample_count(spp)},
         },
         "light": light_emitter(scene),
     }

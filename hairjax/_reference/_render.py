@@ -13,7 +13,7 @@ import numpy as np
 from .._scene._reference import ReferenceSettings
 from .._scene._scene import Scene
 from ._fibres import curve_file_text, fibre_curves
-from ._mitsuba_scene import mitsuba_scene, obj_text
+from ._mitsuba_scene import mitsuba_scene, obj_text, sample_count
 from ._support import MITSUBA_VARIANT, check_supported, import_mitsuba
 
 __all__ = ["reference_image", "MAX_SEED"]
@@ -46,7 +46,8 @@ def reference_image(scene: Scene, *, spp: int | None = None, seed: int = 0) -> n
       widths become fibres w·D/f world units thick at depth D, as wide on screen as their
       ribbons (`_fibres.py`). The shading model, strand opacity and colour, shadow method
       and ordering are the real-time renderer's and are not read.
-    - `spp`: samples per pixel (default: `scene.reference.spp`).
+    - `spp`: samples per pixel (default: `scene.reference.spp`), rounded up to the
+      stratified sampler's grid (`sample_count`: 16, 48, 64, 256 stay, 32 becomes 35).
     - `seed`: the sampler's seed, in [0, 2³² − 1]: the same seed and spp give the same image.
 
     **Returns:** `float32[H, W, 4]` linear RGBA as `hairjax.render` returns it: RGB over the
@@ -63,6 +64,7 @@ def reference_image(scene: Scene, *, spp: int | None = None, seed: int = 0) -> n
         raise ValueError(f"seed must be an integer in [0, {MAX_SEED}], got {seed!r}")
     check_supported(scene)
     mi = import_mitsuba()
+    spp = sample_count(int(spp))
     points, offsets = fibre_curves(scene.strands, scene.camera)
     with tempfile.TemporaryDirectory(prefix="hairjax-reference-") as folder:
         curve_file = mesh_file = None

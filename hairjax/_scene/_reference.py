@@ -67,9 +67,11 @@ class ReferenceSettings:
     - `scale_tilt`: the cuticle scales' tilt α, degrees, in [−45, 45]: it shifts the
       highlights along the fibre.
     - `eta`: the fibre's index of refraction, in [1, 3].
-    - `max_depth`: the longest path (Mitsuba's `path` integrator): 2 is direct light only,
-      more adds the light scattered between fibres. Default 16.
-    - `spp`: samples per pixel (`hairjax reference --spp` overrides it). Default 64.
+    - `max_depth`: the longest path (Mitsuba's `path` integrator), ≥ 2: 2 is direct light
+      only, more adds the light scattered between fibres (1 would show light sources only,
+      and a directional or point light is never seen). Default 16.
+    - `spp`: samples per pixel (`hairjax reference --spp` overrides it), rounded up to the
+      stratified sampler's grid (`_reference._mitsuba_scene.sample_count`). Default 64.
     """
 
     eumelanin: float | int | None = None
@@ -99,7 +101,7 @@ class ReferenceSettings:
             object.__setattr__(self, key, _number(key, getattr(self, key), 0.0, 1.0, lo_open=True))
         object.__setattr__(self, "scale_tilt", _number("scale_tilt", self.scale_tilt, -45.0, 45.0))
         object.__setattr__(self, "eta", _number("eta", self.eta, 1.0, 3.0))
-        object.__setattr__(self, "max_depth", _integer("max_depth", self.max_depth, 1))
+        object.__setattr__(self, "max_depth", _integer("max_depth", self.max_depth, 2))
         object.__setattr__(self, "spp", _integer("spp", self.spp, 1))
 
 

@@ -18,6 +18,7 @@ __all__ = ["run"]
 def run(args: argparse.Namespace) -> int:
     from .._io._image import write_image
     from .._reference import reference_image
+    from .._reference._mitsuba_scene import sample_count
     from .._reference._support import check_supported, import_mitsuba
     from .._scene._reference import ReferenceSettings
     from ._scenes import load_cli_scene
@@ -27,7 +28,7 @@ def run(args: argparse.Namespace) -> int:
     scene = load_cli_scene(args, args.scene)
     check_supported(scene)
     settings = scene.reference if scene.reference is not None else ReferenceSettings()
-    spp = settings.spp if args.spp is None else args.spp
+    spp = sample_count(settings.spp if args.spp is None else args.spp)  # what the sampler takes
     if scene.strands.width_units == "pixels" and not args.quiet:
         print(
             "hairjax: note: hair.width is in pixels: each fibre is w·D/f world units thick at "
