@@ -51,6 +51,7 @@ def check_supported(scene: Scene) -> None:
         )
     if scene.camera.offset != (0.0, 0.0):
         raise SceneError(
-            f"scene {scene.name!r}: camera.offset {scene.camera.offset} (a sub-pixel shift for supersampling, "
-            "docs/model.md §12) is not taken: the reference samples the whole pixel; use offset (0, 0)"
+            f"scene {scene.name!r}: camera.offset {scene.camera.offset} (a sub-pixel shift for "
+            "supersampling, docs/model.md §12) is not taken: the reference samples the whole pixel; "
+            "use offset (0, 0)"
         )
