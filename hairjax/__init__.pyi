@@ -13,6 +13,7 @@ from ._cache import forget as forget
 from ._disagreement import renderer_band as renderer_band
 from ._errors import EmptyViewWarning as EmptyViewWarning
 from ._errors import HairFormatError as HairFormatError
+from ._errors import MissingDependency as MissingDependency
 from ._errors import SceneError as SceneError
 from ._explore import Explorer as Explorer
 from ._explore import explore as explore
@@ -38,6 +39,7 @@ from ._io import hair_info as hair_info
 from ._io import load_hair as load_hair
 from ._io._image import read_image as read_image
 from ._io._image import write_image as write_image
+from ._reference import reference_image as reference_image
 from ._render import render as render
 from ._render import render_profiled as render_profiled
 from ._scene._camera import Camera as Camera
@@ -50,6 +52,7 @@ from ._scene._light import Light as Light
 from ._scene._occluder import Occluder as Occluder
 from ._scene._procedural import furball as furball
 from ._scene._procedural import scalp as scalp
+from ._scene._reference import ReferenceSettings as ReferenceSettings
 from ._scene._scene import PatchGeometry as PatchGeometry
 from ._scene._scene import Scene as Scene
 from ._scene._strands import Strands as Strands

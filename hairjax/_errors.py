@@ -30,3 +30,8 @@ class MeshFormatError(ValueError):
 class EmptyViewWarning(UserWarning):
     """A render's hair covers no pixel of the image (the camera misses it); the message
     gives the hair's bounding box and the camera, and how to frame the hair."""
+
+
+class MissingDependency(ImportError):
+    """An optional extra that a feature needs is not installed; the message says which
+    feature, and the `pip install` line that adds it."""

@@ -2,7 +2,7 @@
 
 A scene file has one table per part of the scene (`[hair]`, `[camera]`, `[light]`,
 `[shading]`, `[shadows]`, `[ordering]`, `[occluder]`, `[background]`, `[streaks]`,
-`[animation]`) and an optional
+`[animation]`, `[reference]`) and an optional
 top-level `name`; docs/scenes.md documents every key. Every key but `hair.source` is
 optional, and an absent key takes the default of the dataclass (or generator) it feeds,
 so defaults live in one place.
@@ -36,6 +36,7 @@ from ._framing import WIDTH_FRACTION, bounding_sphere, frame_camera, key_light
 from ._hair_table import HAIR_KEYS, read_hair, read_patches
 from ._light import Light
 from ._occluder import OCCLUDER_KINDS, Occluder
+from ._reference import REFERENCE_KEYS, ReferenceSettings, read_reference
 from ._scene import Scene
 from ._table import Table, build, describe, given
 
@@ -61,6 +62,8 @@ _FIXED_TABLES: dict[str, tuple[str, ...]] = {
     "streaks": ("texels", "width", "contrast", "seed"),
     # Read by `hairjax animate` only (hairjax/_animate.py); a still render shows the rest pose.
     "animation": ("amplitude", "frequency", "phase", "inertia", "frames"),
+    # Read by `hairjax reference` only (hairjax/_reference/): the fibres' BSDF and the path tracer.
+    "reference": REFERENCE_KEYS,
 }
 TOP_LEVEL_KEYS = ("name",)
 
@@ -91,6 +94,7 @@ def scene_tables() -> dict[str, tuple[str, ...]]:
         "background",
         "streaks",
         "animation",
+        "reference",
     )
     return {name: tables[name] for name in order}
 
@@ -195,7 +199,10 @@ def scene_from_dict(
     if frame == "auto":  # eye, target and up from the hair (the table's size, fov, near)
         camera = build(where, _framed, strands=strands, camera=camera, near=camera_args.get("near"))
 
-    scene_args = given(background=background, streaks=streaks, patches=patches)
+    reference = None
+    if "reference" in data:
+        reference = build(where, ReferenceSettings, **read_reference(tables["reference"]))
+    scene_args = given(background=background, streaks=streaks, patches=patches, reference=reference)
     return build(
         where,
         Scene,

@@ -19,6 +19,7 @@ from .._shading import AbstractShadingModel, KajiyaKay, Streaks
 from ._camera import Camera
 from ._light import Light, rgb
 from ._occluder import Occluder
+from ._reference import ReferenceSettings
 from ._strands import Strands
 
 __all__ = ["PatchGeometry", "Scene"]
@@ -55,6 +56,9 @@ class Scene:
     order (`Ordering(...)`, §4). `streaks`: wenzel-2002's streak texture along the hairs
     (§16), or None. `patches`: draw the strands as hair patches (§18) instead of ribbons,
     or None; the strands' opacity maps still give the self-shadows; no occluder.
+    `reference`: the fibres and path tracer of the physically based reference
+    (`hairjax.reference_image`, docs/reference.md), or None for `ReferenceSettings()`;
+    the JAX and GL renderers do not read it.
     """
 
     strands: Strands
@@ -68,6 +72,7 @@ class Scene:
     name: str = "scene"
     streaks: Streaks | None = None
     patches: PatchGeometry | None = None
+    reference: ReferenceSettings | None = None
 
     def __post_init__(self):
         for key, kind in (
@@ -85,6 +90,8 @@ class Scene:
         if self.streaks is not None and not isinstance(self.streaks, Streaks):
             raise SceneError("scene.streaks must be a Streaks or None")
         object.__setattr__(self, "background", rgb("background.color", self.background))
+        if self.reference is not None and not isinstance(self.reference, ReferenceSettings):
+            raise SceneError("scene.reference must be a ReferenceSettings or None")
         if self.patches is not None:
             if not isinstance(self.patches, PatchGeometry):
                 raise SceneError("scene.patches must be a PatchGeometry or None")

@@ -43,8 +43,11 @@ def _enable_compilation_cache() -> None:
 def _is_bad_input(err: BaseException) -> bool:
     """Errors about the user's input, as opposed to a bug: the package's input errors are
     ValueErrors (SceneError, HairFormatError, FitError, …) or OSErrors (ImageError, a
-    missing or unreadable file); the GL renderer's are GLUnavailable and GLError."""
-    if isinstance(err, (ValueError, OSError)):
+    missing or unreadable file); the GL renderer's are GLUnavailable and GLError; an optional
+    extra that is not installed is MissingDependency (its message names the pip line)."""
+    from .._errors import MissingDependency
+
+    if isinstance(err, (ValueError, OSError, MissingDependency)):
         return True
     return type(err).__module__.startswith("hairjax.gl") and isinstance(err, RuntimeError)
 

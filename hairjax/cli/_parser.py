@@ -17,7 +17,7 @@ __all__ = ["build_parser", "parse_size", "positive_int", "parse_assignment", "SO
 # keeps the two equal); listed here so that --help and the check need no optimistix.
 SOLVER_NAMES = ("levenberg-marquardt", "lm", "gauss-newton", "gn", "dogleg", "bfgs")
 
-COMMANDS = ("render", "view", "animate", "compare", "fit", "sweep", "info", "bench")
+COMMANDS = ("render", "reference", "view", "animate", "compare", "fit", "sweep", "info", "bench")
 
 
 def positive_int(text: str) -> int:
@@ -140,6 +140,27 @@ def build_parser() -> argparse.ArgumentParser:
         dest="sidecar",
         action="store_false",
         help="do not write IMAGE.json (the scene as resolved, parameters, versions, timings)",
+    )
+
+    p = command(
+        "reference",
+        "render a scene's strands as physically based fibres with Mitsuba 3 (docs/reference.md)",
+    )
+    p.add_argument("scene", nargs="?", type=Path, help=_SCENE_HELP + " (default: the built-in fur ball)")
+    p.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        default=Path("out/reference.exr"),
+        help="output image, .exr (linear float, alpha = coverage) or .png (8-bit sRGB)",
+    )
+    p.add_argument("--spp", type=positive_int, help="samples per pixel (default: reference.spp, 64)")
+    p.add_argument(
+        "--sample-seed",
+        type=int,
+        default=0,
+        help="the path tracer's seed: the same seed and spp give the same image "
+        "(--seed is the hair's, as for render)",
     )
 
     p = command("view", "tone-map an EXR to an 8-bit sRGB PNG", scene_options=False)

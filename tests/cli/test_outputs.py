@@ -52,6 +52,7 @@ EXR = "t.exr"
 COMMANDS = {
     "render -o": (["render"], "-o", ".exr", "hairjax.cli._scenes.load_cli_scene"),
     "render --png": (["render"], "--png", ".png", "hairjax.cli._scenes.load_cli_scene"),
+    "reference -o": (["reference"], "-o", ".exr", "hairjax.cli._scenes.load_cli_scene"),
     "view -o": (["view", EXR], "-o", ".png", "hairjax._io._image.read_image"),
     "compare --json": (["compare"], "--json", ".json", "hairjax.cli._scenes.load_cli_scene"),
     "fit --json": (["fit", "--target", EXR], "--json", ".json", "hairjax._io._image.read_image"),

@@ -1,0 +1,145 @@
+"""`hairjax.reference_image` and `hairjax reference`: the image's form and determinism, the
+refused features, a missing Mitsuba, and the sampler's count. The tests that render skip,
+with the reason, only where Mitsuba (the [reference] extra) is not installed; the refusals
+and the missing-Mitsuba message are tested everywhere."""
+
+from __future__ import annotations
+
+import importlib.util
+import re
+import sys
+
+import numpy as np
+import pytest
+
+import hairjax as hj
+from hairjax._errors import MissingDependency, SceneError
+from hairjax._reference._mitsuba_scene import sample_count
+from hairjax.cli import main
+
+NEEDS_MITSUBA = pytest.mark.skipif(
+    importlib.util.find_spec("mitsuba") is None,
+    reason="the [reference] extra is not installed: pip install 'hairjax[reference]'",
+)
+SCENE_TEXT = """
+[hair]
+source = "furball"
+strands = 30
+points = 4
+width = 2.0
+
+[camera]
+eye = [0.0, 0.0, 3.5]
+width = 24
+height = 16
+
+[background]
+color = [0.1, 0.2, 0.3]
+
+[reference]
+eumelanin = 0.3
+max_depth = 3
+spp = 4
+"""
+
+
+def _scene(tmp_path, extra=""):
+    path = tmp_path / "scene.toml"
+    path.write_text(SCENE_TEXT + extra)
+    return path
+
+
+@NEEDS_MITSUBA
+def test_the_image_is_rgba_over_the_background_and_the_same_for_a_seed(tmp_path):
+    scene = hj.load_scene(_scene(tmp_path))
+    image = hj.reference_image(scene, seed=7)
+    assert image.shape == (16, 24, 4) and image.dtype == np.float32
+    alpha = image[..., 3]
+    assert 0.05 < alpha.mean() < 0.95 and alpha.min() >= 0 and alpha.max() <= 1
+    empty = alpha == 0
+    np.testing.assert_array_equal(
+        image[empty, :3], np.broadcast_to(np.float32([0.1, 0.2, 0.3]), (empty.sum(), 3))
+    )
+    np.testing.assert_array_equal(hj.reference_image(scene, seed=7), image)
+    assert not np.array_equal(hj.reference_image(scene, seed=8), image)
+
+
+@NEEDS_MITSUBA
+def test_the_sampler_takes_the_count_reported():
+    import mitsuba as mi
+
+    from hairjax._reference._render import _variant
+
+    with _variant(mi):
+        for spp in (1, 2, 16, 32, 48, 64, 100, 128):
+            sampler = mi.load_dict({"type": "multijitter", "sample_count": spp})
+            assert sampler.sample_count() == sample_count(spp), spp
+
+
+def test_sample_count_keeps_square_grids():
+    assert [sample_count(n) for n in (1, 4, 16, 32, 48, 64, 256)] == [1, 4, 16, 35, 48, 64, 256]
+
+
+@NEEDS_MITSUBA
+def test_the_command_writes_the_exr(tmp_path, capsys):
+    out = tmp_path / "ref.exr"
+    assert main(["reference", str(_scene(tmp_path)), "--spp", "2", "--sample-seed", "3", "-o", str(out)]) == 0
+    text = capsys.readouterr()
+    assert "note: hair.width is in pixels" in text.err
+    assert "24x16, 2 spp, seed 3, max_depth 3" in text.out
+    image = hj.read_image(out)
+    scene = hj.load_scene(_scene(tmp_path))
+    np.testing.assert_array_equal(image, hj.reference_image(scene, spp=2, seed=3))
+
+
+def _one_line_error(capsys, argv):
+    code = main(argv)
+    err = capsys.readouterr().err
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and "Traceback" not in err, err
+    return lines[0]
+
+
+def test_a_missing_mitsuba_is_one_line_naming_the_extra(tmp_path, monkeypatch, capsys):
+    monkeypatch.setitem(sys.modules, "mitsuba", None)  # `import mitsuba` raises ImportError
+    line = _one_line_error(capsys, ["reference", str(_scene(tmp_path)), "-o", str(tmp_path / "r.exr")])
+    assert "pip install 'hairjax[reference]'" in line
+    with pytest.raises(MissingDependency, match=r"pip install 'hairjax\[reference\]'"):
+        hj.reference_image(hj.load_scene(_scene(tmp_path)))
+    assert not (tmp_path / "r.exr").exists()
+
+
+@pytest.mark.parametrize(
+    ("extra", "overrides", "feature"),
+    [
+        ("\n[streaks]\n", [], r"\[streaks\]"),
+        (
+            "",
+            ["--set", "hair.geometry=patches", "--set", "hair.patch_width=0.05"],
+            "hair.geometry = 'patches'",
+        ),
+    ],
+    ids=["streaks", "patches"],
+)
+def test_an_unsupported_feature_is_one_line_naming_it(
+    tmp_path, monkeypatch, capsys, extra, overrides, feature
+):
+    monkeypatch.setattr("hairjax._reference._support.import_mitsuba", lambda: None)  # present or not
+    line = _one_line_error(
+        capsys, ["reference", str(_scene(tmp_path, extra)), *overrides, "-o", str(tmp_path / "r.exr")]
+    )
+    assert re.search(feature, line), line
+
+
+def test_the_api_refuses_before_importing_mitsuba(tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "mitsuba", None)
+    scene = hj.load_scene(_scene(tmp_path, "\n[streaks]\n"))
+    with pytest.raises(SceneError, match=r"\[streaks\]"):
+        hj.reference_image(scene)
+    plain = hj.load_scene(_scene(tmp_path))
+    shifted = plain.replace(camera=hj.Camera(eye=(0, 0, 3.5), width=24, height=16, offset=(0.25, 0.0)))
+    with pytest.raises(SceneError, match=r"camera\.offset"):
+        hj.reference_image(shifted)
+    for spp, seed in ((0, 0), (4, -1), (4, 2**32)):
+        with pytest.raises(ValueError, match="spp|seed"):
+            hj.reference_image(plain, spp=spp, seed=seed)
