@@ -16,7 +16,7 @@ from ._fibres import curve_file_text, fibre_curves
 from ._mitsuba_scene import mitsuba_scene, obj_text, sample_count
 from ._support import MITSUBA_VARIANT, check_supported, import_mitsuba
 
-__all__ = ["reference_image", "MAX_SEED"]
+__all__ = ["reference_image", "settings_of", "check_sampling", "MAX_SEED"]
 
 MAX_SEED = 2**32 - 1  # Mitsuba's sampler seed is an unsigned 32-bit integer
 
@@ -32,6 +32,19 @@ def _variant(mi: ModuleType) -> Iterator[None]:
     finally:
         if before is not None:
             mi.set_variant(before)
+
+
+def settings_of(scene: Scene) -> ReferenceSettings:
+    """The scene's reference settings: `scene.reference`, or the defaults when it has none."""
+    return scene.reference if scene.reference is not None else ReferenceSettings()
+
+
+def check_sampling(spp, seed) -> None:
+    """`ValueError` unless `spp` is an integer ≥ 1 and `seed` one in [0, MAX_SEED]."""
+    if isinstance(spp, bool) or not isinstance(spp, int | np.integer) or spp < 1:
+        raise ValueError(f"spp must be an integer >= 1, got {spp!r}")
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or not 0 <= seed <= MAX_SEED:
+        raise ValueError(f"seed must be an integer in [0, {MAX_SEED}], got {seed!r}")
 
 
 def reference_image(scene: Scene, *, spp: int | None = None, seed: int = 0) -> np.ndarray:
@@ -56,12 +69,9 @@ def reference_image(scene: Scene, *, spp: int | None = None, seed: int = 0) -> n
     **Raises:** `MissingDependency` without Mitsuba (`pip install 'hairjax[reference]'`);
     `SceneError` naming a feature the reference cannot show; `ValueError` for a bad spp or seed.
     """
-    settings = scene.reference if scene.reference is not None else ReferenceSettings()
+    settings = settings_of(scene)
     spp = settings.spp if spp is None else spp
-    if isinstance(spp, bool) or not isinstance(spp, int | np.integer) or spp < 1:
-        raise ValueError(f"spp must be an integer >= 1, got {spp!r}")
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or not 0 <= seed <= MAX_SEED:
-        raise ValueError(f"seed must be an integer in [0, {MAX_SEED}], got {seed!r}")
+    check_sampling(spp, seed)
     check_supported(scene)
     mi = import_mitsuba()
     spp = sample_count(int(spp))

@@ -19,15 +19,16 @@ def run(args: argparse.Namespace) -> int:
     from .._io._image import write_image
     from .._reference import reference_image
     from .._reference._mitsuba_scene import sample_count
+    from .._reference._render import check_sampling, settings_of
     from .._reference._support import check_supported, import_mitsuba
-    from .._scene._reference import ReferenceSettings
     from ._scenes import load_cli_scene
 
     check_outputs([Output(args.output, IMAGE_SUFFIXES, "-o")])
+    check_sampling(1 if args.spp is None else args.spp, args.sample_seed)  # before any work
     import_mitsuba()  # a missing extra is said before the (slow) hair is read
     scene = load_cli_scene(args, args.scene)
     check_supported(scene)
-    settings = scene.reference if scene.reference is not None else ReferenceSettings()
+    settings = settings_of(scene)
     spp = sample_count(settings.spp if args.spp is None else args.spp)  # what the sampler takes
     if scene.strands.width_units == "pixels" and not args.quiet:
         print(

@@ -143,3 +143,12 @@ def test_the_api_refuses_before_importing_mitsuba(tmp_path, monkeypatch):
     for spp, seed in ((0, 0), (4, -1), (4, 2**32)):
         with pytest.raises(ValueError, match="spp|seed"):
             hj.reference_image(plain, spp=spp, seed=seed)
+
+
+def test_a_bad_sample_seed_is_refused_before_the_scene_is_read(tmp_path, monkeypatch, capsys):
+    def never(*args, **kwargs):
+        raise AssertionError("the scene was read before --sample-seed was checked")
+
+    monkeypatch.setattr("hairjax.cli._scenes.load_cli_scene", never)
+    line = _one_line_error(capsys, ["reference", "--sample-seed", "-1", "-o", str(tmp_path / "r.exr")])
+    assert re.search(r"seed must be an integer in \[0, 4294967295\], got -1", line), line
