@@ -55,7 +55,14 @@ def composite(geometry: Geometry, colors: Float[Array, "P C"]) -> Float[Array, "
     """Σ_k w_k ((1 − t_k) c(p₀) + t_k c(p₁)) per pixel: the hair's part of the composite
     (docs/model.md §6), linear in the point colours. The backdrop term is not included."""
     t = geometry.frag_t[:, None]
-    frag_color = (1 - t) * colors[geometry.frag_i0] + t * colors[geometry.frag_i0 + 1]
+    # Each point's colour beside its successor's (`[P, 2C]`; the last row's second half
+    # wraps to point 0 and is never read: a fragment's i0 is a segment's first point), so
+    # a fragment reads both ends in one row. This also keeps XLA from fusing the
+    # per-point shading into the per-fragment gather, which on the CPU evaluated the
+    # shading twice per fragment instead of once per point (BENCHMARKS.md "Shading stage").
+    ends = jnp.concatenate([colors, jnp.roll(colors, -1, axis=0)], axis=1)[geometry.frag_i0]
+    c = colors.shape[1]
+    frag_color = (1 - t) * ends[:, :c] + t * ends[:, c:]
     hw = geometry.height * geometry.width
     return jax.ops.segment_sum(
         geometry.frag_weight[:, None] * frag_color,
