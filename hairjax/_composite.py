@@ -51,18 +51,27 @@ def over_weights(
     return alpha * exclusive, inclusive
 
 
-def composite(geometry: Geometry, colors: Float[Array, "P C"]) -> Float[Array, "HW C"]:
+def composite(geometry: Geometry, colors: Float[Array, "P C"], *, paired: bool = False) -> Float[Array, "HW C"]:
     """Σ_k w_k ((1 − t_k) c(p₀) + t_k c(p₁)) per pixel: the hair's part of the composite
-    (docs/model.md §6), linear in the point colours. The backdrop term is not included."""
+    (docs/model.md §6), linear in the point colours. The backdrop term is not included.
+
+    `paired=True` for colours computed in the same XLA program (the shading stage's):
+    each point's colour is first laid beside its successor's (`[P, 2C]`) and a fragment
+    reads both ends from one row. Without it, XLA on the CPU fuses the per-point shading
+    into the per-fragment gathers and evaluates it twice per fragment instead of once per
+    point (BENCHMARKS.md "Shading stage"). Colours that are already materialised (the
+    fit's stacked gain images) gather directly: the extra table would only cost. The same
+    arithmetic either way."""
     t = geometry.frag_t[:, None]
-    # Each point's colour beside its successor's (`[P, 2C]`; the last row's second half
-    # wraps to point 0 and is never read: a fragment's i0 is a segment's first point), so
-    # a fragment reads both ends in one row. This also keeps XLA from fusing the
-    # per-point shading into the per-fragment gather, which on the CPU evaluated the
-    # shading twice per fragment instead of once per point (BENCHMARKS.md "Shading stage").
-    ends = jnp.concatenate([colors, jnp.roll(colors, -1, axis=0)], axis=1)[geometry.frag_i0]
-    c = colors.shape[1]
-    frag_color = (1 - t) * ends[:, :c] + t * ends[:, c:]
+    if paired:
+        # The last row's second half wraps to point 0 and is never read: a fragment's i0
+        # is a segment's first point, so i0 + 1 < P.
+        ends = jnp.concatenate([colors, jnp.roll(colors, -1, axis=0)], axis=1)[geometry.frag_i0]
+        c = colors.shape[1]
+        c0, c1 = ends[:, :c], ends[:, c:]
+    else:
+        c0, c1 = colors[geometry.frag_i0], colors[geometry.frag_i0 + 1]
+    frag_color = (1 - t) * c0 + t * c1
     hw = geometry.height * geometry.width
     return jax.ops.segment_sum(
         geometry.frag_weight[:, None] * frag_color,

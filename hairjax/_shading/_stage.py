@@ -111,7 +111,7 @@ def shading_stage(geometry: Geometry, params, light: LightParams | None = None) 
     and not for one with an occluder (ValueError). Ω and V stay the scene light's
     (docs/model.md §3). `light=None`: the scene's light, exactly as without the argument.
     """
-    rgb = composite(geometry, point_colors(geometry, params, light))
+    rgb = composite(geometry, point_colors(geometry, params, light), paired=True)
     backdrop = geometry.backdrop
     if geometry.occluder_pixel is not None:
         backdrop = backdrop.at[geometry.occluder_pixel].set(occluder_colors(geometry, params, light))
