@@ -51,7 +51,9 @@ def over_weights(
     return alpha * exclusive, inclusive
 
 
-def composite(geometry: Geometry, colors: Float[Array, "P C"], *, paired: bool = False) -> Float[Array, "HW C"]:
+def composite(
+    geometry: Geometry, colors: Float[Array, "P C"], *, paired: bool = False
+) -> Float[Array, "HW C"]:
     """Σ_k w_k ((1 − t_k) c(p₀) + t_k c(p₁)) per pixel: the hair's part of the composite
     (docs/model.md §6), linear in the point colours. The backdrop term is not included.
 

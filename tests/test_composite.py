@@ -36,3 +36,27 @@ def test_pixels_restart_and_opaque_fragments_have_finite_gradients():
     assert np.all(np.isfinite(g))
     # d/dα₁ of (w₁·1) with w₁ = α₁(1 − α₀) = 0 at α₀ = 1 → 0; d/dα₀ = 1·0 − α₁·1 = −0.3.
     np.testing.assert_allclose(g[:2], [-0.3, 0.0], atol=1e-15)
+
+
+def test_paired_composite_equals_the_two_gathers_by_hand():
+    """composite(paired=True) (the shading stage's one-row read of both end colours) gives
+    Σ w ((1 − t) c[i0] + t c[i0 + 1]) per pixel, written out here by hand, as the plain
+    form does; a fragment on the last segment (i0 = P − 2) reads the last point, not the
+    wrapped row. Tolerance: float64 rounding of a three-term sum."""
+    import hairjax as hj
+    from hairjax._composite import composite
+
+    scene = hj.Scene(
+        hj.furball(strands=30, points=5, seed=2),
+        camera=hj.Camera(eye=(0.0, 0.0, 3.0), target=(0.0, 0.0, 0.0), width=24, height=24),
+    )
+    g = hj.geometry_stage(scene)
+    p = g.tangent.shape[0]
+    colors = jnp.asarray(np.random.default_rng(0).random((p, 3)))
+    i0, t, w, pixel = (np.asarray(x) for x in (g.frag_i0, g.frag_t, g.frag_weight, g.frag_pixel))
+    c = np.asarray(colors)
+    by_hand = np.zeros((24 * 24, 3))
+    np.add.at(by_hand, pixel, w[:, None] * ((1 - t)[:, None] * c[i0] + t[:, None] * c[i0 + 1]))
+    assert i0.max() == p - 2  # the case the wrap must not touch is exercised
+    for paired in (False, True):
+        np.testing.assert_allclose(composite(g, colors, paired=paired), by_hand, rtol=1e-12, atol=1e-14)
