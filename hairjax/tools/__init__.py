@@ -13,6 +13,7 @@ from ._bench import bench_main as bench_main
 from ._bench_cases import GL_PASSES as GL_PASSES
 from ._bench_cases import STAGES as STAGES
 from ._bench_cases import TARGETS as TARGETS
+from ._bench_cases import bench_scene as bench_scene
 from ._bench_cases import configurations as configurations
 from ._compare import compare as compare
 from ._compare import format_report as format_report
