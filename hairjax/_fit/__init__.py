@@ -6,7 +6,7 @@ solver's parameter space), `_problem` (targets, weights, the residuals), `_varpr
 `_uncertainty` (standard errors), `_model` (what the fit asks of a shading model) and
 `_shading_fit` (that, for any registered shading model, from the model's own terms), with
 `_dependence` (which images a fitted parameter reaches); `_lit` and `_light_fit` add the
-light's direction and colour to a fit.
+light's direction and colour to a fit; `_holdout` reports the fit on held-out targets.
 """
 
 from ._entry import fit as fit

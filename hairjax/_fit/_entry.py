@@ -9,6 +9,7 @@ image is linear in them) and builds the `FitResult`, standard errors included
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Callable, Sequence
 
@@ -19,6 +20,7 @@ import numpy as np
 from .._scene._scene import Scene
 from .._shading import AbstractShadingModel, LightParams
 from ._convergence import half_square, plateau_exit, solve
+from ._holdout import check_light, held_out, held_out_rmse
 from ._light_fit import lit_fit_model, start_light
 from ._lit import LIGHT_NAMES, LitParams
 from ._model import FitModel
@@ -57,6 +59,7 @@ def fit(
     rtol: float | None = None,
     atol: float | None = None,
     progress: Callable[[int, float, float], None] | None = None,
+    holdout=None,
 ) -> FitResult:
     """Least-squares fit of shading parameters to one or more target images.
 
@@ -85,6 +88,9 @@ def fit(
     - `rtol`, `atol`: the solver's tolerances; default 1e-8 and 1e-10 in float64, 1e-5 and
       1e-7 in float32 (tighter than float32 resolves only adds steps that change nothing).
     - `progress(step, loss, elapsed_s)`: called after every step.
+    - `holdout`: `(scene or scenes, target or targets)` the fit does not see, paired like
+      `scene` and `targets`; the result's `holdout_rmse` is the fitted parameters' RMSE on
+      them (docs/fitting.md, "Held-out views and lights"). Checked before the fit starts.
 
     **Returns:** a `FitResult`.
     """
@@ -114,6 +120,14 @@ def fit(
         raise FitError(
             f"a {model.label} scene is fitted from {model.params_type.__name__}, got {type(init).__name__}"
         )
+    heldout = None
+    if holdout is not None:
+        if not isinstance(holdout, tuple) or len(holdout) != 2:
+            raise FitError("holdout must be a (scene or scenes, target or targets) pair")
+        heldout = held_out(*holdout)
+        check_light(heldout, scenes, lit)
+        if any(type(s.shading) is not type(scenes[0].shading) for s, _, _ in heldout):
+            raise FitError("holdout: the held-out scenes need the training scenes' shading model")
     initial, initial_light = init, None
     if lit:  # the light joins the model's parameters (docs/fitting.md, "Fitting the light")
         initial_light = start_light(scenes, names, light)
@@ -165,7 +179,7 @@ def fit(
     # At the returned point (a diverged fit's last loss is not).
     final_loss = float(half_square(residuals, z, problem)) if diverged else losses[-1]
     rmse = float(np.sqrt(2 * final_loss / max(n_pixels, 1.0)))
-    return FitResult(
+    result = FitResult(
         params=params,
         initial=initial,
         fitted=names,
@@ -181,6 +195,9 @@ def fit(
         light=fitted_light,
         initial_light=initial_light,
     )
+    if heldout is None:
+        return result
+    return dataclasses.replace(result, holdout_rmse=held_out_rmse(result, heldout))
 
 
 def _model_of(scenes, lit: bool) -> FitModel:

@@ -30,7 +30,8 @@ class FitResult:
     `rmse` over the fitted pixels; `geometry_s`: time of the geometry stages;
     `light`, `initial_light`: the fitted and the start's `LightParams` where the fit fitted
     or held the light (docs/fitting.md, "Fitting the light"), else None. `get(name)`
-    reads any fitted name, the light's included.
+    reads any fitted name, the light's included; `holdout_rmse`: the RMSE on the held-out
+    targets (`fit`'s `holdout`), else None.
     """
 
     params: Any  # the shading model's parameters (its `params_type`)
@@ -47,6 +48,7 @@ class FitResult:
     restarts: int = 0
     light: Any = None
     initial_light: Any = None
+    holdout_rmse: float | None = None
 
     def get(self, name: str, initial: bool = False):
         """The fitted (or, with `initial`, the start's) value of `name`: a field of the
@@ -83,6 +85,7 @@ class FitResult:
             "geometry_s": self.geometry_s,
             "loss": [float(x) for x in self.loss],
             "rmse": self.rmse,
+            "holdout_rmse": self.holdout_rmse,
             "termination": self.termination,
             "restarts": self.restarts,
             "light": light(self.light),

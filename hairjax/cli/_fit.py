@@ -57,6 +57,11 @@ def run(args: argparse.Namespace) -> int:
             f"{1 + len(args.scenes)} scenes for {len(args.target)} targets: "
             "each extra --scene goes with one extra --target"
         )
+    if len(args.holdout_scenes) > len(args.holdout):
+        raise FitError(
+            f"{len(args.holdout_scenes)} --holdout-scene for {len(args.holdout)} --holdout targets: "
+            "each --holdout-scene goes with one --holdout"
+        )
     outputs = _outputs(args)
     check_outputs(outputs)
     # Everything is read and checked before any rendering starts.
@@ -64,6 +69,11 @@ def run(args: argparse.Namespace) -> int:
     first = load_cli_scene(args, args.scene)
     extra = [load_cli_scene(args, s) for s in args.scenes]
     scenes = [first, *extra, *[first] * (len(targets) - 1 - len(extra))]
+    holdout = None
+    if args.holdout:
+        held = [read_image(t) for t in args.holdout]
+        held_scenes = [load_cli_scene(args, s) for s in args.holdout_scenes]
+        holdout = ([*held_scenes, *[first] * (len(held) - len(held_scenes))], held)
     # Each shading model has its parameters (docs/model.md §17 for Scheuermann's); any model
     # also fits the light's (docs/fitting.md, "Fitting the light"), when named.
     fittable = first.shading.fittable
@@ -81,7 +91,13 @@ def run(args: argparse.Namespace) -> int:
             progress(step, args.max_steps, f"loss {loss:.6e}")
 
         result = fit(
-            scenes, targets, fit=names, solver=args.solver, max_steps=args.max_steps, progress=on_step
+            scenes,
+            targets,
+            fit=names,
+            solver=args.solver,
+            max_steps=args.max_steps,
+            progress=on_step,
+            holdout=holdout,
         )
     print(_table(result, names, fittable))
     restarted = f" ({result.restarts} restarts)" if result.restarts else ""
@@ -89,6 +105,8 @@ def run(args: argparse.Namespace) -> int:
         f"{result.termination} after {result.steps} steps{restarted}, {result.time_s:.2f} s "
         f"(+ {result.geometry_s:.2f} s geometry); RMSE {result.rmse:.4g}"
     )
+    if result.holdout_rmse is not None:
+        print(f"held-out RMSE {result.holdout_rmse:.4g} ({len(args.holdout)} target(s) the fit did not see)")
 
     fitted_image = None
     if args.out is not None or args.plot is not None:

@@ -201,6 +201,21 @@ def build_parser() -> argparse.ArgumentParser:
         help="scene of the 2nd, 3rd, … --target, in order; targets without one use the first scene",
     )
     p.add_argument(
+        "--holdout",
+        action="append",
+        type=Path,
+        default=[],
+        help="a target the fit does not see (another view or light); its RMSE is reported. Repeatable",
+    )
+    p.add_argument(
+        "--holdout-scene",
+        dest="holdout_scenes",
+        action="append",
+        type=Path,
+        default=[],
+        help="scene of each --holdout, in order; held-out targets without one use the first scene",
+    )
+    p.add_argument(
         "--fit",
         help="comma list of the parameters to fit "
         "(default: all the model's fittable ones, e.g. kd,ks,shininess,kappa; "

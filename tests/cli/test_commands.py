@@ -195,6 +195,46 @@ def test_fit_takes_the_light_names(scene_file, tmp_path, monkeypatch, capsys):
     assert "light_direction, light_color" in capsys.readouterr().err
 
 
+def test_fit_reports_the_held_out_rmse(scene_file, tmp_path, monkeypatch, capsys):
+    """--holdout targets go to the fit with their --holdout-scene (or the first scene),
+    read before the fit; the held-out RMSE is printed and in the JSON (the fit is replaced
+    by its result: tests/fit/test_holdout.py computes it)."""
+    import dataclasses
+    import json
+
+    from hairjax._fit import FitResult
+
+    params = hj.load_scene(scene_file).params
+    fields = dict(params=params, initial=params, fitted=("kd",), loss=[1.0], steps=1, time_s=0.1)
+    fields |= dict(geometry_s=0.1, std_error={"kd": None}, undetermined=(), rmse=0.5)
+    result = FitResult(**fields, termination="converged", holdout_rmse=0.0123)
+    calls = []
+    monkeypatch.setattr("hairjax._fit.fit", lambda *args, **kwargs: calls.append(kwargs) or result)
+    other = tmp_path / "side.toml"
+    other.write_text(SMALL_SCENE + "[light]\ndirection = [0.6, -0.7, -0.3]\n")
+    target, held, report = tmp_path / "t.exr", tmp_path / "h.exr", tmp_path / "fit.json"
+    hj.write_image(target, np.zeros((30, 40, 4)))
+    hj.write_image(held, np.full((30, 40, 4), 0.5))
+    argv = ["fit", str(scene_file), "--target", str(target), "--json", str(report), "-q"]
+    assert main([*argv, "--holdout", str(held), "--holdout-scene", str(other), "--holdout", str(held)]) == 0
+    scenes, targets = calls[0]["holdout"]
+    first_light = hj.load_scene(scene_file).light.direction
+    assert [s.light.direction for s in scenes] == [(0.6, -0.7, -0.3), first_light]
+    assert len(targets) == 2 and np.all(np.asarray(targets[0])[..., :3] == 0.5)
+    assert "held-out RMSE 0.0123 (2 target(s) the fit did not see)" in capsys.readouterr().out
+    assert json.loads(report.read_text())["holdout_rmse"] == 0.0123
+    # Without --holdout, no held-out line and None in the JSON.
+    monkeypatch.setattr("hairjax._fit.fit", lambda *a, **k: dataclasses.replace(result, holdout_rmse=None))
+    assert main(argv) == 0
+    assert "held-out" not in capsys.readouterr().out
+    assert json.loads(report.read_text())["holdout_rmse"] is None
+    # A --holdout-scene without its --holdout, or an unreadable held-out target: one line, before work.
+    assert main([*argv, "--holdout-scene", str(other)]) == 2
+    assert "each --holdout-scene goes with one --holdout" in capsys.readouterr().err
+    assert main([*argv, "--holdout", str(tmp_path / "missing.exr")]) == 2
+    assert "missing.exr" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize(
     "args, message",
     [
