@@ -20,6 +20,7 @@ from ._explore import explore as explore
 from ._fit import FitError as FitError
 from ._fit import FitResult as FitResult
 from ._fit import fit as fit
+from ._fit import fitted_image as fitted_image
 from ._geometry._ordering import AbstractOrdering as AbstractOrdering
 from ._geometry._ordering import Ordering as Ordering
 from ._geometry._ordering import draw_order as draw_order

@@ -148,9 +148,9 @@ def test_geometry_reused_and_unneeded_work_skipped(monkeypatch):
     calls, opacity_calls = [], []
     original = setup_mod._prepare
     monkeypatch.setattr(setup_mod, "_prepare", lambda s: calls.append(s) or original(s))
-    original_weights = stage_mod._composite_weights
+    original_weights = stage_mod.composite_weights
     monkeypatch.setattr(
-        stage_mod, "_composite_weights", lambda *a: opacity_calls.append(1) or original_weights(*a)
+        stage_mod, "composite_weights", lambda *a: opacity_calls.append(1) or original_weights(*a)
     )
 
     def forbidden(*args, **kwargs):

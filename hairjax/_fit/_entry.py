@@ -24,6 +24,7 @@ from ._holdout import check_light, held_out, held_out_rmse
 from ._light_fit import lit_fit_model, start_light
 from ._lit import LIGHT_NAMES, LitParams
 from ._model import FitModel
+from ._opacity_fit import ALPHA, OpacityParams, opacity_fit_model, start_alpha
 from ._problem import (
     Problem,
     check_names,
@@ -70,8 +71,9 @@ def fit(
       them): kd, ks, shininess, kappa for Kajiya-Kay; kd, primary_color, primary_exponent,
       primary_shift, secondary_color, secondary_exponent, secondary_shift, kappa for
       Scheuermann (docs/model.md §17); and, for any model, the light's light_direction (a
-      directional light's) and light_color (docs/fitting.md, "Fitting the light"); the rest
-      stay at `init` and `light`.
+      directional light's) and light_color (docs/fitting.md, "Fitting the light"), and
+      alpha, one opacity for every strand, starting from the first scene's mean
+      (docs/fitting.md, "Fitting the strands' opacity"); the rest stay at `init` and `light`.
     - `init`: starting (and fixed) parameters, the model's parameter type; default the
       first scene's.
     - `solver`: levenberg-marquardt (lm), gauss-newton, dogleg, or bfgs (on ½‖r‖²).
@@ -105,7 +107,10 @@ def fit(
     if any(s.patches is not None for s in scenes):  # docs/model.md §18: not wired into the fit
         raise FitError("fit does not support hair-patch scenes (hair.geometry = 'patches')")
     lit = light is not None or (fit is not None and any(n in LIGHT_NAMES for n in fit))
-    model = _model_of(scenes, lit)
+    opacity = fit is not None and ALPHA in fit
+    if opacity and lit:
+        raise FitError(f"{ALPHA} is not fitted together with the light (light_direction, light_color)")
+    model = _model_of(scenes, lit, opacity)
     names = check_names(
         tuple(n for n in model.fittable if n not in LIGHT_NAMES) if fit is None else fit, scalar, model
     )
@@ -132,6 +137,9 @@ def fit(
     if lit:  # the light joins the model's parameters (docs/fitting.md, "Fitting the light")
         initial_light = start_light(scenes, names, light)
         init = LitParams(init, initial_light)
+    initial_alpha = start_alpha(scenes) if opacity else None
+    if opacity:  # the strands' opacity joins them (docs/fitting.md, "Fitting the strands' opacity")
+        init = OpacityParams(init, jnp.asarray(initial_alpha, dtype=jnp.result_type(float)))
 
     start = time.perf_counter()
     data = [model.prepare(s, init, names, t, sw) for s, (t, sw) in zip(scenes, arrays)]
@@ -172,6 +180,7 @@ def fit(
         )
     fitted = jit_point(z, problem)[0]
     params, fitted_light = (fitted.shading, fitted.light) if lit else (fitted, None)
+    params, fitted_alpha = (fitted.shading, float(fitted.alpha)) if opacity else (params, None)
     elapsed = time.perf_counter() - start - geometry_s
 
     std_error, undetermined = standard_errors(model, data, fitted, names, scalar)
@@ -194,18 +203,21 @@ def fit(
         restarts=restarts,
         light=fitted_light,
         initial_light=initial_light,
+        alpha=fitted_alpha,
+        initial_alpha=initial_alpha,
     )
     if heldout is None:
         return result
     return dataclasses.replace(result, holdout_rmse=held_out_rmse(result, heldout))
 
 
-def _model_of(scenes, lit: bool) -> FitModel:
-    """The fit of the scenes' shading model (`fit_model`; with the light, `lit_fit_model`);
-    FitError where they differ."""
+def _model_of(scenes, lit: bool, opacity: bool) -> FitModel:
+    """The fit of the scenes' shading model (`fit_model`; with the light, `lit_fit_model`;
+    with the strands' opacity, `opacity_fit_model`); FitError where they differ."""
     classes: list[type[AbstractShadingModel]] = list(dict.fromkeys(type(s.shading) for s in scenes))
     if len(classes) > 1:
         raise FitError(
             "scenes of one fit share a shading model; got " + " and ".join(c.name for c in classes)
         )
-    return (lit_fit_model if lit else fit_model)(classes[0])  # a class: hashable, cached by identity
+    make = lit_fit_model if lit else opacity_fit_model if opacity else fit_model
+    return make(classes[0])  # a class: hashable, cached by identity

@@ -19,10 +19,11 @@ from .._geometry._stage import geometry_stage
 from .._render import render
 from .._scene._scene import Scene
 from .._shading import shading_stage
+from ._opacity_fit import strand_alpha
 from ._problem import target_arrays
 from ._result import FitError, FitResult
 
-__all__ = ["HeldOut", "held_out", "held_out_rmse"]
+__all__ = ["HeldOut", "fitted_image", "held_out", "held_out_rmse"]
 
 HeldOut = list[tuple[Scene, np.ndarray, np.ndarray]]  # (scene, target [HW, 3], √weight [HW, 1])
 
@@ -53,14 +54,22 @@ def check_light(heldout: HeldOut, training: Sequence[Scene], lit: bool) -> None:
         )
 
 
+def fitted_image(scene: Scene, result: FitResult):
+    """`scene` rendered `[H, W, 4]` with `result`'s parameters, and its fitted light (Ω and
+    V stay the scene's light's, as in the fit) or strands' opacity where it fitted them."""
+    if result.light is not None:
+        return shading_stage(geometry_stage(scene), result.params, result.light)
+    if result.alpha is not None:
+        return render(scene, result.params, strand_alpha(scene, result.alpha))
+    return render(scene, result.params)
+
+
 def held_out_rmse(result: FitResult, heldout: HeldOut) -> float:
-    """The RMSE of `result`'s parameters (and fitted light) on the `held_out` targets."""
+    """The RMSE of `result`'s parameters (and fitted light or opacity) on the `held_out`
+    targets."""
     total, count = 0.0, 0.0
     for scene, target, sqrt_weight in heldout:
-        if result.light is None:
-            image = render(scene, result.params)
-        else:  # at the fitted light, its Ω and V the scene's (as in the fit)
-            image = shading_stage(geometry_stage(scene), result.params, result.light)
+        image = fitted_image(scene, result)
         rgb = np.asarray(jnp.asarray(image)[..., :3], np.float64).reshape(-1, 3)
         total += float(np.sum((sqrt_weight * (rgb - target)) ** 2))
         count += 3.0 * np.count_nonzero(sqrt_weight)

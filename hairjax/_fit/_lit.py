@@ -19,10 +19,10 @@ import dataclasses
 from collections.abc import Callable
 from typing import Any, NamedTuple
 
-import equinox as eqx
 import jax.numpy as jnp
 
 from .._shading._light import LightParams
+from ._point import ExtendedParams
 
 __all__ = ["LIGHT_NAMES", "light_field", "LitParams", "RelativeTransform", "PLANE", "plane_basis"]
 
@@ -36,7 +36,7 @@ def light_field(name: str) -> str | None:
     return _FIELD.get(name)
 
 
-class LitParams(eqx.Module):
+class LitParams(ExtendedParams):
     """A model's parameters (`shading`) and the light's (`light`, `LightParams`) as one
     point of a fit that fits the light or holds it at a given value. `get(name)` reads
     light_direction and light_color from the light, every other name from `shading`."""

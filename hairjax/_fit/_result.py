@@ -31,7 +31,9 @@ class FitResult:
     `light`, `initial_light`: the fitted and the start's `LightParams` where the fit fitted
     or held the light (docs/fitting.md, "Fitting the light"), else None. `get(name)`
     reads any fitted name, the light's included; `holdout_rmse`: the RMSE on the held-out
-    targets (`fit`'s `holdout`), else None.
+    targets (`fit`'s `holdout`), else None; `alpha`, `initial_alpha`: the strands' fitted
+    and starting opacity where the fit fitted it (docs/fitting.md, "Fitting the strands'
+    opacity"), else None.
     """
 
     params: Any  # the shading model's parameters (its `params_type`)
@@ -49,11 +51,15 @@ class FitResult:
     light: Any = None
     initial_light: Any = None
     holdout_rmse: float | None = None
+    alpha: float | None = None
+    initial_alpha: float | None = None
 
     def get(self, name: str, initial: bool = False):
         """The fitted (or, with `initial`, the start's) value of `name`: a field of the
         model's parameters, or light_direction, light_color (None without a light)."""
         params, light = (self.initial, self.initial_light) if initial else (self.params, self.light)
+        if name == "alpha":
+            return self.initial_alpha if initial else self.alpha
         field = light_field(name)
         if field is None:
             return getattr(params, name)
@@ -86,6 +92,8 @@ class FitResult:
             "loss": [float(x) for x in self.loss],
             "rmse": self.rmse,
             "holdout_rmse": self.holdout_rmse,
+            "alpha": self.alpha,
+            "initial_alpha": self.initial_alpha,
             "termination": self.termination,
             "restarts": self.restarts,
             "light": light(self.light),

@@ -16,8 +16,9 @@ from collections.abc import Mapping
 import jax
 import jax.numpy as jnp
 
-from .._shading._transforms import IDENTITY, LOG, SOFTPLUS, Transform, identity, softplus, softplus_inv
-from ._lit import LitParams, RelativeTransform
+from .._shading._transforms import IDENTITY, LOG, LOGIT, SOFTPLUS, Transform, identity, softplus, softplus_inv
+from ._lit import RelativeTransform
+from ._point import ExtendedParams
 
 __all__ = [
     "Transform",
@@ -44,15 +45,16 @@ START_FLOOR = 1e-6
 
 
 def error_space(space: Mapping[str, Transform | RelativeTransform]) -> dict:
-    """Where the standard errors are taken: the gains themselves (0 is a valid value, where
-    the softplus z of the solver is not), every other parameter as the solver sees it (log
+    """Where the standard errors are taken: the gains and the strands' opacity themselves (0
+    is a valid gain, where the softplus z of the solver is not; an opacity's error is one in
+    α, not in its logit), every other parameter as the solver sees it (log
     exponents and κ, shifts as they are)."""
-    return {n: IDENTITY if t is SOFTPLUS else t for n, t in space.items()}
+    return {n: IDENTITY if t is SOFTPLUS or t is LOGIT else t for n, t in space.items()}
 
 
 def value(params, name: str):
-    """The parameter `name` of `params` (a model's parameters, or `LitParams`)."""
-    return params.get(name) if isinstance(params, LitParams) else getattr(params, name)
+    """The parameter `name` of `params` (a model's parameters, or `ExtendedParams`)."""
+    return params.get(name) if isinstance(params, ExtendedParams) else getattr(params, name)
 
 
 def entries(name: str, colours, scalar, space: Mapping | None = None) -> int:
@@ -104,11 +106,11 @@ def from_flat(z: jax.Array, base, names, colours, scalar, space: Mapping):
 
 
 def with_values(base, values: dict, colours):
-    """`base` (a model's parameters, or `LitParams`, built through their own constructor,
+    """`base` (a model's parameters, or `ExtendedParams`, built through their own constructor,
     whose checks pass traced values) with some parameters replaced; a single value of an
     RGB one broadcasts, every other takes the shape of `base`'s."""
     shaped = {
         n: jnp.broadcast_to(x, (3,)) if n in colours else jnp.reshape(x, jnp.shape(value(base, n)))
         for n, x in values.items()
     }
-    return base.replace(shaped) if isinstance(base, LitParams) else dataclasses.replace(base, **shaped)
+    return base.replace(shaped) if isinstance(base, ExtendedParams) else dataclasses.replace(base, **shaped)

@@ -21,7 +21,7 @@ from .._shading import AbstractShadingModel
 from .._shading._streaks import streak_factors
 from ._setup import prepare
 
-__all__ = ["Geometry", "geometry_stage"]
+__all__ = ["Geometry", "composite_weights", "geometry_stage"]
 
 
 class Geometry(eqx.Module):
@@ -59,7 +59,10 @@ class Geometry(eqx.Module):
 
 
 @eqx.filter_jit
-def _composite_weights(alpha, frag_strand, frag_coverage, frag_first, frag_last, last_pixel, opaque):
+def composite_weights(alpha, frag_strand, frag_coverage, frag_first, frag_last, last_pixel, opaque):
+    """(weights `[F]`, fragment opacities `[F]`, transmittance `[HW]`, alpha channel `[HW]`)
+    of the set-up's fragments at the per-strand opacities `alpha` (docs/model.md §6);
+    `last_pixel`: each pixel's last fragment's pixel, past the end (H·W) for the others."""
     frag_alpha = alpha[frag_strand] * frag_coverage
     weights, inclusive = over_weights(frag_alpha, frag_first, frag_last)
     # Pixels without fragments keep T = 1; each covered pixel's last fragment sets its T
@@ -93,7 +96,7 @@ def _geometry_stage(scene: Scene, alpha, order=None) -> Geometry:
     alpha = jnp.asarray(alpha, dtype=dtype)
     hw = scene.camera.width * scene.camera.height
     last_pixel = np.where(setup.frag_last, setup.frag_pixel, hw)
-    weights, frag_alpha, transmittance, alpha_channel = _composite_weights(
+    weights, frag_alpha, transmittance, alpha_channel = composite_weights(
         alpha,
         setup.frag_strand,
         jnp.asarray(setup.frag_coverage, dtype),

@@ -12,7 +12,7 @@ from typing import NamedTuple
 
 import jax.numpy as jnp
 
-__all__ = ["Transform", "LOG", "SOFTPLUS", "IDENTITY", "softplus", "softplus_inv", "identity"]
+__all__ = ["Transform", "LOG", "SOFTPLUS", "IDENTITY", "LOGIT", "softplus", "softplus_inv", "identity"]
 
 
 def softplus(z):
@@ -43,3 +43,21 @@ LOG = Transform(jnp.exp, jnp.log, floored=True)
 SOFTPLUS = Transform(softplus, softplus_inv, floored=True)
 # Signed parameters (a tangent shift): x = z.
 IDENTITY = Transform(identity, identity, floored=False)
+
+
+# Clamp for the logit's argument: x in (0, 1) is needed, and a start at 0 or 1 (an opaque
+# strand, α = 1) would give z = ±∞. Fires only for such a start.
+_OPEN_UNIT = 1e-6
+
+
+def _logit(x):
+    x = jnp.clip(x, _OPEN_UNIT, 1.0 - _OPEN_UNIT)
+    return jnp.log(x) - jnp.log1p(-x)
+
+
+def _sigmoid(z):
+    return 0.5 * (1.0 + jnp.tanh(0.5 * z))  # = 1 / (1 + e^−z), without overflow for z ≪ 0
+
+
+# Opacities in (0, 1) (the strands' α, fitted): x = sigmoid(z).
+LOGIT = Transform(_sigmoid, _logit, floored=False)

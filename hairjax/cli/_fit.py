@@ -47,7 +47,7 @@ def _table(result, names, fittable) -> str:
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from .._fit import LIGHT_NAMES, FitError, fit
+    from .._fit import ALPHA, LIGHT_NAMES, FitError, fit
     from .._io._image import read_image
     from .._progress import reporter
     from ._scenes import load_cli_scene
@@ -78,10 +78,10 @@ def run(args: argparse.Namespace) -> int:
     # also fits the light's (docs/fitting.md, "Fitting the light"), when named.
     fittable = first.shading.fittable
     names = fittable if args.fit is None else tuple(n.strip() for n in args.fit.split(",") if n.strip())
-    unknown = [n for n in names if n not in fittable + LIGHT_NAMES]
+    unknown = [n for n in names if n not in fittable + LIGHT_NAMES + (ALPHA,)]
     if unknown or not names:
         what = f"unknown parameter {unknown[0]!r}" if unknown else "no parameter"
-        raise FitError(f"{what} in --fit; fittable: {', '.join(fittable + LIGHT_NAMES)}")
+        raise FitError(f"{what} in --fit; fittable: {', '.join(fittable + LIGHT_NAMES + (ALPHA,))}")
 
     if not args.quiet:
         print(f"fitting {', '.join(names)} with {args.solver} to {len(targets)} target(s)", file=sys.stderr)
@@ -108,17 +108,11 @@ def run(args: argparse.Namespace) -> int:
     if result.holdout_rmse is not None:
         print(f"held-out RMSE {result.holdout_rmse:.4g} ({len(args.holdout)} target(s) the fit did not see)")
 
-    fitted_image = None
+    image = None
     if args.out is not None or args.plot is not None:
-        if result.light is None:
-            from .._render import render
+        from .._fit import fitted_image
 
-            fitted_image = np.asarray(render(first, result.params))
-        else:  # at the fitted light (its Ω and V the scene's, as in the fit)
-            from .._geometry._stage import geometry_stage
-            from .._shading import shading_stage
-
-            fitted_image = np.asarray(shading_stage(geometry_stage(first), result.params, result.light))
+        image = np.asarray(fitted_image(first, result))
     with written_together([o.path for o in outputs]) as temps:
         for out, tmp in zip(outputs, temps):
             if out.option == "--json":
@@ -128,11 +122,11 @@ def run(args: argparse.Namespace) -> int:
             elif out.option == "--out":
                 from .._io._image import write_image
 
-                write_image(tmp, fitted_image)
+                write_image(tmp, image)
             else:
                 from .._io._view import side_by_side
 
-                side_by_side(targets[0], fitted_image, tmp, title=f"{first.name}: {result.termination}")
+                side_by_side(targets[0], image, tmp, title=f"{first.name}: {result.termination}")
     if not args.quiet:
         for out in outputs:
             print(f"wrote {out.path}")

@@ -2,6 +2,7 @@
 
 import os
 
+import jax.numpy as jnp
 import numpy as np
 import pytest
 from helpers import DATA
@@ -193,6 +194,29 @@ def test_fit_takes_the_light_names(scene_file, tmp_path, monkeypatch, capsys):
     assert json.loads(report.read_text())["light"]["color"] == [1.0, 0.8, 0.6]
     assert main([*argv, "--fit", "light_gloss"]) == 2
     assert "light_direction, light_color" in capsys.readouterr().err
+
+
+def test_fit_takes_alpha(scene_file, tmp_path, monkeypatch, capsys):
+    """--fit accepts the strands' opacity; the table shows its start and fitted value, and
+    --out renders at the fitted opacity (the fit is replaced by its result)."""
+    from hairjax._fit import FitResult
+
+    params = hj.load_scene(scene_file).params
+    fields = dict(params=params, initial=params, fitted=("kd", "alpha"), loss=[1.0], steps=1, time_s=0.1)
+    fields |= dict(geometry_s=0.1, std_error={"kd": None, "alpha": 0.01}, undetermined=(), rmse=0.5)
+    result = FitResult(**fields, termination="converged", alpha=0.25, initial_alpha=0.8)
+    calls = []
+    monkeypatch.setattr("hairjax._fit.fit", lambda *args, **kwargs: calls.append(kwargs) or result)
+    target, out = tmp_path / "t.exr", tmp_path / "fitted.exr"
+    hj.write_image(target, np.zeros((30, 40, 4)))
+    argv = ["fit", str(scene_file), "--target", str(target), "--fit", "kd,alpha", "--out", str(out), "-q"]
+    assert main(argv) == 0
+    assert calls[0]["fit"] == ("kd", "alpha")
+    row = next(line for line in capsys.readouterr().out.splitlines() if line.startswith("alpha"))
+    assert row.split()[1:4] == ["0.8", "0.25", "0.01"]
+    scene = hj.load_scene(scene_file)
+    expected = hj.render(scene, params, jnp.full(scene.strands.num_strands, 0.25))
+    np.testing.assert_allclose(hj.read_image(out), expected, atol=1e-6)  # EXR float32
 
 
 def test_fit_reports_the_held_out_rmse(scene_file, tmp_path, monkeypatch, capsys):
