@@ -252,6 +252,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--repeats", type=positive_int, default=3, help="timed renders per point (their median)")
     p.add_argument("--quick", action="store_true", help="a few values per knob")
     p.add_argument("--restart", action="store_true", help="discard the finished points in --out")
+    p.add_argument(
+        "--target",
+        type=Path,
+        help="measure every point against this image (e.g. `hairjax reference`'s) instead of "
+        "each renderer's converged reference",
+    )
 
     p = command("info", "summarise a hair file (.hair, .tfx, .ply)", scene_options=False)
     p.add_argument("file", type=Path, help="hair file")

@@ -27,6 +27,11 @@ def run(args: argparse.Namespace) -> int:
     if any(p not in PATHS for p in paths) or not paths:
         raise SweepError(f"--paths takes a comma list of {', '.join(PATHS)}, got {args.paths!r}")
     scene = load_cli_scene(args, args.scene)
+    target = None
+    if args.target is not None:
+        from .._io._image import read_image
+
+        target = read_image(args.target)
     try:
         with reporter("sweep", quiet=args.quiet) as progress:
             points = run_sweep(
@@ -37,6 +42,7 @@ def run(args: argparse.Namespace) -> int:
                 repeats=args.repeats,
                 restart=args.restart,
                 progress=progress,
+                target=target,
             )
     except KeyboardInterrupt:
         print(

@@ -216,6 +216,25 @@ def _reference(out: Path, path: str, run, scene: Scene, knobs: dict, repeats: in
     return {"image": image, "omega": omega, "peak": peak, "time_s": median}
 
 
+def _target_reference(scene: Scene, target) -> dict:
+    """A given target image as every path's reference: checked against the scene's size
+    (SweepError before any work), its peak for the relative RMSE, no Ω."""
+    image = np.asarray(target, np.float64)
+    size = (scene.camera.height, scene.camera.width)
+    if image.ndim != 3 or image.shape[2] not in (3, 4) or image.shape[:2] != size:
+        raise SweepError(
+            f"the target is {'x'.join(map(str, image.shape))}, the scene renders "
+            f"{size[1]}x{size[0]}: a target must be [H, W, 3 or 4] at the scene's size"
+        )
+    if not np.all(np.isfinite(image[..., :3])):
+        raise SweepError("the target has NaN or infinite pixels")
+    peak = float(image[..., :3].max())
+    if not peak > 0:  # the relative RMSE divides by it
+        raise SweepError("the target image is black: nothing to measure errors against")
+    digest = hashlib.sha256(np.ascontiguousarray(image).tobytes()).hexdigest()[:16]
+    return {"image": image, "omega": None, "peak": peak, "time_s": float("nan"), "digest": digest}
+
+
 def run_sweep(
     scene: Scene,
     out,
@@ -225,6 +244,7 @@ def run_sweep(
     repeats: int = 3,
     restart: bool = False,
     progress: Progress | bool | None = None,
+    target=None,
 ) -> list[dict]:
     """Sweep `knobs` (name → values; default `KNOBS`) for `paths` and return all points.
 
@@ -238,7 +258,12 @@ def run_sweep(
     the sweep's points and `done` counting those a resumed sweep found finished: its first
     call, "resuming: N of M points already done", has done = N. Each path's reference render
     is reported too, with `done` unchanged. (True and False, the older flags, are taken
-    for one release: True draws `reporter("sweep")`.)"""
+    for one release: True draws `reporter("sweep")`.)
+
+    `target`: an `[H, W, 3|4]` image (e.g. `reference_image`'s physically based one) that
+    every point of both paths is measured against instead of each path's converged
+    reference: the error then includes the model's own (docs/results.md). No reference is
+    rendered, and tau_rmse and tau_max are None."""
     knobs = dict(KNOBS if knobs is None else knobs)
     for k in knobs:
         if k not in KNOBS:
@@ -250,6 +275,7 @@ def run_sweep(
         repeats = check_repeats(repeats)
     except ValueError as err:
         raise SweepError(str(err)) from None
+    given = None if target is None else _target_reference(scene, target)
     if not scene.shadows.casts:
         # A scene without shadows has no shadow knobs to turn.
         knobs = {k: v for k, v in knobs.items() if k not in SHADOW_KNOBS}
@@ -259,11 +285,15 @@ def run_sweep(
         "scene": scene.name,
         "scene_digest": scene_digest(scene),
         "repeats": repeats,
-        "reference": {
-            "shadows": ("none" if not scene.shadows.casts else f"exact at {scene.shadows.resolution}²"),
-            "ordering": "exact",
-            "supersampling": int(max(knobs.get("supersampling", (1,)))),
-        },
+        "reference": (
+            {
+                "shadows": ("none" if not scene.shadows.casts else f"exact at {scene.shadows.resolution}²"),
+                "ordering": "exact",
+                "supersampling": int(max(knobs.get("supersampling", (1,)))),
+            }
+            if given is None
+            else {"target": given["digest"]}
+        ),
         "knobs": {k: list(v) for k, v in knobs.items()},
         "paths": list(paths),
         "size": [scene.camera.width, scene.camera.height],
@@ -285,8 +315,11 @@ def run_sweep(
         for path, knob, value in todo:
             if path not in runs:
                 runs[path] = _renderer(path)
-                references[path] = _reference(out, path, runs[path], scene, knobs, repeats)
-                report(count, total, f"{path} reference")
+                if given is None:
+                    references[path] = _reference(out, path, runs[path], scene, knobs, repeats)
+                    report(count, total, f"{path} reference")
+                else:
+                    references[path] = given
             variant, s = knob_scene(scene, knob, value)
             label = f"{path} {knob} = {value}"
             try:

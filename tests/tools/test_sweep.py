@@ -1,5 +1,6 @@
 """`hairjax sweep` (hairjax/tools/_sweep.py, _sweep_report.py): points, resuming, the report."""
 
+import dataclasses
 import json
 
 import numpy as np
@@ -176,6 +177,10 @@ def test_cli_sweep(tmp_path, capsys):
     assert len(load_points(out)) == 3 and (out / "pareto.png").exists()
     assert cli.main(["sweep", *args[:5], "--knobs", "gamma"]) == 2
     assert "unknown knob 'gamma'" in capsys.readouterr().err
+    small = tmp_path / "small.exr"
+    hj.write_image(small, np.ones((8, 8, 4)))
+    assert cli.main(["sweep", *args, "--target", str(small), "--out", str(tmp_path / "t")]) == 2
+    assert "the target is 8x8x4, the scene renders 16x16" in capsys.readouterr().err
 
 
 def test_a_refused_setting_is_recorded_and_the_sweep_goes_on(scene, tmp_path, monkeypatch):
@@ -194,3 +199,42 @@ def test_a_refused_setting_is_recorded_and_the_sweep_goes_on(scene, tmp_path, mo
     files = write_report(tmp_path, points, config)
     assert "- jax, bins = 4: 4 bins exceed the test's budget" in files["summary"].read_text()
     assert len(files["csv"].read_text().splitlines()) == 3  # header and the two measured points
+
+
+def test_a_given_target_is_every_point_s_reference(scene, tmp_path):
+    """With `target`, each point's error is against that image (here the scene rendered
+    with other shading parameters, as a physically based target differs from the model):
+    no reference is rendered, and the error is the RMSE written out."""
+    target = np.asarray(hj.render(scene, dataclasses.replace(scene.params, kd=scene.params.kd * 0.5)))
+    points = run_sweep(
+        scene,
+        tmp_path,
+        knobs={"bins": (1, "exact")},
+        paths=("jax",),
+        repeats=1,
+        progress=False,
+        target=target,
+    )
+    assert not (tmp_path / "reference_jax.npz").exists()
+    for p in points:
+        image = np.asarray(hj.render(knob_scene(scene, "bins", p["value"])[0]), np.float64)
+        expected = np.sqrt(np.mean((image[..., :3] - target[..., :3]) ** 2))
+        np.testing.assert_allclose(p["rmse"], expected, rtol=1e-9)  # one float64 sum, two orders
+        assert p["rel_rmse"] == pytest.approx(p["rmse"] / target[..., :3].max()) and p["tau_rmse"] is None
+    config = json.loads((tmp_path / "sweep.json").read_text())
+    assert set(config["reference"]) == {"target"}
+    text = summary_markdown(points, config)
+    assert "## Cheapest settings within 10% of the best error" in text and "given target image" in text
+    with pytest.raises(SweepError, match="the target is 8x8x4, the scene renders 24x24"):
+        run_sweep(
+            scene, tmp_path / "b", knobs={"bins": (1,)}, paths=("jax",), progress=False, target=target[:8, :8]
+        )
+
+
+def test_cheapest_within_ten_percent_of_the_best_error_against_a_target():
+    config = {**CONFIG, "reference": {"target": "0123456789abcdef"}}
+    points = [*POINTS, {"path": "jax", "knob": "maps", "value": 64, "time_s": 2.5, "rel_rmse": 5.4e-4}]
+    text = summary_markdown(points, config)
+    # Best 5e-4 (bins = exact, 3 s): within 10 %, maps = 64 (5.4e-4) at 2.5 s is cheaper.
+    assert "| jax | maps = 64 (2.5 s) | 64 (2.5 s) | exact (3 s) |" in text
+    assert "digest 0123456789abcdef" in text
