@@ -112,7 +112,7 @@ def fit(
         raise FitError(f"{ALPHA} is not fitted together with the light (light_direction, light_color)")
     model = _model_of(scenes, lit, opacity)
     names = check_names(
-        tuple(n for n in model.fittable if n not in LIGHT_NAMES) if fit is None else fit, scalar, model
+        model.defaults if fit is None else fit, scalar, model
     )
     scalar = tuple(scalar)
     double = jnp.result_type(float) == jnp.float64

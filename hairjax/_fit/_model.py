@@ -32,7 +32,9 @@ class FitModel:
 
     - `label`: its name in messages; `model_class`: the shading model class it fits;
       `params_type`: its parameters' class (ShadingParams, ScheuermannParams).
-    - `fittable`: the names `fit` takes (all of them by default); `colours`: the RGB ones,
+    - `fittable`: the names `fit` takes; `defaults`: those it fits when none are named (the
+      shading model's `fittable`: the ambient gain, the light and the strands' opacity are
+      fitted only where named); `colours`: the RGB ones,
       which may also be fitted as one grey value; `transforms`: name → `Transform` from the
       solver's z (`_space.py`), or a `RelativeTransform` (the light's direction, `_lit.py`).
     - `prepare(scene, params, names, target, sqrt_weight) -> data`: per target, everything
@@ -49,6 +51,7 @@ class FitModel:
     model_class: type
     params_type: type
     fittable: tuple[str, ...]
+    defaults: tuple[str, ...]
     colours: tuple[str, ...]
     transforms: Mapping[str, Transform | RelativeTransform]
     prepare: Callable

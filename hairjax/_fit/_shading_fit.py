@@ -281,10 +281,11 @@ def _reaches(model: AbstractShadingModel, points, params, searched, direction: b
 @functools.cache
 def fit_model(cls: type[AbstractShadingModel]) -> FitModel:
     """The fit of shading model class `cls` (one per class: a static part of the compiled
-    steps). Its gains are solved for (`linear`), its `searched` parameters iterated on."""
+    steps). Its gains are solved for (`linear`), its `searched` parameters iterated on; the
+    ambient gain is fitted where named, never by default."""
     gains = tuple(n for n in cls.fittable if n not in cls.searched)
     all_gains = gains + (() if "ambient" in gains else ("ambient",))
-    transforms = {**{n: SOFTPLUS for n in gains}, **dict(cls.searched)}
+    transforms = {**{n: SOFTPLUS for n in all_gains}, **dict(cls.searched)}
     plateau = None
     if cls.plateau is not None:
         gain, exponent = cls.plateau
@@ -301,12 +302,13 @@ def fit_model(cls: type[AbstractShadingModel]) -> FitModel:
         label=cls.name,
         model_class=cls,
         params_type=cls.params_type,
-        fittable=cls.fittable,
+        fittable=cls.fittable + tuple(n for n in all_gains if n not in cls.fittable),
+        defaults=cls.fittable,
         colours=all_gains,
         transforms=transforms,
         prepare=functools.partial(prepare_terms, all_gains),
         image=image,
-        linear=gains,
+        linear=all_gains,
         gain_images=images,
         plateau=plateau,
     )

@@ -77,11 +77,12 @@ def run(args: argparse.Namespace) -> int:
     # Each shading model has its parameters (docs/model.md §17 for Scheuermann's); any model
     # also fits the light's (docs/fitting.md, "Fitting the light"), when named.
     fittable = first.shading.fittable
+    also = (*(("ambient",) if "ambient" not in fittable else ()), *LIGHT_NAMES, ALPHA)  # where named
     names = fittable if args.fit is None else tuple(n.strip() for n in args.fit.split(",") if n.strip())
-    unknown = [n for n in names if n not in fittable + LIGHT_NAMES + (ALPHA,)]
+    unknown = [n for n in names if n not in fittable + also]
     if unknown or not names:
         what = f"unknown parameter {unknown[0]!r}" if unknown else "no parameter"
-        raise FitError(f"{what} in --fit; fittable: {', '.join(fittable + LIGHT_NAMES + (ALPHA,))}")
+        raise FitError(f"{what} in --fit; fittable: {', '.join(fittable + also)}")
 
     if not args.quiet:
         print(f"fitting {', '.join(names)} with {args.solver} to {len(targets)} target(s)", file=sys.stderr)

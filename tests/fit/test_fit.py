@@ -1,5 +1,7 @@
 """hairjax.fit (docs/fitting.md): recovery, subsets, staging, degenerate cases, input errors."""
 
+import dataclasses
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -495,3 +497,17 @@ def test_a_fit_leaves_the_plateau_where_ks_is_zero(scene, target, solver):
     r = hj.fit(scene, target, init=start, solver=solver)
     assert r.termination == "converged" and r.restarts >= 1
     assert all(rel(getattr(r.params, n), getattr(TRUE, n)) < 1e-3 for n in hj.KajiyaKay.fittable)
+
+
+def test_the_ambient_gain_is_fitted_where_named(scene):
+    """ambient is a gain like Kd (solved for, RGB): recovered where named, held otherwise."""
+    true = dataclasses.replace(TRUE, ambient=jnp.asarray([0.05, 0.1, 0.02]))
+    target = np.asarray(hj.render(scene, true))
+    start = dataclasses.replace(INIT, ambient=jnp.zeros(3))
+    r = hj.fit(scene, target, fit=("kd", "ks", "shininess", "kappa", "ambient"), init=start, max_steps=200)
+    assert r.termination == "converged" and r.undetermined == ()
+    # The noise-free recovery bound (docs/fitting.md): 1e-3 relative.
+    assert rel(r.params.ambient, true.ambient) < 1e-3 and rel(r.params.kd, true.kd) < 1e-3
+    assert np.all(np.isfinite(r.std_error["ambient"]))
+    held = hj.fit(scene, target, init=start, max_steps=3)
+    assert "ambient" not in held.fitted and np.all(np.asarray(held.params.ambient) == 0.0)
