@@ -70,10 +70,11 @@ def fit(
     - `fit`: the parameters to fit, among the shading model's `fittable` (default: all of
       them): kd, ks, shininess, kappa for Kajiya-Kay; kd, primary_color, primary_exponent,
       primary_shift, secondary_color, secondary_exponent, secondary_shift, kappa for
-      Scheuermann (docs/model.md §17); and, for any model, the light's light_direction (a
-      directional light's) and light_color (docs/fitting.md, "Fitting the light"), and
-      alpha, one opacity for every strand, starting from the first scene's mean
-      (docs/fitting.md, "Fitting the strands' opacity"); the rest stay at `init` and `light`.
+      Scheuermann (docs/model.md §17); and, for any model and only where named: ambient
+      (a gain, solved for like Kd), the light's light_direction (a directional light's)
+      and light_color (docs/fitting.md, "Fitting the light"), and alpha, one opacity for
+      every strand, starting from the first scene's mean (docs/fitting.md, "Fitting the
+      strands' opacity"); the rest stay at `init` and `light`.
     - `init`: starting (and fixed) parameters, the model's parameter type; default the
       first scene's.
     - `solver`: levenberg-marquardt (lm), gauss-newton, dogleg, or bfgs (on ½‖r‖²).
