@@ -29,7 +29,15 @@ from ._scene._light import Light
 from ._scene._scene import Scene
 from ._shading import shading_stage
 
-__all__ = ["render_views", "view_scenes", "stack_geometries", "shade_views", "view_mesh", "bucket"]
+__all__ = [
+    "render_views",
+    "view_scenes",
+    "stack_geometries",
+    "pad_geometries",
+    "shade_views",
+    "view_mesh",
+    "bucket",
+]
 
 # The per-fragment fields and what pads them: a padded fragment adds nothing to any pixel.
 _FRAGMENT_FILL = {"frag_pixel": None, "frag_i0": 0, "frag_t": 0.0, "frag_weight": 0.0, "frag_alpha": 0.0}
@@ -96,15 +104,21 @@ def _padded(g: Geometry, fill: dict, n: int) -> Geometry:
     return eqx.tree_at(lambda g: tuple(getattr(g, k) for k in names), g, grown)
 
 
+def pad_geometries(geometries: Sequence[Geometry], round_up=bucket) -> list[Geometry]:
+    """The geometries with their fragment and occluder arrays padded to the longest of
+    them, rounded up by `round_up` (default `bucket`), with entries that add nothing."""
+    f = round_up(max(int(g.frag_pixel.shape[0]) for g in geometries))
+    padded = [_padded(g, _FRAGMENT_FILL, f) for g in geometries]
+    if geometries[0].occluder_pixel is not None:
+        q = round_up(max(np.shape(g.occluder_pixel)[0] for g in geometries if g.occluder_pixel is not None))
+        padded = [_padded(g, _OCCLUDER_FILL, q) for g in padded]
+    return padded
+
+
 def stack_geometries(geometries: Sequence[Geometry]) -> Geometry:
     """One `Geometry` with a leading view axis: fragment and occluder arrays padded to the
     longest of the views (rounded up by `bucket`, so that batches compile rarely)."""
-    f = bucket(max(int(g.frag_pixel.shape[0]) for g in geometries))
-    padded = [_padded(g, _FRAGMENT_FILL, f) for g in geometries]
-    if geometries[0].occluder_pixel is not None:
-        q = bucket(max(np.shape(g.occluder_pixel)[0] for g in geometries if g.occluder_pixel is not None))
-        padded = [_padded(g, _OCCLUDER_FILL, q) for g in padded]
-    return jax.tree.map(lambda *xs: jnp.stack(xs), *padded)
+    return jax.tree.map(lambda *xs: jnp.stack(xs), *pad_geometries(geometries))
 
 
 def view_mesh(devices=None) -> Mesh:

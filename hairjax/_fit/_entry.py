@@ -19,6 +19,7 @@ import numpy as np
 
 from .._scene._scene import Scene
 from .._shading import AbstractShadingModel, LightParams
+from ._batch import batched, batched_model
 from ._convergence import half_square, plateau_exit, solve
 from ._holdout import check_light, held_out, held_out_rmse
 from ._light_fit import lit_fit_model, start_light
@@ -144,6 +145,9 @@ def fit(
 
     start = time.perf_counter()
     data = [model.prepare(s, init, names, t, sw) for s, (t, sw) in zip(scenes, arrays)]
+    stacked = batched(data)  # several targets: one batch under vmap where they stack
+    if stacked is not data:
+        data, model = stacked, batched_model(model)
     jax.block_until_ready(data)
     geometry_s = time.perf_counter() - start
 

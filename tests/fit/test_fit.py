@@ -129,10 +129,16 @@ def test_fitting_kappa_alone_reuses_the_shading_terms(scene, target, monkeypatch
     assert len(calls) <= 2 and r.steps >= 2
 
 
-def test_several_targets_at_once(scene):
+def test_several_targets_at_once(scene, monkeypatch):
+    """Two lights of one view: one fit, its targets one batch (tests/fit/test_batch.py)."""
+    from hairjax._fit import _batch
+
+    calls = []
+    monkeypatch.setattr(_entry, "batched", lambda data: calls.append(len(data)) or _batch.batched(data))
     other = scene.replace(light=hj.Light(direction=(0.6, -0.5, -0.3)))
     targets = [np.asarray(hj.render(scene, TRUE)), np.asarray(hj.render(other, TRUE))]
     r = hj.fit([scene, other], targets, init=INIT)
+    assert calls == [2] and r.termination == "converged"
     assert rel(r.params.kappa, TRUE.kappa) < 1e-3 and rel(r.params.kd, TRUE.kd) < 1e-3
 
 
