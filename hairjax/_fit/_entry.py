@@ -113,9 +113,7 @@ def fit(
     if opacity and lit:
         raise FitError(f"{ALPHA} is not fitted together with the light (light_direction, light_color)")
     model = _model_of(scenes, lit, opacity)
-    names = check_names(
-        model.defaults if fit is None else fit, scalar, model
-    )
+    names = check_names(model.defaults if fit is None else fit, scalar, model)
     scalar = tuple(scalar)
     double = jnp.result_type(float) == jnp.float64
     rtol = (1e-8 if double else 1e-5) if rtol is None else rtol
