@@ -2,6 +2,7 @@
 time for V views of one scene, as one batched, sharded call and as V calls.
 
     python experiments/12_views_batch.py            # default scene at 256², 4 views (~1 min)
+    python experiments/12_views_batch.py --strands 2000 --size 64   # a smaller ball, quicker
 
 Prints medians of 5 runs after a warm-up; the geometry stages (per view, cached) are
 built before the timing. Run with XLA_FLAGS=--xla_force_host_platform_device_count=N to
@@ -36,8 +37,12 @@ def main(argv=None) -> int:
     p.add_argument("--size", type=int, default=256)
     p.add_argument("--views", type=int, default=4)
     p.add_argument("--repeats", type=int, default=5)
+    p.add_argument("--strands", type=int, help="the fur ball's strands (default: the scene's, 20,000)")
     args = p.parse_args(argv)
-    scene = hj.load_scene(hj.default_scene_path(), {"camera.width": args.size, "camera.height": args.size})
+    overrides = {"camera.width": args.size, "camera.height": args.size}
+    if args.strands is not None:
+        overrides["hair.strands"] = args.strands
+    scene = hj.load_scene(hj.default_scene_path(), overrides)
     cam = scene.camera
     r = float(np.linalg.norm(np.subtract(cam.eye, cam.target)))
     cameras = [

@@ -8,8 +8,10 @@ from helpers import load_experiment
 
 
 def test_views_batch_runs(capsys):
-    assert load_experiment("12_views_batch").main(["--size", "24", "--views", "2", "--repeats", "1"]) == 0
+    # A 500-strand ball: the same code path as the default 20,000 (which only take longer).
+    argv = ["--size", "24", "--views", "2", "--repeats", "1", "--strands", "500"]
+    assert load_experiment("12_views_batch").main(argv) == 0
     out = capsys.readouterr().out
-    assert "2 views of 24²" in out
+    assert "2 views of 24², 500 strands" in out
     times = [float(t) for t in re.findall(r": +([0-9.]+) ms", out)]
     assert len(times) == 2 and all(t > 0 for t in times)
