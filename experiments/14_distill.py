@@ -41,7 +41,7 @@ view, the same definition as the fit's RMSE (√(Σ (a − b)² / 3N) over all p
 Independent noise of variance σ² per channel adds σ² = floor²/2 to a perfect model's
 squared RMSE, so floor/√2 is the share of a fit's RMSE that no model can remove.
 
-    python experiments/14_distill.py --data ../shared/data          # the full sweep
+    python experiments/14_distill.py --docs docs                    # the full sweep (docs/results.md §6)
     python experiments/14_distill.py --quick                        # tiny, for the test suite
     python experiments/14_distill.py --assets furball --colours brown --models kajiya-kay
 
@@ -260,8 +260,8 @@ def fit_one(model: str, scenes: dict, refs: dict, max_steps: int) -> tuple[dict,
     numbers, the FitResult, view name → fitted image)."""
     import hairjax as hj
 
-    train = [v.name for v in VIEWS if v.train]
-    held = [v.name for v in VIEWS if not v.train]
+    train = [v.name for v in VIEWS if v.train and v.name in scenes]
+    held = [v.name for v in VIEWS if not v.train and v.name in scenes]
     start = scenes[train[0]].params
     t0 = time.perf_counter()
     r = hj.fit(
@@ -289,8 +289,8 @@ def fit_one(model: str, scenes: dict, refs: dict, max_steps: int) -> tuple[dict,
         termination=r.termination,
         undetermined=" ".join(r.undetermined),
         params="; ".join(f"{n} {_fmt(r.get(n), r.std_error.get(n))}" for n in FIT_NAMES[model]),
-        **{f"rmse_{v.name}": rmse([fitted[v.name]], [refs[v.name][0]]) for v in VIEWS},
-        **{f"floor_{v.name}": rmse([refs[v.name][0]], [refs[v.name][1]]) for v in VIEWS},
+        **{f"rmse_{v}": rmse([fitted[v]], [refs[v][0]]) for v in scenes},
+        **{f"floor_{v}": rmse([refs[v][0]], [refs[v][1]]) for v in scenes},
     )
     return row, r, fitted
 
@@ -331,9 +331,10 @@ def summary_table(rows: list[dict], models: list[str]) -> str:
 def view_table(rows: list[dict], models: list[str]) -> str:
     """Per model and view, the median over the sweep of the fitted view's RMSE and of its
     ratio to the view's floor, and the same for light (blonde) and dark (black) hair."""
+    views = [v for v in VIEWS if any(f"rmse_{v.name}" in r for r in rows)]
     lines = [
-        "| model | hair | " + " | ".join(v.name for v in VIEWS) + " |",
-        "|---" * (2 + len(VIEWS)) + "|",
+        "| model | hair | " + " | ".join(v.name for v in views) + " |",
+        "|---" * (2 + len(views)) + "|",
     ]
     for m in models:
         for hair, colours in (("all", tuple(COLOURS)), ("blonde", ("blonde",)), ("black", ("black",))):
@@ -341,7 +342,7 @@ def view_table(rows: list[dict], models: list[str]) -> str:
             if not sel:
                 continue
             cells = []
-            for v in VIEWS:
+            for v in views:
                 err = float(np.median([r[f"rmse_{v.name}"] for r in sel]))
                 ratio = float(np.median([r[f"rmse_{v.name}"] / r[f"floor_{v.name}"] for r in sel]))
                 cells.append(f"{err:.4f} ({ratio:.1f}×)")
@@ -397,8 +398,15 @@ def figure(path: Path, target, fitted: dict, title: str) -> None:
 
 # --- the sweep ---------------------------------------------------------------------------
 
-FULL = dict(size=128, spp=64, strands={"furball": 1000, "ponytail": None, "sintel": None})
-QUICK = dict(size=40, spp=16, strands={"furball": 120})
+FULL = dict(size=96, spp=256, strands={"furball": 1000, "ponytail": None, "sintel": None})
+QUICK = dict(
+    size=40,
+    spp=16,
+    strands={"furball": 120},
+    models=("kajiya-kay",),
+    max_steps=30,
+    views=("front", "back-lit", "held-out"),  # fewer views: fewer programs to compile
+)
 CSV_COLUMNS = (
     "asset",
     "colour",
@@ -457,7 +465,7 @@ def _parser() -> argparse.ArgumentParser:
         "--quick",
         action="store_true",
         help=f"{QUICK['strands']['furball']} fur-ball strands at {QUICK['size']}², {QUICK['spp']} spp, "
-        "brown, β_m 0.2, for the test suite",
+        f"brown, β_m 0.2, {', '.join(QUICK['models'])} only, for the test suite",
     )
     return p
 
@@ -465,22 +473,27 @@ def _parser() -> argparse.ArgumentParser:
 def cached_references(args, asset: str, views: dict, colour: str, roughness: float) -> dict:
     """`references`, read from OUT/references/ with `--reuse-references` where an earlier
     run wrote them (every run writes them)."""
-    n = len(views["front"].strands.offsets) - 1
+    n = len(next(iter(views.values())).strands.offsets) - 1
     path = args.out / "references" / f"{asset}-{n}_{colour}_{roughness:g}_{args.size}_{args.spp}.npz"
     if args.reuse_references and path.is_file():
         with np.load(path) as f:
-            return {v.name: (f[f"{v.name}_0"], f[f"{v.name}_1"]) for v in VIEWS}
+            return {v: (f[f"{v}_0"], f[f"{v}_1"]) for v in views}
     refs = references(views, colour, roughness, args.spp)
     path.parent.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(path, **{f"{v}_{i}": x[i] for v, x in refs.items() for i in (0, 1)})
     return refs
 
 
+def chosen_views(args) -> list[View]:
+    return [v for v in VIEWS if not args.quick or v.name in QUICK["views"]]
+
+
 def run_asset(args, asset: str, strands: int | None, colours, roughnesses, models) -> tuple:
     """Every fit of one asset: (CSV rows, FitResult JSONs, figure paths)."""
     base = asset_scene(asset, args.size, strands, args.data)
     light_of = lights(base)
-    views = {v.name: view_scene(base, v, light_of) for v in VIEWS}
+    chosen = chosen_views(args)
+    views = {v.name: view_scene(base, v, light_of) for v in chosen}
     scenes = {m: {n: s.replace(shading=shading_model(m)) for n, s in views.items()} for m in models}
     print(f"{asset}: {len(base.strands.offsets) - 1} strands, {len(base.strands.points)} points", flush=True)
     rows, fits, figures = [], [], []
@@ -503,9 +516,8 @@ def run_asset(args, asset: str, strands: int | None, colours, roughnesses, model
                     f"{r.termination}",
                     flush=True,
                 )
-            for v in VIEWS:
-                chosen = (asset, colour, roughness, v.name) in FIGURES
-                if chosen or (args.quick and not v.train):
+            for v in chosen:
+                if (asset, colour, roughness, v.name) in FIGURES or (args.quick and not v.train):
                     path = args.out / "figures" / f"distill_{asset}_{colour}_{roughness:g}_{v.name}.png"
                     title = (
                         f"{asset}, {colour}, β_m {roughness:g}, {v.name} view ({args.size}², {args.spp} spp)"
@@ -524,6 +536,7 @@ def main(argv=None) -> int:
     if args.quick:
         args.size, args.spp, strands = QUICK["size"], QUICK["spp"], dict(QUICK["strands"])
         args.assets, args.colours, args.roughnesses = "furball", "brown", "0.2"
+        args.models, args.max_steps = ",".join(QUICK["models"]), min(args.max_steps, QUICK["max_steps"])
     if args.strands is not None:
         strands = {a: args.strands for a in ASSETS}
     assets = _choices(args.assets, ASSETS, "asset")
@@ -545,8 +558,8 @@ def main(argv=None) -> int:
     total = time.perf_counter() - started
     header = (
         f"{', '.join(assets)}; {args.size}², {args.spp} spp (Mitsuba `max_depth` 16); "
-        f"training views {', '.join(v.name for v in VIEWS if v.train)}, held out: "
-        f"{', '.join(v.name for v in VIEWS if not v.train)}; total {total:.0f} s"
+        f"training views {', '.join(v.name for v in chosen_views(args) if v.train)}, held out: "
+        f"{', '.join(v.name for v in chosen_views(args) if not v.train)}; total {total:.0f} s"
     )
     text = "\n\n".join(
         [
