@@ -1,7 +1,7 @@
 """Distillation: the real-time hair models fitted to Mitsuba 3's physically based hair.
 
 Which real-time parameters reproduce physically based hair, and how much error remains
-(docs/reference.md, docs/fitting.md; the table and discussion: docs/results.md §6). Every
+(docs/reference.md, docs/fitting.md; the table and discussion: docs/physically_based.md §1). Every
 target is `hj.reference_image`: the same strands as fibres with Chiang et al. 2016's hair
 BSDF, path traced by Mitsuba 3 (`max_depth` 16, so the light scattered between fibres is
 in it). Swept:
@@ -41,7 +41,7 @@ view, the same definition as the fit's RMSE (√(Σ (a − b)² / 3N) over all p
 Independent noise of variance σ² per channel adds σ² = floor²/2 to a perfect model's
 squared RMSE, so floor/√2 is the share of a fit's RMSE that no model can remove.
 
-    python experiments/14_distill.py --docs docs                    # the full sweep (docs/results.md §6)
+    python experiments/14_distill.py --docs docs                    # the full sweep (docs/physically_based.md §1)
     python experiments/14_distill.py --quick                        # tiny, for the test suite
     python experiments/14_distill.py --assets furball --colours brown --models kajiya-kay
 

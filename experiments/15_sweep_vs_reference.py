@@ -1,4 +1,4 @@
-"""Error against run time, against the physically based reference (docs/results.md,
+"""Error against run time, against the physically based reference (docs/physically_based.md §2,
 "Quality settings against the physically based reference"): which quality settings still
 matter once the model's own error is counted, and what Mitsuba itself costs.
 

@@ -1,4 +1,4 @@
-"""experiments/15_sweep_vs_reference.py runs end to end (docs/results.md, "Quality
+"""experiments/15_sweep_vs_reference.py runs end to end (docs/physically_based.md §2, "Quality
 settings against the physically based reference")."""
 
 from __future__ import annotations
