@@ -41,8 +41,8 @@ view, the same definition as the fit's RMSE (√(Σ (a − b)² / 3N) over all p
 Independent noise of variance σ² per channel adds σ² = floor²/2 to a perfect model's
 squared RMSE, so floor/√2 is the share of a fit's RMSE that no model can remove.
 
-    python experiments/14_distill.py --docs docs                    # the full sweep (docs/physically_based.md §1)
-    python experiments/14_distill.py --quick                        # tiny, for the test suite
+    python experiments/14_distill.py --docs docs    # the full sweep (docs/physically_based.md §1)
+    python experiments/14_distill.py --quick        # tiny, for the test suite
     python experiments/14_distill.py --assets furball --colours brown --models kajiya-kay
 
 Writes DIR/distill.csv (one row per fit), DIR/distill.md (the tables), DIR/fits.json

@@ -36,10 +36,10 @@ class BatchedTerms(eqx.Module):
 
 
 def _same_leaves(trees) -> bool:
-    structure = jax.tree.structure(trees[0])
+    structure: Any = jax.tree.structure(trees[0])  # PyTreeDef's stubs declare no __eq__
     shapes = [jnp.shape(x) for x in jax.tree.leaves(trees[0])]
     return all(
-        jax.tree.structure(t) == structure and [jnp.shape(x) for x in jax.tree.leaves(t)] == shapes
+        structure == jax.tree.structure(t) and [jnp.shape(x) for x in jax.tree.leaves(t)] == shapes
         for t in trees[1:]
     )
 
