@@ -11,8 +11,9 @@ weights to JAX point colours, so the image stays differentiable in the shading p
   front face points outward. Vertices 2p (u = 0) and 2p + 1 (u = 1) sit at p ∓ (w/2)B.
 - `patch_alpha`: the alpha texture, an across-profile a(u): 1 for |u − ½| ≤ c/2 (the
   opaque core, slide 6's "fully opaque regions"), falling linearly to 0 at the edges.
-- `patch_fragments`: every triangle rasterised at the pixel centres (the mesh occluder's
-  rasteriser, §13), in draw order.
+- `patch_fragments`: every triangle rasterised at the pixel centres as GL does it:
+  coverage on the vertices rounded to 1/2^RASTER_SUBPIXEL_BITS px with GL's tie rule,
+  attributes from the unrounded positions (`snapped_fragments`), in draw order.
 - `four_pass_weights`: per pixel, what slide 17's four passes leave in the colour buffer,
   as weights on the fragments' colours and on the background.
 """
@@ -27,9 +28,10 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ._constants import PATCH_OPAQUE_EPS
-from ._geometry._occluder import drawable_triangles, pixel_fragments
+from ._geometry._occluder import drawable_triangles
 from ._geometry._ordering import hair_centre, static_order
 from ._geometry._projection import View, camera_view
+from ._geometry._snapped import snapped_fragments
 from ._geometry._stage import geometry_stage
 from ._scene._strands import tangents
 from ._shading import point_colors
@@ -42,6 +44,7 @@ __all__ = [
     "Patches",
     "patch_mesh",
     "patch_alpha",
+    "snapped_fragments",
     "PatchFragments",
     "patch_fragments",
     "PatchWeights",
@@ -131,8 +134,9 @@ class PatchFragments:
 
 
 def patch_fragments(view: View, patches: Patches) -> PatchFragments:
-    """The patches rasterised at `view`'s pixel centres (§13's rules: λ ≥ 0 with edges,
-    all three vertices beyond the near plane, zero-area projections dropped).
+    """The patches rasterised at `view`'s pixel centres as GL does (`snapped_fragments`:
+    coverage on rounded vertices with GL's tie rule, attributes unrounded), of the
+    triangles with all three vertices beyond the near plane.
 
     A triangle faces the viewer when its projection is counter-clockwise in GL's window
     coordinates (y up), i.e. its signed area in pixel coordinates (y down) is negative;
@@ -141,12 +145,11 @@ def patch_fragments(view: View, patches: Patches) -> PatchFragments:
     drawn = drawable_triangles(view, patches.vertices, tri_all)
     tri = tri_all[drawn]
     xy, depth = view.project(patches.vertices)
-    a, b, c = (xy[tri[:, k]] for k in range(3))
-    area = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
-    parts = [(k, pixel, lam) for k, pixel, lam in pixel_fragments(view, xy, depth, tri)]
+    parts = list(snapped_fragments(view, xy, depth, tri))
     k = np.concatenate([p[0] for p in parts]) if parts else np.zeros(0, np.int64)
     pixel = np.concatenate([p[1] for p in parts]) if parts else np.zeros(0, np.int64)
     lam = np.concatenate([p[2] for p in parts]) if parts else np.zeros((0, 3))
+    front = np.concatenate([p[3] for p in parts]) if parts else np.zeros(0, bool)
     corners = tri[k]
     point = np.einsum("ni,nij->nj", lam, patches.vertices[corners])
     d = (point - view.origin) @ view.forward
@@ -157,7 +160,7 @@ def patch_fragments(view: View, patches: Patches) -> PatchFragments:
         pixel[order],
         draw[order],
         d[order],
-        (area[k] < 0)[order],
+        front[order],
         patch_alpha(u[order], patches.core),
         lam[order],
         patches.point[corners[order]],
