@@ -56,3 +56,8 @@ PATCH_OPAQUE_EPS = 1e-6
 # lp_rast.h, GL_SUBPIXEL_BITS = 8; tests/test_patches.py measures both rules. The JAX patch
 # rasteriser rounds the same way, so the two agree on which fragments exist.
 RASTER_SUBPIXEL_BITS = 8
+
+# Hair patches' strand texture (docs/model.md §18, scheuermann-2004 slide 6: the alpha
+# texture "should have fully opaque regions"): this share of the strands across a patch
+# reaches alpha 1; the others peak at patch_strand_alpha … 1 − (1 − that)/128.
+PATCH_OPAQUE_STRANDS = 0.5

@@ -33,6 +33,9 @@ _HAIR_COMMON = (
     "geometry",
     "patch_width",
     "opaque_core",
+    "patch_strands",
+    "patch_strand_alpha",
+    "patch_strand_tips",
 )
 HAIR_GEOMETRIES = ("strands", "patches")
 _HAIR_PROCEDURAL = ("strands", "points", "seed", "length")
@@ -91,12 +94,16 @@ def read_hair(table: Table, base_dir: Path) -> Strands:
 
 
 def read_patches(table: Table) -> PatchGeometry | None:
-    """[hair] geometry = "patches" with patch_width (required) and opaque_core (§18)."""
+    """[hair] geometry = "patches" with patch_width (required), opaque_core and the strand
+    texture's patch_strands, patch_strand_alpha, patch_strand_tips (§18)."""
     geometry = table.choice("geometry", HAIR_GEOMETRIES)
     width = table.number("patch_width", lo=0, lo_open=True)
     core = table.number("opaque_core", lo=0, hi=1)
+    strands = table.integer("patch_strands", lo=1)
+    strand_alpha = table.number("patch_strand_alpha", lo=0, hi=1)
+    tips = table.number("patch_strand_tips", lo=0, hi=1)
     if geometry != "patches":
-        for key in ("patch_width", "opaque_core"):
+        for key in ("patch_width", "opaque_core", "patch_strands", "patch_strand_alpha", "patch_strand_tips"):
             if key in table:
                 raise SceneError(f"{table.where}: hair.{key} applies only to geometry = 'patches'")
         return None
@@ -104,7 +111,9 @@ def read_patches(table: Table) -> PatchGeometry | None:
         raise SceneError(
             f"{table.where}: hair.patch_width (world units) is required with geometry = 'patches'"
         )
-    return PatchGeometry(width, **given(opaque_core=core))
+    return PatchGeometry(
+        width, **given(opaque_core=core, strands=strands, strand_alpha=strand_alpha, tips=tips)
+    )
 
 
 def _check_hair_keys(table: Table, source: str, is_file: bool) -> None:
