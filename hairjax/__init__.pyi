@@ -51,6 +51,7 @@ from ._scene._framing import frame_camera as frame_camera
 from ._scene._framing import key_light as key_light
 from ._scene._light import Light as Light
 from ._scene._occluder import Occluder as Occluder
+from ._scene._procedural import combed as combed
 from ._scene._procedural import furball as furball
 from ._scene._procedural import scalp as scalp
 from ._scene._reference import ReferenceSettings as ReferenceSettings

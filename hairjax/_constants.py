@@ -49,3 +49,15 @@ SCHEUERMANN_DIFFUSE_FLOOR = 0.25
 # The profile a(u) reaches exactly 1 on the core; 1e-6 only absorbs float32 rounding of
 # the interpolated u in GL there (u's float32 error ~1e-7, a's ≤ 1e-7 / (½ − c/2)).
 PATCH_OPAQUE_EPS = 1e-6
+
+# Hair patches (docs/model.md §18): GL decides a triangle's coverage on its window-space
+# vertices in fixed point with this many fractional bits, i.e. rounded to 1/256 px, and
+# interpolates attributes from the unrounded positions. llvmpipe: FIXED_ORDER = 8 in
+# lp_rast.h, GL_SUBPIXEL_BITS = 8; tests/test_patches.py measures both rules. The JAX patch
+# rasteriser rounds the same way, so the two agree on which fragments exist.
+RASTER_SUBPIXEL_BITS = 8
+
+# Hair patches' strand texture (docs/model.md §18, scheuermann-2004 slide 6: the alpha
+# texture "should have fully opaque regions"): this share of the strands across a patch
+# reaches alpha 1; the others peak at patch_strand_alpha … 1 − (1 − that)/128.
+PATCH_OPAQUE_STRANDS = 0.5

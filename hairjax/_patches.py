@@ -9,12 +9,17 @@ weights to JAX point colours, so the image stays differentiable in the shading p
   world width w, in the plane spanned by T and B = normalise(N × T) (N the strand normal
   away from the hair centre, §17), wound so that the right-hand-rule normal is +N: the
   front face points outward. Vertices 2p (u = 0) and 2p + 1 (u = 1) sit at p ∓ (w/2)B.
-- `patch_alpha`: the alpha texture, an across-profile a(u): 1 for |u − ½| ≤ c/2 (the
-  opaque core, slide 6's "fully opaque regions"), falling linearly to 0 at the edges.
-- `patch_fragments`: every triangle rasterised at the pixel centres (the mesh occluder's
-  rasteriser, §13), in draw order.
-- `four_pass_weights`: per pixel, what slide 17's four passes leave in the colour buffer,
-  as weights on the fragments' colours and on the background.
+- `patch_alpha`: one strand's across-profile p(t): 1 for |t − ½| ≤ c/2 (the opaque core,
+  slide 6's "fully opaque regions"), falling linearly to 0 at the strand's edges.
+- `patch_texture`: the alpha texture a(u, v): n strands side by side across the patch,
+  each the profile p times its peak alpha, each cut at its own length along v; peak and
+  length from an integer hash of (patch, strand), so JAX and GLSL draw the same texture.
+- `patch_fragments`: every triangle rasterised at the pixel centres as GL does it:
+  coverage on the vertices rounded to 1/2^RASTER_SUBPIXEL_BITS px with GL's tie rule,
+  attributes from the unrounded positions (`snapped_fragments`), in draw order.
+- `four_pass_weights`: per pixel, what slide 17's four passes leave in the colour buffer
+  after the head (the scene's occluder, drawn first: slide 16), as weights on the
+  fragments' colours, the head's colour and the background.
 """
 
 from __future__ import annotations
@@ -27,12 +32,14 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ._constants import PATCH_OPAQUE_EPS
-from ._geometry._occluder import drawable_triangles, pixel_fragments
+from ._geometry._occluder import drawable_triangles, occluder_hits
 from ._geometry._ordering import hair_centre, static_order
 from ._geometry._projection import View, camera_view
+from ._geometry._snapped import snapped_fragments
 from ._geometry._stage import geometry_stage
+from ._patch_texture import patch_alpha, patch_texture, strand_hash
 from ._scene._strands import tangents
-from ._shading import point_colors
+from ._shading import occluder_colors, point_colors
 from ._shading._scheuermann_inputs import strand_normals
 
 __all__ = [
@@ -42,6 +49,9 @@ __all__ = [
     "Patches",
     "patch_mesh",
     "patch_alpha",
+    "patch_texture",
+    "strand_hash",
+    "snapped_fragments",
     "PatchFragments",
     "patch_fragments",
     "PatchWeights",
@@ -54,13 +64,33 @@ __all__ = [
 class Patches:
     """A patch mesh: `vertices` `[V, 3]`, `triangles` `[T, 3]` in draw order, `u` `[V]`
     across-coordinate, `point` `[V]` the strand point whose colour a vertex carries,
-    `core` the opaque fraction c of the alpha profile."""
+    `core` the opaque fraction c of a strand's profile. The texture (§18): `v` `[V]` the
+    along-coordinate (0 at the root, 1 at the tip; None: 0 everywhere), `patch` `[V]` the
+    patch a vertex belongs to (None: 0), `strands` n across a patch, `strand_alpha` m the
+    lowest peak alpha of the semi-transparent ones, `tips` λ the spread of their lengths."""
 
     vertices: np.ndarray
     triangles: np.ndarray
     u: np.ndarray
     point: np.ndarray
     core: float
+    v: np.ndarray | None = None
+    patch: np.ndarray | None = None
+    strands: int = 1
+    strand_alpha: float = 1.0
+    tips: float = 0.0
+
+    def alpha(self, u: np.ndarray, v: np.ndarray, patch: np.ndarray) -> np.ndarray:
+        """The texture a(u, v) of patch `patch` (`patch_texture` with this mesh's settings)."""
+        return patch_texture(u, v, patch, self.core, self.strands, self.strand_alpha, self.tips)
+
+    def along(self) -> np.ndarray:
+        """`v` per vertex (0 where the mesh has none)."""
+        return np.zeros(len(self.vertices)) if self.v is None else np.asarray(self.v, np.float64)
+
+    def patch_of(self) -> np.ndarray:
+        """`patch` per vertex (0 where the mesh has none)."""
+        return np.zeros(len(self.vertices), np.int64) if self.patch is None else np.asarray(self.patch)
 
 
 def patch_mesh(
@@ -71,17 +101,28 @@ def patch_mesh(
     width: float,
     core: float,
     centre: np.ndarray,
+    strands: int = 1,
+    strand_alpha: float = 1.0,
+    tips: float = 0.0,
 ) -> Patches:
     """Ribbons of world width `width` along the strands (module docstring). Triangles are
     drawn in slide 14's static inside-to-outside order of their segments (`static_order`
-    about `centre`), the segment's two triangles one after the other.
+    about `centre`), the segment's two triangles one after the other. Strand s is patch s;
+    its point j of J gets v = j/(J − 1).
 
     **Arguments:** `points` `[P, 3]`, `offsets` `[S + 1]`, unit `tangent` and `normal`
-    `[P, 3]` (N ⟂ T), `width` > 0, `core` ∈ [0, 1], `centre` `[3]`."""
+    `[P, 3]` (N ⟂ T), `width` > 0, `core` ∈ [0, 1], `centre` `[3]`; the texture's
+    `strands` ≥ 1, `strand_alpha` ∈ [0, 1], `tips` ∈ [0, 1] (`patch_texture`)."""
     if not (np.isfinite(width) and width > 0):
         raise ValueError(f"patch width must be a positive finite number, got {width!r}")
     if not (0.0 <= core <= 1.0):
         raise ValueError(f"opaque core must lie in [0, 1], got {core!r}")
+    if not (int(strands) == strands and strands >= 1):
+        raise ValueError(f"strands across a patch must be an integer ≥ 1, got {strands!r}")
+    if not (0.0 <= strand_alpha <= 1.0):
+        raise ValueError(f"strand alpha must lie in [0, 1], got {strand_alpha!r}")
+    if not (0.0 <= tips <= 1.0):
+        raise ValueError(f"strand tips must lie in [0, 1], got {tips!r}")
     points = np.asarray(points, np.float64)
     b = np.cross(normal, tangent)
     norm = np.linalg.norm(b, axis=1, keepdims=True)
@@ -92,6 +133,9 @@ def patch_mesh(
     vertices[1::2] = points + 0.5 * width * b
     u = np.tile([0.0, 1.0], len(points))
     strand_of = np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
+    index = np.arange(len(points)) - np.asarray(offsets)[strand_of]
+    # Fires for one-point strands only (no segment, no triangle): v = 0 there.
+    along = index / np.maximum(np.diff(offsets)[strand_of] - 1, 1)
     first = np.flatnonzero(strand_of[:-1] == strand_of[1:])  # segments (p, p + 1)
     segments = np.stack([first, first + 1], axis=1)
     p = first[static_order(points, segments, centre)]
@@ -103,15 +147,18 @@ def patch_mesh(
         ],
         axis=1,
     ).reshape(-1, 3)
-    return Patches(vertices, tris.astype(np.int64), u, np.repeat(np.arange(len(points)), 2), float(core))
-
-
-def patch_alpha(u: np.ndarray, core: float) -> np.ndarray:
-    """a(u) = clamp((½ − |u − ½|) / (½ − c/2), 0, 1); 1 everywhere for c = 1."""
-    half = 0.5 - 0.5 * core
-    edge = 0.5 - np.abs(np.asarray(u, np.float64) - 0.5)
-    # Fires for c = 1 only (no fading band): the whole patch is opaque.
-    return np.clip(edge / half, 0.0, 1.0) if half > 0 else np.ones_like(edge)
+    return Patches(
+        vertices,
+        tris.astype(np.int64),
+        u,
+        np.repeat(np.arange(len(points)), 2),
+        float(core),
+        np.repeat(along, 2),
+        np.repeat(strand_of, 2),
+        int(strands),
+        float(strand_alpha),
+        float(tips),
+    )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -131,8 +178,9 @@ class PatchFragments:
 
 
 def patch_fragments(view: View, patches: Patches) -> PatchFragments:
-    """The patches rasterised at `view`'s pixel centres (§13's rules: λ ≥ 0 with edges,
-    all three vertices beyond the near plane, zero-area projections dropped).
+    """The patches rasterised at `view`'s pixel centres as GL does (`snapped_fragments`:
+    coverage on rounded vertices with GL's tie rule, attributes unrounded), of the
+    triangles with all three vertices beyond the near plane.
 
     A triangle faces the viewer when its projection is counter-clockwise in GL's window
     coordinates (y up), i.e. its signed area in pixel coordinates (y down) is negative;
@@ -141,24 +189,24 @@ def patch_fragments(view: View, patches: Patches) -> PatchFragments:
     drawn = drawable_triangles(view, patches.vertices, tri_all)
     tri = tri_all[drawn]
     xy, depth = view.project(patches.vertices)
-    a, b, c = (xy[tri[:, k]] for k in range(3))
-    area = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
-    parts = [(k, pixel, lam) for k, pixel, lam in pixel_fragments(view, xy, depth, tri)]
+    parts = list(snapped_fragments(view, xy, depth, tri))
     k = np.concatenate([p[0] for p in parts]) if parts else np.zeros(0, np.int64)
     pixel = np.concatenate([p[1] for p in parts]) if parts else np.zeros(0, np.int64)
     lam = np.concatenate([p[2] for p in parts]) if parts else np.zeros((0, 3))
+    front = np.concatenate([p[3] for p in parts]) if parts else np.zeros(0, bool)
     corners = tri[k]
     point = np.einsum("ni,nij->nj", lam, patches.vertices[corners])
     d = (point - view.origin) @ view.forward
     u = np.sum(lam * patches.u[corners], axis=1)
+    v = np.sum(lam * patches.along()[corners], axis=1)
     draw = drawn[k]
     order = np.lexsort((draw, pixel))
     return PatchFragments(
         pixel[order],
         draw[order],
         d[order],
-        (area[k] < 0)[order],
-        patch_alpha(u[order], patches.core),
+        front[order],
+        patches.alpha(u[order], v[order], patches.patch_of()[corners[order, 0]]),
         lam[order],
         patches.point[corners[order]],
     )
@@ -167,19 +215,24 @@ def patch_fragments(view: View, patches: Patches) -> PatchFragments:
 @dataclasses.dataclass(frozen=True)
 class PatchWeights:
     """The four passes' result as weights: colour = Σ_f `weight`_f c_f + `background`_pixel
-    · background, alpha channel `coverage` per pixel."""
+    · background + `head`_pixel · the head's colour there, alpha channel `coverage`."""
 
     fragment: np.ndarray  # [F]
     background: np.ndarray  # [H*W]
     coverage: np.ndarray  # [H*W]
+    head: np.ndarray  # [H*W] (0 without a head)
 
 
-def four_pass_weights(frags: PatchFragments, num_pixels: int) -> PatchWeights:
-    """docs/model.md §18, per pixel, fragments in draw order:
+def four_pass_weights(frags: PatchFragments, num_pixels: int, head_depth=None) -> PatchWeights:
+    """docs/model.md §18, per pixel, fragments in draw order, after the head (the scene's
+    occluder, slide 16: "draw head first") wrote its depth `head_depth` `[H*W]` (∞ where it
+    misses; None: no head) and its colour:
 
-    1. Z₁ = min D over opaque fragments (a ≥ 1 − PATCH_OPAQUE_EPS); ∞ if none.
+    1. Z₁ = min of the head's depth and D over opaque fragments (a ≥ 1 − PATCH_OPAQUE_EPS);
+       ∞ if neither.
     2. The colour buffer holds the opaque fragment with D = Z₁ (the last drawn of equal
-       ones: Z test EQUAL, no blending), else the background (alpha 0).
+       ones: Z test EQUAL, no blending), else the head where it covers the pixel (alpha
+       1), else the background (alpha 0).
     3. Over it, in draw order, each transparent back-facing fragment with D < Z₁.
     4. Then each transparent front-facing fragment with D < Z, where Z starts at Z₁ and
        becomes D after each fragment drawn (Z writes on).
@@ -187,7 +240,8 @@ def four_pass_weights(frags: PatchFragments, num_pixels: int) -> PatchWeights:
     """
     f = frags.pixel.size
     opaque = frags.alpha >= 1.0 - PATCH_OPAQUE_EPS
-    z1 = np.full(num_pixels, np.inf)
+    head = np.full(num_pixels, np.inf) if head_depth is None else np.asarray(head_depth, np.float64)
+    z1 = head.copy()
     np.minimum.at(z1, frags.pixel[opaque], frags.depth[opaque])
     # Pass 2: opaque fragments at exactly Z₁; fragments are sorted by draw within a pixel,
     # so the last such fragment of each pixel is the one left in the buffer.
@@ -224,9 +278,11 @@ def four_pass_weights(frags: PatchFragments, num_pixels: int) -> PatchWeights:
         trans[pix[sel]] *= 1.0 - a[sel]
     has_base = base >= 0
     weight[base[has_base]] = trans[has_base]
-    background = np.where(has_base, 0.0, trans)
-    coverage = 1.0 - trans * np.where(has_base, 0.0, 1.0)
-    return PatchWeights(weight, background, coverage)
+    # The head stays where no opaque fragment met Z₁ (then Z₁ is the head's depth).
+    on_head = ~has_base & np.isfinite(head)
+    background = np.where(has_base | on_head, 0.0, trans)
+    coverage = np.where(has_base | on_head, 1.0, 1.0 - trans)
+    return PatchWeights(weight, background, coverage, np.where(on_head, trans, 0.0))
 
 
 def _rank(pixel: np.ndarray) -> np.ndarray:
@@ -245,9 +301,12 @@ def composite_patches(
     background: Float[Array, " 3"],
     height: int,
     width: int,
+    head_colors: Float[Array, "HW 3"] | None = None,
 ) -> Float[Array, "H W 4"]:
-    """The image: Σ_f w_f Σ_i λ'_i c(point_i) + w_bg · background per pixel, alpha channel
-    the coverage. Linear in the JAX `colors` (so differentiable in the shading parameters)."""
+    """The image: Σ_f w_f Σ_i λ'_i c(point_i) + w_bg · background + w_head · the head's
+    colour per pixel (`head_colors`, where `weights.head` is non-zero), alpha channel the
+    coverage. Linear in the JAX `colors` and `head_colors` (so differentiable in the
+    shading parameters)."""
     lam = jnp.asarray(frags.lam)
     frag_color = jnp.einsum("fi,fic->fc", lam, colors[jnp.asarray(frags.corner_point)])
     rgb = jax.ops.segment_sum(
@@ -256,19 +315,22 @@ def composite_patches(
         num_segments=height * width,
     )
     rgb = rgb + jnp.asarray(weights.background)[:, None] * jnp.asarray(background)[None, :]
+    if head_colors is not None:
+        rgb = rgb + jnp.asarray(weights.head)[:, None] * head_colors
     image = jnp.concatenate([rgb, jnp.asarray(weights.coverage)[:, None]], axis=1)
     return image.reshape(height, width, 4)
 
 
 def scene_patches(scene) -> Patches:
-    """The scene's strands as patches (`scene.patches`: width, opaque core): N away from
+    """The scene's strands as patches (`scene.patches`: width and texture): N away from
     `hair_centre` (§17's strand normal), drawn in the static order about it (slide 14)."""
     points, offsets = scene.strands.points, scene.strands.offsets
     tangent = tangents(points, offsets)
     centre = hair_centre(points, offsets)
     normal = strand_normals(points, tangent, centre)
+    g = scene.patches
     return patch_mesh(
-        points, offsets, tangent, normal, scene.patches.width, scene.patches.opaque_core, centre
+        points, offsets, tangent, normal, g.width, g.opaque_core, centre, g.strands, g.strand_alpha, g.tips
     )
 
 
@@ -280,15 +342,31 @@ def scene_point_colors(scene, params=None) -> Float[Array, "P 3"]:
 
 def render_patches(scene, params=None) -> Float[Array, "H W 4"]:
     """`scene` (with `scene.patches`) drawn as hair patches: slide 17's four passes as
-    per-pixel weights (NumPy) on the JAX point colours, so differentiable in `params`."""
+    per-pixel weights (NumPy) on the JAX point colours, so differentiable in `params`. The
+    scene's occluder, if any, is the head drawn first (slide 16): its depth per pixel
+    centre (§9, §13) primes the Z test and its colour (§13, lit and shadowed as in the
+    strand renderer) is the backdrop of the pixels it covers."""
+    params = scene.params if params is None else params
     view = camera_view(scene.camera)
+    hw = view.width * view.height
     frags = patch_fragments(view, scene_patches(scene))
-    weights = four_pass_weights(frags, view.width * view.height)
+    geometry = geometry_stage(scene)
+    head_depth = head_colors = None
+    if scene.occluder is not None:
+        head_depth, _, _ = occluder_hits(view, scene.occluder)
+        # The geometry stage's occluder pixels are exactly those where head_depth is finite.
+        head_colors = (
+            jnp.zeros((hw, 3), jnp.result_type(float))
+            .at[jnp.asarray(geometry.occluder_pixel)]
+            .set(occluder_colors(geometry, params))
+        )
+    weights = four_pass_weights(frags, hw, head_depth)
     return composite_patches(
         frags,
         weights,
-        scene_point_colors(scene, params),
+        point_colors(geometry, params),
         jnp.asarray(scene.background),
         view.height,
         view.width,
+        head_colors,
     )

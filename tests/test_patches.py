@@ -1,5 +1,6 @@
 """Hair patches and slide 17's four passes (docs/model.md §18): hand-built cases whose
-colours follow from the rule by hand, the JAX rule against GL, and the patch mesh."""
+colours follow from the rule by hand, the strand texture, GL's rounding of vertices to
+1/256 px measured, the JAX rule against GL, the patch mesh and the example scene."""
 
 import dataclasses
 
@@ -10,11 +11,11 @@ from helpers import EXAMPLES
 
 import hairjax as hj
 from hairjax import Camera, PatchGeometry
-from hairjax._constants import PATCH_OPAQUE_EPS
+from hairjax._constants import PATCH_OPAQUE_EPS, PATCH_OPAQUE_STRANDS, RASTER_SUBPIXEL_BITS
 from hairjax._errors import SceneError
-from hairjax._geometry._occluder import _near_segments, corner_nudges
+from hairjax._geometry._occluder import _near_segments
 from hairjax._geometry._ordering import hair_centre
-from hairjax._geometry._projection import camera_view
+from hairjax._geometry._projection import View, camera_view
 from hairjax._patches import (
     Patches,
     composite_patches,
@@ -22,10 +23,10 @@ from hairjax._patches import (
     patch_alpha,
     patch_fragments,
     patch_mesh,
+    patch_texture,
     scene_patches,
-    scene_point_colors,
+    strand_hash,
 )
-from hairjax._scene._procedural import furball
 from hairjax._scene._strands import tangents
 from hairjax._shading._scheuermann_inputs import strand_normals
 
@@ -167,42 +168,184 @@ def test_alpha_threshold():
         patch_mesh(
             np.zeros((2, 3)), np.array([0, 2]), np.zeros((2, 3)), np.zeros((2, 3)), 0.0, 0.5, np.zeros(3)
         )
+    for bad, message in [
+        ((0, 1.0, 0.0), "strands across"),
+        ((2, 1.5, 0.0), "strand alpha"),
+        ((2, 1.0, -1.0), "tips"),
+    ]:
+        with pytest.raises(ValueError, match=message):
+            patch_mesh(
+                np.zeros((2, 3)),
+                np.array([0, 2]),
+                np.zeros((2, 3)),
+                np.zeros((2, 3)),
+                1.0,
+                0.5,
+                np.zeros(3),
+                *bad,
+            )
 
 
-SNAP = 1 / 256  # llvmpipe's sub-pixel precision: vertices snap to 1/256 px (as _occluder's bound)
+def _pcg_by_hand(x: int) -> int:
+    """Jarzynski & Olano's pcg_hash (JCGT 2020) in Python integers mod 2³², written out
+    apart from the code under test."""
+    m = 0xFFFFFFFF
+    state = (x * 747796405 + 2891336453) & m
+    word = (((state >> ((state >> 28) + 4)) ^ state) * 277803737) & m
+    return (word >> 22) ^ word
 
 
-def snap_bound(view, patches, frags, colors):
-    """Per pixel, how far the image may move when the drawn triangles' projected vertices
-    move by up to SNAP px per axis: first order, Σ over the 6 coordinates of the change in
-    each fragment's a and colour (central differences of §13's barycentrics), Σ over the
-    pixel's fragments of 2·max|c|·|Δa| + |Δc| (a fragment's alpha moves its own term and
-    the transmittance of what lies behind, each ≤ max|c|). Matters for patches a pixel or
-    less wide, where u moves by SNAP/width."""
-    xy, depth = view.project(patches.vertices)
-    tri = patches.triangles[frags.draw]
-    c = np.stack([frags.pixel % view.width + 0.5, frags.pixel // view.width + 0.5], axis=1)
-    colors = np.asarray(colors, np.float64)
+def test_strand_texture():
+    """docs/model.md §18's texture, checked against the formula evaluated by hand."""
+    # The hash: pcg(k + pcg(patch)) mod 2³², including patch ids past 2¹⁶ and the wrap.
+    for patch, k in [(0, 0), (3, 5), (70000, 11), (2**31 + 7, 2**32 - 1)]:
+        assert int(strand_hash(np.array([patch]), np.array([k]))[0]) == _pcg_by_hand(
+            (k + _pcg_by_hand(patch)) & 0xFFFFFFFF
+        )
+    n, c, m, tips = 6, 0.4, 0.3, 0.5
+    patch = 17
+    # Across u: strand k's profile between k/n and (k + 1)/n, 0 at both ends, its peak α_k on
+    # the core; α_k = 1 for q = ⌊h/2²⁴⌋/256 ≥ 1 − PATCH_OPAQUE_STRANDS, else m + (1 − m)q/(1 − share).
+    for k in range(n):
+        h = _pcg_by_hand((k + _pcg_by_hand(patch)) & 0xFFFFFFFF)
+        q = (h >> 24) / 256
+        rest = 1 - PATCH_OPAQUE_STRANDS
+        peak = 1.0 if q >= rest else m + (1 - m) * q / rest
+        length = 1 - tips * (h & 0xFFFF) / 65536
+        u = (k + np.array([0.0, 0.15, 0.5, 0.85, 1.0])) / n
+        # v = 0 (at the root): the strand is there; profile 0, ½, 1, ½, 0 at t = 0, .15, .5, .85, 1.
+        a = patch_texture(u, np.zeros(5), np.full(5, patch), c, n, m, tips)
+        np.testing.assert_allclose(a, peak * np.array([0.0, 0.5, 1.0, 0.5, 0.0]), atol=1e-12)
+        # Along v: the strand ends at its length 1 − λ·g.
+        a = patch_texture(
+            np.full(2, (k + 0.5) / n),
+            np.array([length - 1e-9, length + 1e-9]),
+            np.full(2, patch),
+            c,
+            n,
+            m,
+            tips,
+        )
+        np.testing.assert_allclose(a, [peak, 0.0], atol=1e-12)
+    # Over many patches, the share of opaque strands is PATCH_OPAQUE_STRANDS (binomial, 4σ),
+    # and the others peak within [m, 1 − (1 − m)/128], well below the opaque threshold.
+    patches = np.repeat(np.arange(4000), n)
+    u = (np.tile(np.arange(n), 4000) + 0.5) / n
+    peaks = patch_texture(u, np.zeros(u.size), patches, c, n, m, tips)
+    opaque = peaks >= 1 - PATCH_OPAQUE_EPS
+    sigma = np.sqrt(PATCH_OPAQUE_STRANDS * (1 - PATCH_OPAQUE_STRANDS) / u.size)
+    assert abs(opaque.mean() - PATCH_OPAQUE_STRANDS) < 4 * sigma
+    assert peaks[~opaque].min() >= m and peaks[~opaque].max() <= 1 - (1 - m) / 128 + 1e-12
+    # n = 1, m = 1, λ = 0 is the single profile a(u) = p(u).
+    u = np.linspace(-0.01, 1.01, 41)
+    np.testing.assert_array_equal(patch_texture(u, np.ones(41), np.arange(41), c), patch_alpha(u, c))
 
-    def values(corners):
-        a, b, cc = corners[:, 0], corners[:, 1], corners[:, 2]
-        area = (b[:, 0] - a[:, 0]) * (cc[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (cc[:, 0] - a[:, 0])
-        la = ((b[:, 0] - c[:, 0]) * (cc[:, 1] - c[:, 1]) - (b[:, 1] - c[:, 1]) * (cc[:, 0] - c[:, 0])) / area
-        lb = ((cc[:, 0] - c[:, 0]) * (a[:, 1] - c[:, 1]) - (cc[:, 1] - c[:, 1]) * (a[:, 0] - c[:, 0])) / area
-        lam = np.stack([la, lb, 1 - la - lb], axis=1) / depth[tri]
-        lam /= lam.sum(axis=1, keepdims=True)
-        alpha = patch_alpha(np.sum(lam * patches.u[tri], axis=1), patches.core)
-        return alpha, np.einsum("fi,fic->fc", lam, colors[patches.point[tri]])
 
-    corners = xy[tri]
-    da = np.zeros(len(tri))
-    dc = np.zeros(len(tri))
-    for up, down in corner_nudges(corners, SNAP):
-        (a1, c1), (a0, c0) = values(up), values(down)
-        da += 0.5 * np.abs(a1 - a0)
-        dc += 0.5 * np.abs(c1 - c0).max(axis=1)
-    per_fragment = 2 * max(colors.max(), 1.0) * da + dc
-    return np.bincount(frags.pixel, per_fragment, minlength=view.width * view.height)
+def _pixel_view(size=16):
+    """An orthographic view whose pixel coordinates are the world's (x, y), depth z: GL's
+    float32 window coordinates of the vertices below are then exact."""
+    e = np.eye(3)
+    return View(np.zeros(3), e[2], e[0], -e[1], size, size, 1.0, 0.0, 0.0, False, -np.inf)
+
+
+def _triangles(corners, colors=None):
+    """Opaque triangles (core 1) at depth 1 with pixel-space corners `[T, 3, 2]`."""
+    corners = np.asarray(corners, float).reshape(-1, 2)
+    vertices = np.c_[corners, np.ones(len(corners))]
+    return Patches(
+        vertices,
+        np.arange(len(corners)).reshape(-1, 3),
+        np.full(len(corners), 0.5),
+        np.arange(len(corners)),
+        1.0,
+    )
+
+
+def test_gl_rounds_vertices_to_1_256_px(gl):
+    """GL decides coverage on vertices rounded to 1/2^RASTER_SUBPIXEL_BITS = 1/256 px (ties
+    to even) with the top-left rule (y up), and interpolates attributes from the unrounded
+    positions (docs/model.md §18): measured with the patch shader on llvmpipe, and the
+    JAX rasteriser does the same."""
+    from hairjax.gl._patches import render_patches_gl
+
+    assert gl.info["GL_SUBPIXEL_BITS"] == RASTER_SUBPIXEL_BITS == 8
+    view = _pixel_view()
+    centre = 8.5  # pixel (8, 8)'s centre, x and y
+    # Each edge through x (or y) = 8.5 + k/4096 px; the triangle lies on one side of it.
+    # Rounded to 1/256 = 16/4096 px, the edge sits on the centre for |k| ≤ 8 (k = ±8 are
+    # ties, rounded to even: onto the centre) and passes it for |k| ≥ 9. On the edge, the
+    # centre is covered for a left or bottom edge (y down: GL's top-left rule with y up),
+    # not for a right or top one.
+    sides = {
+        "right edge": (lambda e: [(0, 0), (e, 0), (e, 16)], lambda k: k >= 9),
+        "left edge": (lambda e: [(e, 0), (16, 0), (e, 16)], lambda k: k <= 8),
+        "bottom edge": (lambda e: [(0, e), (16, e), (8, 0)], lambda k: k >= -8),
+        "top edge": (lambda e: [(0, e), (8, 16), (16, e)], lambda k: k <= -9),
+    }
+    for name, (corners, expected) in sides.items():
+        for k in [-9, -8, 0, 8, 9]:
+            patches = _triangles(corners(centre + k / 4096))
+            gl_covered = render_patches_gl(gl, view, patches, np.ones((3, 3)), BG)[8, 8, 3] == 1.0
+            jax_covered = 8 * 16 + 8 in patch_fragments(view, patches).pixel
+            assert gl_covered == jax_covered == expected(k), (name, k, gl_covered, jax_covered)
+    # Attributes: colours that are the vertices' own (x, y) interpolate to the pixel
+    # centre's (x, y) from the unrounded vertices; from the rounded ones they would be off
+    # by up to the rounding, ~1e-3 px here (the vertices lie 0.3–0.45 steps off the grid).
+    corners = (
+        np.array([(0.3, 0.2), (15.7, 1.1), (2.2, 15.6)])
+        + np.array([(0.35, -0.3), (0.4, 0.45), (-0.45, 0.38)]) / 256
+    )
+    patches = _triangles(corners)
+    colors = np.c_[corners, np.zeros(3)]
+    image = render_patches_gl(gl, view, patches, colors, BG)
+    frags = patch_fragments(view, patches)
+    j, i = np.divmod(frags.pixel, 16)
+    centres = np.stack([i + 0.5, j + 0.5], axis=1)
+    # float32 interpolation of values ≤ 16: a few ulps, ~1e-5.
+    np.testing.assert_allclose(image[j, i, :2], centres, atol=1e-5)
+    np.testing.assert_allclose(_jax_image(view, patches, colors)[j, i, :2], centres, atol=1e-12)
+    rounded = np.round(corners * 256) / 256
+
+    def cross(a, b):
+        return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+    area = cross(rounded[1] - rounded[0], rounded[2] - rounded[0])
+    lam0 = cross(rounded[1] - centres, rounded[2] - centres) / area
+    lam1 = cross(rounded[2] - centres, rounded[0] - centres) / area
+    from_rounded = np.stack([lam0, lam1, 1 - lam0 - lam1], axis=1) @ corners
+    assert np.abs(from_rounded - image[j, i, :2]).max() > 1e-4  # the test tells the two apart
+
+
+def test_texture_jax_matches_gl(gl):
+    """Two textured quads (7 strands across, m = 0.3, λ = 0.4, patch ids 3 and 70000), one
+    over the other: JAX and GL draw the same strands. Tolerance 1e-4: float32 u (~1e-6 at
+    64 px) times the profile's slope n/(½ − c/2) = 23, and float32 blending."""
+    from hairjax.gl._patches import render_patches_gl
+
+    vertices, triangles = [], []
+    for q, (z, dx) in enumerate([(0.0, -0.3), (0.2, 0.3)]):
+        vertices += [(-1.1 + dx, -1.2, z), (0.9 + dx, -1.2, z), (0.9 + dx, 1.1, z), (-1.1 + dx, 1.1, z)]
+        triangles += [(4 * q, 4 * q + 1, 4 * q + 2), (4 * q, 4 * q + 2, 4 * q + 3)]
+    patches = Patches(
+        np.array(vertices),
+        np.array(triangles),
+        np.tile([0.0, 1.0, 1.0, 0.0], 2),
+        np.repeat([0, 1], 4),
+        0.4,
+        np.tile([1.0, 1.0, 0.0, 0.0], 2),
+        np.repeat([3, 70000], 4),
+        7,
+        0.3,
+        0.4,
+    )
+    view = _view(64)
+    colors = np.array([[1.0, 0.2, 0.1], [0.1, 0.8, 0.3]])
+    frags = patch_fragments(view, patches)
+    opaque = frags.alpha >= 1 - PATCH_OPAQUE_EPS
+    # The texture is at work: opaque strands, semi-transparent ones and gaps between them.
+    assert opaque.any() and ((frags.alpha > 0) & ~opaque).any() and (frags.alpha == 0).any()
+    gl_image = render_patches_gl(gl, view, patches, colors, BG)
+    np.testing.assert_allclose(gl_image, _jax_image(view, patches, colors), atol=1e-4)
 
 
 def _strand_patches(width=0.3, core=0.4):
@@ -242,15 +385,47 @@ def test_front_faces_point_outward():
     np.testing.assert_array_equal(frags.front, facing[frags.draw])
 
 
+# GL's window coordinates are float32: a vertex within this many px of a rounding boundary
+# (k + ½)/256 may round to the other neighbour in GL. Its projection's float32 error is a
+# few ulps of the coordinate (ulp(64) = 7.6e-6 px) amplified by the perspective division;
+# 1e-4 px bounds it with margin.
+WINDOW_F32 = 1e-4
+
+
+def _rounding_mask(view, patches, frags):
+    """Pixels where float32 may change which fragments exist or pass a test (docs/model.md
+    §18): centres within 1/256 + WINDOW_F32 px of an edge that has a vertex within
+    WINDOW_F32 px of a rounding boundary (GL may round it the other way, moving the edge
+    by 1/256 px); fragments within 1e-4 of the opaque threshold; and pixels with
+    two fragments whose depths differ by < 1e-5 of the depth range (the depth buffer's
+    24 bits: 6e-8 of it)."""
+    xy, depth = view.project(patches.vertices)
+    scaled = xy * 2**RASTER_SUBPIXEL_BITS
+    ambiguous = np.any(np.abs(scaled - np.floor(scaled) - 0.5) < WINDOW_F32 * 2**RASTER_SUBPIXEL_BITS, axis=1)
+    t = patches.triangles
+    edges = np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]])
+    edges = edges[ambiguous[edges].any(axis=1)]
+    mask = _near_segments(
+        xy[edges[:, 0]], xy[edges[:, 1]], 2**-RASTER_SUBPIXEL_BITS + WINDOW_F32, view.width, view.height
+    )
+    # The profile before its clamp, (½ − |u − ½|)/(½ − c/2) (one strand across): float32 u
+    # moves it by ~3e-6 here, so within 1e-4 of 1 − ε GL may call the fragment the other way.
+    u = np.sum(frags.lam * patches.u[patches.triangles[frags.draw]], axis=1)
+    raw = (0.5 - np.abs(u - 0.5)) / (0.5 - 0.5 * patches.core)
+    mask[frags.pixel[np.abs(raw - (1 - PATCH_OPAQUE_EPS)) < 1e-4]] = True
+    order = np.lexsort((frags.depth, frags.pixel))
+    d, p = frags.depth[order], frags.pixel[order]
+    tie = (p[1:] == p[:-1]) & (np.diff(d) < 1e-5 * 2 * depth.max())
+    mask[p[1:][tie]] = True
+    return mask
+
+
 def test_jax_matches_gl(gl):
-    """A 40² tuft of patches with seeded point colours. Tolerance 1e-4 (float32 colours and
-    barycentrics, ~1e-6) plus `snap_bound` (llvmpipe's vertex snapping), except pixels
-    where float32 may change which fragments exist or pass a test: centres within 1e-3 px
-    of a triangle edge (float32 rounding of our 40 px coordinates is ~4e-6 px; snapping
-    moves edges by up to 1/256 px, which the edge case leaves to the mask only where a
-    centre lies that near), fragments with alpha within 1e-4 of the opaque threshold, and
-    pixels with two fragments whose depths differ by < 1e-5 of the depth range (the depth
-    buffer's 24 bits)."""
+    """A 40² tuft of patches with seeded point colours: JAX's rasteriser rounds vertices as
+    GL's does, so outside `_rounding_mask` every pixel agrees to 1e-4 (float32 colours,
+    barycentrics and blending, ~1e-6; float32 u times the profile's slope 1/(½ − c/2) = 3.3).
+    (Before the rounding was modelled this needed a first-order bound on its effect, and
+    5 % of the covered pixels could exceed 1e-4.)"""
     from hairjax.gl._patches import render_patches_gl
 
     patches, points, _ = _strand_patches()
@@ -258,38 +433,15 @@ def test_jax_matches_gl(gl):
     colors = np.random.default_rng(3).uniform(0.1, 1.0, size=(len(points), 3))
     jax_image = _jax_image(view, patches, colors)
     gl_image = render_patches_gl(gl, view, patches, colors, BG)
-    xy, depth = view.project(patches.vertices)
-    t = patches.triangles
-    edges = np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]])
-    mask = _near_segments(xy[edges[:, 0]], xy[edges[:, 1]], 1e-3, view.width, view.height)
     frags = patch_fragments(view, patches)
-    near_threshold = np.abs(frags.alpha - (1 - PATCH_OPAQUE_EPS)) < 1e-4
-    mask[frags.pixel[near_threshold]] = True
-    far = 2 * depth.max()
-    same = frags.pixel[1:] == frags.pixel[:-1]
-    order = np.lexsort((frags.depth, frags.pixel))
-    d, p = frags.depth[order], frags.pixel[order]
-    tie = (p[1:] == p[:-1]) & (np.diff(d) < 1e-5 * far)
-    mask[p[1:][tie]] = True
-    assert same.any()  # the tuft overlaps itself: the passes have work to do
+    mask = _rounding_mask(view, patches, frags)
+    assert np.any(frags.pixel[1:] == frags.pixel[:-1])  # the tuft overlaps itself: the passes have work
     covered = np.zeros(view.width * view.height, bool)
     covered[frags.pixel] = True
-    assert covered.sum() > 100 and mask.sum() < 0.5 * covered.sum()
-    _assert_agree(gl_image, jax_image, view, patches, frags, colors, mask)
-
-
-def _assert_agree(gl_image, jax_image, view, patches, frags, colors, mask):
-    """GL and JAX agree to 1e-4 plus the vertex-snapping bound outside `mask`, and to 1e-4
-    outright on 95 % of the covered pixels outside it: the bound is a worst case (all six
-    coordinates moved adversely, summed); in practice snapping moves few pixels past 1e-4,
-    a wrong pass rule would move many."""
+    assert covered.sum() > 100 and mask.sum() < 0.1 * covered.sum()
     diff = np.abs(gl_image - jax_image).max(axis=-1).ravel()
-    bad = np.flatnonzero((diff > 1e-4 + snap_bound(view, patches, frags, colors)) & ~mask)
+    bad = np.flatnonzero((diff > 1e-4) & ~mask)
     assert bad.size == 0, (bad, diff[bad])
-    checked = np.zeros(view.width * view.height, bool)
-    checked[frags.pixel] = True
-    checked &= ~mask
-    assert np.mean(diff[checked] <= 1e-4) >= 0.95
 
 
 # --------------------------------------------------------------------------- scenes
@@ -297,54 +449,98 @@ def _assert_agree(gl_image, jax_image, view, patches, frags, colors, mask):
 EXAMPLE = EXAMPLES / "patches.toml"
 
 
-def _small_patch_scene():
+def _example(size=96):
+    """The example scene (a head under three layers of textured patches) at size²."""
     scene = hj.load_scene(EXAMPLE)
-    return scene.replace(
-        strands=furball(strands=60, points=6, seed=1, alpha=0.6),
-        camera=dataclasses.replace(scene.camera, width=40, height=40),
-    )
+    return scene.replace(camera=dataclasses.replace(scene.camera, width=size, height=size))
 
 
 def test_scene_file_keys(tmp_path):
     scene = hj.load_scene(EXAMPLE)
-    assert scene.patches == PatchGeometry(width=0.04, opaque_core=0.4)
+    assert scene.patches == PatchGeometry(width=0.4, opaque_core=0.4, strands=10, strand_alpha=0.3, tips=0.3)
+    assert scene.occluder is not None and scene.occluder.kind == "sphere"  # the head
     base = EXAMPLE.read_text()
     for old, new, message in [
         ('geometry = "patches"\n', "", "applies only to geometry = 'patches'"),
-        ("patch_width = 0.04", "patch_width = 0.0", "patch_width"),
-        ("patch_width = 0.04   # world units\n", "", "patch_width .* is required"),
+        ("patch_width = 0.4 ", "patch_width = 0.0 ", "patch_width"),
+        ("patch_width = 0.4    # world units\n", "", "patch_width .* is required"),
         ("opaque_core = 0.4", "opaque_core = 1.5", "opaque_core"),
+        ("patch_strands = 10", "patch_strands = 0", "patch_strands"),
+        ("patch_strands = 10", "patch_strands = 2.5", "patch_strands"),
+        ("patch_strand_alpha = 0.3", "patch_strand_alpha = 1.2", "patch_strand_alpha"),
+        ("patch_strand_tips = 0.3", "patch_strand_tips = -0.1", "patch_strand_tips"),
         ('geometry = "patches"', 'geometry = "quads"', "geometry"),
     ]:
         path = tmp_path / "bad.toml"
+        assert old in base
         path.write_text(base.replace(old, new))
         with pytest.raises(SceneError, match=message):
             hj.load_scene(path)
-    with pytest.raises(SceneError, match="occluder"):
-        scene.replace(occluder=hj.Occluder(kind="sphere", center=(0, 0, 0), radius=0.3))
+    for key in ("patch_strands = 10\n", "patch_strand_alpha = 0.3", "patch_strand_tips = 0.3"):
+        path.write_text(base.replace('geometry = "patches"\n', "").replace("patch_width = 0.4 ", "#"))
+        path.write_text(path.read_text().replace("opaque_core = 0.4", "#"))
+        with pytest.raises(SceneError, match="applies only to geometry = 'patches'"):
+            hj.load_scene(path)
+        assert key.split()[0] in path.read_text()
+
+
+def test_four_passes_over_the_head():
+    """The head drawn first (slide 16): its depth primes Z, its colour is the backdrop, by
+    hand as CASES: a transparent quad in front blends over it, one behind it is hidden, an
+    opaque quad in front replaces it."""
+    view = _view()
+    centre = (view.height // 2) * view.width + view.width // 2
+    head_rgb = np.array([0.9, 0.7, 0.5])
+    head_colors = np.tile(head_rgb, (view.width * view.height, 1))
+    for specs, colors, head_z, expected in [
+        ([(0.5, A_HALF, True)], [GREEN], 4.0, over(0.5, GREEN, head_rgb)),  # D = 3.5 < 4
+        ([(0.5, A_HALF, True)], [GREEN], 3.0, head_rgb),  # the quad behind the head
+        ([(0.5, A_HALF, False)], [GREEN], 3.0, head_rgb),  # a back face behind it (pass 3)
+        ([(0.5, 0.5, True)], [RED], 4.0, RED),  # an opaque quad in front
+        ([(0.0, 0.5, True), (0.5, A_HALF, True)], [RED, GREEN], 4.2, over(0.5, GREEN, RED)),
+        ([(0.0, 0.5, True), (0.5, A_HALF, True)], [RED, GREEN], 3.8, over(0.5, GREEN, head_rgb)),
+    ]:
+        patches = _quads(specs)
+        frags = patch_fragments(view, patches)
+        head = np.full(view.width * view.height, np.inf)
+        head[centre] = head_z
+        weights = four_pass_weights(frags, view.width * view.height, head)
+        image = composite_patches(
+            frags,
+            weights,
+            jnp.asarray(colors),
+            jnp.asarray(BG),
+            view.height,
+            view.width,
+            jnp.asarray(head_colors),
+        )
+        pixel = np.asarray(image).reshape(-1, 4)[centre]
+        # float64 sums of a few products: 1e-12 is rounding.
+        np.testing.assert_allclose(pixel, [*expected, 1.0], atol=1e-12)
 
 
 def test_scene_jax_matches_gl(gl):
-    """The example (fewer strands, 40²) through `render` and `render_gl`: both draw the
-    same patches with the same JAX point colours, so only visibility and compositing can
-    differ; the mask and tolerance as in test_jax_matches_gl (its patches are ~2 px wide,
-    so the vertex-snapping bound matters here)."""
+    """The example at 96² through `render` and `render_gl` (the same patches, the same JAX
+    point colours and head light): the share of pixels where they differ by more than 1e-4
+    (RGB, largest channel) is at most 0.1 % — measured 0 at 96², 128² and 256², the largest
+    difference 5e-5 (the alpha channel: 0.09 % of the pixels, up to 2e-4, float32 u times
+    the strand texture's slope n/(½ − c/2) = 33 on strands about a pixel wide)."""
     from hairjax.gl import render_gl
 
-    scene = _small_patch_scene()
+    scene = _example()
     jax_image = np.asarray(hj.render(scene))
     gl_image = render_gl(scene).image
+    diff = np.abs(jax_image - gl_image)[..., :3].max(axis=-1)
+    assert np.mean(diff > 1e-4) <= 1e-3, (np.mean(diff > 1e-4), diff.max())
+    # The scene does what the example promises: the head shows (opaque, its colour), the
+    # patches cover it in layers, their texture leaves opaque and see-through strands.
     view = camera_view(scene.camera)
-    patches = scene_patches(scene)
-    frags = patch_fragments(view, patches)
-    xy, _ = view.project(patches.vertices)
-    t = patches.triangles
-    edges = np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]])
-    mask = _near_segments(xy[edges[:, 0]], xy[edges[:, 1]], 1e-3, view.width, view.height)
-    assert np.bincount(frags.pixel).max() > 1 and mask.sum() < 0.5 * np.unique(frags.pixel).size
-    colors = scene_point_colors(scene)
-    _assert_agree(gl_image, jax_image, view, patches, frags, colors, mask)
-    assert jax_image[..., 3].max() == 1.0  # opaque cores are drawn
+    frags = patch_fragments(view, scene_patches(scene))
+    opaque = frags.alpha >= 1 - PATCH_OPAQUE_EPS
+    assert opaque.any() and ((frags.alpha > 0) & ~opaque).any()
+    assert np.bincount(frags.pixel).max() >= 6  # layers over layers
+    head, _, _ = hj._geometry._occluder.occluder_hits(view, scene.occluder)
+    assert np.mean(np.isfinite(head) & (jax_image[..., 3].ravel() == 1.0)) > 0.2
 
 
 def test_patch_image_differentiable():
@@ -353,7 +549,7 @@ def test_patch_image_differentiable():
     import equinox as eqx
     import jax
 
-    scene = _small_patch_scene()
+    scene = _example()
     p = scene.params
 
     def total(s):
@@ -362,7 +558,8 @@ def test_patch_image_differentiable():
     grad = jax.grad(total)(1.0)
     eps = 1e-6
     fd = (total(1.0 + eps) - total(1.0 - eps)) / (2 * eps)
-    # Linear in kd: the central difference is exact but for rounding (~1e-16/ε relative).
+    # Linear in kd (the head's colour does not depend on it): the central difference is
+    # exact but for rounding (~1e-16/ε relative).
     np.testing.assert_allclose(float(grad), float(fd), rtol=1e-7)
     assert float(grad) > 0
 
@@ -371,7 +568,7 @@ def test_strand_scene_untouched():
     """A strand scene does no patch work: `render` is the staged path, bit for bit."""
     from hairjax import geometry_stage, shading_stage
 
-    scene = _small_patch_scene().replace(patches=None)
+    scene = _example().replace(patches=None)
     np.testing.assert_array_equal(
         np.asarray(hj.render(scene)), np.asarray(shading_stage(geometry_stage(scene), scene.params))
     )
@@ -382,9 +579,9 @@ def test_other_entry_points():
     the ribbons' image."""
     from hairjax import render_profiled
 
-    scene = _small_patch_scene()
+    scene = _example()
     image, timings = render_profiled(scene)
     np.testing.assert_array_equal(np.asarray(image), np.asarray(hj.render(scene)))
     assert "patches (four passes)" in timings
     with pytest.raises(hj.FitError, match="hair-patch"):
-        hj.fit(scene, np.zeros((40, 40, 4)))
+        hj.fit(scene, np.zeros((96, 96, 4)))

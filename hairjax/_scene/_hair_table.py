@@ -6,14 +6,14 @@ from __future__ import annotations
 from pathlib import Path
 
 from .._errors import SceneError
-from ._procedural import furball, scalp
+from ._procedural import combed, furball, scalp
 from ._scene import PatchGeometry
 from ._strands import WIDTH_UNITS, Strands
 from ._table import Table, given
 
 __all__ = ["read_hair", "read_patches", "HAIR_KEYS", "HAIR_FILE_SUFFIXES", "PROCEDURAL_SOURCES"]
 
-PROCEDURAL_SOURCES = ("furball", "scalp")
+PROCEDURAL_SOURCES = ("furball", "scalp", "combed")
 HAIR_FILE_SUFFIXES = (".hair", ".tfx", ".ply")
 
 # Defaults that belong to the file format rather than to a dataclass: a scene's hair is
@@ -33,10 +33,19 @@ _HAIR_COMMON = (
     "geometry",
     "patch_width",
     "opaque_core",
+    "patch_strands",
+    "patch_strand_alpha",
+    "patch_strand_tips",
 )
 HAIR_GEOMETRIES = ("strands", "patches")
-_HAIR_PROCEDURAL = ("strands", "points", "seed", "length", "gravity")
-_HAIR_ONLY_FOR = {"inertia": "furball", "radius": "scalp", "coverage": "scalp"}
+_HAIR_PROCEDURAL = ("strands", "points", "seed", "length")
+_HAIR_ONLY_FOR = {
+    "gravity": ("furball", "scalp"),
+    "inertia": ("furball",),
+    "radius": ("scalp", "combed"),
+    "coverage": ("scalp",),
+    "layers": ("combed",),
+}
 
 HAIR_KEYS = _HAIR_COMMON + _HAIR_PROCEDURAL + tuple(_HAIR_ONLY_FOR)
 
@@ -47,13 +56,15 @@ def read_hair(table: Table, base_dir: Path) -> Strands:
     source = table.string("source")
     if source is None:
         raise SceneError(
-            f"{where}: hair.source is required: 'furball', 'scalp', or a path "
+            f"{where}: hair.source is required: 'furball', 'scalp', 'combed', or a path "
             f"to a {'/'.join(HAIR_FILE_SUFFIXES)} file"
         )
     is_file = source not in PROCEDURAL_SOURCES
     if is_file and Path(source).suffix.lower() not in HAIR_FILE_SUFFIXES:
         raise table.error(
-            "source", f"'furball', 'scalp', or a path to a {'/'.join(HAIR_FILE_SUFFIXES)} file", source
+            "source",
+            f"'furball', 'scalp', 'combed', or a path to a {'/'.join(HAIR_FILE_SUFFIXES)} file",
+            source,
         )
     _check_hair_keys(table, source, is_file)
 
@@ -83,12 +94,16 @@ def read_hair(table: Table, base_dir: Path) -> Strands:
 
 
 def read_patches(table: Table) -> PatchGeometry | None:
-    """[hair] geometry = "patches" with patch_width (required) and opaque_core (§18)."""
+    """[hair] geometry = "patches" with patch_width (required), opaque_core and the strand
+    texture's patch_strands, patch_strand_alpha, patch_strand_tips (§18)."""
     geometry = table.choice("geometry", HAIR_GEOMETRIES)
     width = table.number("patch_width", lo=0, lo_open=True)
     core = table.number("opaque_core", lo=0, hi=1)
+    strands = table.integer("patch_strands", lo=1)
+    strand_alpha = table.number("patch_strand_alpha", lo=0, hi=1)
+    tips = table.number("patch_strand_tips", lo=0, hi=1)
     if geometry != "patches":
-        for key in ("patch_width", "opaque_core"):
+        for key in ("patch_width", "opaque_core", "patch_strands", "patch_strand_alpha", "patch_strand_tips"):
             if key in table:
                 raise SceneError(f"{table.where}: hair.{key} applies only to geometry = 'patches'")
         return None
@@ -96,7 +111,9 @@ def read_patches(table: Table) -> PatchGeometry | None:
         raise SceneError(
             f"{table.where}: hair.patch_width (world units) is required with geometry = 'patches'"
         )
-    return PatchGeometry(width, **given(opaque_core=core))
+    return PatchGeometry(
+        width, **given(opaque_core=core, strands=strands, strand_alpha=strand_alpha, tips=tips)
+    )
 
 
 def _check_hair_keys(table: Table, source: str, is_file: bool) -> None:
@@ -109,21 +126,26 @@ def _check_hair_keys(table: Table, source: str, is_file: bool) -> None:
                 f"{source!r}; allowed keys for a file: {', '.join(_HAIR_COMMON)}"
             )
         only_for = _HAIR_ONLY_FOR.get(key)
-        if not is_file and only_for is not None and only_for != source:
-            raise SceneError(
-                f"{table.where}: hair.{key} applies only to source = {only_for!r}, not {source!r}"
-            )
+        if not is_file and only_for is not None and source not in only_for:
+            sources = " or ".join(repr(s) for s in only_for)
+            raise SceneError(f"{table.where}: hair.{key} applies only to source = {sources}, not {source!r}")
 
 
 def _generate_hair(table: Table, source: str, alpha: float, width: float) -> Strands:
-    """Call `furball` or `scalp` with the keys given (their own defaults for the rest)."""
+    """Call `furball`, `scalp` or `combed` with the keys given (their own defaults for the
+    rest)."""
     kwargs = given(
         strands=table.integer("strands", lo=1),
         points=table.integer("points", lo=2),
         seed=table.integer("seed", lo=0),
         length=table.number("length", lo=0, lo_open=True),
-        gravity=table.vec3("gravity"),
     )
+    if source == "combed":
+        kwargs.update(
+            given(radius=table.number("radius", lo=0, lo_open=True), layers=table.integer("layers", lo=1))
+        )
+        return combed(**kwargs, alpha=alpha, width=width)
+    kwargs.update(given(gravity=table.vec3("gravity")))
     if source == "furball":
         kwargs.update(given(inertia=table.vec3("inertia")))
         return furball(**kwargs, alpha=alpha, width=width)

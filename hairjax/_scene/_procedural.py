@@ -1,4 +1,5 @@
-"""Procedural hair: Wenzel's fur ball and a scalp of strands bending under gravity."""
+"""Procedural hair: Wenzel's fur ball, a scalp of strands bending under gravity, and hair
+combed over a head in layers (the guide curves of hair patches)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import numpy as np
 
 from ._strands import Strands
 
-__all__ = ["furball", "scalp"]
+__all__ = ["furball", "scalp", "combed"]
 
 
 @runtime_checkable
@@ -101,5 +102,55 @@ def scalp(
     normals = np.stack([r * np.cos(phi), y, r * np.sin(phi)], axis=1)
     seg = length / (points - 1) * rng.uniform(1 - length_jitter, 1 + length_jitter, strands)
     pts = _grow(normals * radius, normals, seg, points, gravity, (0.0, 0.0, 0.0))
+    offsets = np.arange(strands + 1) * points
+    return Strands(pts.reshape(-1, 3), offsets, alpha, width)
+
+
+def combed(
+    strands: int = 72,
+    points: int = 16,
+    seed: int = 0,
+    length: float = 2.2,
+    radius: float = 1.0,
+    layers: int = 3,
+    gap: float = 0.06,
+    fringe: float = 1.0,
+    face: float = 0.9,
+    length_jitter: float = 0.1,
+    alpha: float = 0.5,
+    width: float = 1.0,
+) -> Strands:
+    """Hair combed down over a head, the sphere of `radius` at the origin, in `layers`
+    shells: the guide curves of scheuermann-2004 slide 5's "several layers of patches"
+    (docs/model.md §18).
+
+    Strand i lies in layer l = i mod `layers`, on the sphere of radius
+    `radius`·(1 + `gap`·(l + 1)) (layer 0 innermost). It starts near the crown (polar angle
+    U(0.1, 0.2) rad), runs down its meridian to the equator and then straight down (−y),
+    `length`·U(1 ± `length_jitter`) long in all; over the face (azimuth within `face` rad
+    of +z) it stops at polar angle `fringe` rad. Each layer's azimuths are evenly spaced,
+    turned by half a step against the layer below, plus U(±¼ step). Points are evenly
+    spaced along the curve. Deterministic for a `seed`.
+    """
+    if strands < 1 or points < 2 or layers < 1:
+        raise ValueError("combed needs at least 1 strand of at least 2 points and 1 layer")
+    rng = np.random.default_rng(seed)
+    layer = np.arange(strands) % layers
+    rank = np.arange(strands) // layers  # position within its layer
+    per_layer = np.bincount(layer, minlength=layers)[layer]
+    step = 2 * np.pi / per_layer
+    phi = step * (rank + 0.5 * (layer % 2) + rng.uniform(-0.25, 0.25, strands))
+    r = radius * (1 + gap * (layer + 1))
+    theta0 = rng.uniform(0.1, 0.2, strands)
+    total = length * rng.uniform(1 - length_jitter, 1 + length_jitter, strands)
+    over_face = np.abs(np.angle(np.exp(1j * phi))) < face  # azimuth wrapped to (−π, π]
+    total = np.where(over_face, np.minimum(total, r * (fringe - theta0)), total)
+    s = total[:, None] * np.linspace(0.0, 1.0, points)[None, :]  # arc length, [n, points]
+    on_head = r[:, None] * (np.pi / 2 - theta0[:, None])  # arc length to the equator
+    theta = theta0[:, None] + np.minimum(s, on_head) / r[:, None]
+    drop = np.maximum(s - on_head, 0.0)  # straight down below the equator
+    side = np.stack([np.sin(phi), np.zeros(strands), np.cos(phi)], axis=1)  # azimuth φ, +z at 0
+    pts = r[:, None, None] * (np.sin(theta)[..., None] * side[:, None, :])
+    pts[..., 1] = r[:, None] * np.cos(theta) - drop
     offsets = np.arange(strands + 1) * points
     return Strands(pts.reshape(-1, 3), offsets, alpha, width)

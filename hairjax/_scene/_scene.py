@@ -28,21 +28,36 @@ __all__ = ["PatchGeometry", "Scene"]
 @dataclasses.dataclass(frozen=True)
 class PatchGeometry:
     """Draw the strands as polygonal hair patches (docs/model.md §18, scheuermann-2004
-    slides 4–6, 14–17): ribbons `width` world units wide, alpha texture with an opaque
-    core of fraction `opaque_core`, drawn with slide 17's four passes."""
+    slides 4–6, 14–17): ribbons `width` world units wide, drawn with slide 17's four
+    passes, with an alpha texture of `strands` strands side by side across each patch,
+    each with an opaque core of fraction `opaque_core`; the semi-transparent strands peak
+    at `strand_alpha` or more, and the strands end up to `tips` of the patch's length
+    before its tip."""
 
     width: float
     opaque_core: float = 0.5
+    strands: int = 1
+    strand_alpha: float = 1.0
+    tips: float = 0.0
 
     def __post_init__(self):
         w = self.width
         if isinstance(w, bool) or not isinstance(w, (int, float)) or not (np.isfinite(w) and w > 0):
             raise SceneError(f"hair.patch_width must be a positive finite number, got {w!r}")
-        c = self.opaque_core
-        if isinstance(c, bool) or not isinstance(c, (int, float)) or not 0 <= c <= 1:
-            raise SceneError(f"hair.opaque_core must be a number in [0, 1], got {c!r}")
+        for key, name in (
+            ("opaque_core", "opaque_core"),
+            ("strand_alpha", "patch_strand_alpha"),
+            ("tips", "patch_strand_tips"),
+        ):
+            c = getattr(self, key)
+            if isinstance(c, bool) or not isinstance(c, (int, float)) or not 0 <= c <= 1:
+                raise SceneError(f"hair.{name} must be a number in [0, 1], got {c!r}")
+            object.__setattr__(self, key, float(c))
+        n = self.strands
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+            raise SceneError(f"hair.patch_strands must be an integer ≥ 1, got {n!r}")
         object.__setattr__(self, "width", float(w))
-        object.__setattr__(self, "opaque_core", float(c))
+        object.__setattr__(self, "strands", int(n))
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -55,7 +70,8 @@ class Scene:
     self-shadowing method (`Shadows(...)`, docs/model.md §7); `ordering`: the visibility
     order (`Ordering(...)`, §4). `streaks`: wenzel-2002's streak texture along the hairs
     (§16), or None. `patches`: draw the strands as hair patches (§18) instead of ribbons,
-    or None; the strands' opacity maps still give the self-shadows; no occluder.
+    or None; the strands' opacity maps still give the self-shadows; an occluder is the
+    head, drawn first.
     `reference`: the fibres and path tracer of the physically based reference
     (`hairjax.reference_image`, docs/reference.md), or None for `ReferenceSettings()`;
     the JAX and GL renderers do not read it.
@@ -95,11 +111,6 @@ class Scene:
         if self.patches is not None:
             if not isinstance(self.patches, PatchGeometry):
                 raise SceneError("scene.patches must be a PatchGeometry or None")
-            if self.occluder is not None:
-                raise SceneError(
-                    "hair.geometry = 'patches' does not draw an occluder: "
-                    "remove [occluder] or use geometry = 'strands'"
-                )
 
     @property
     def params(self):

@@ -28,7 +28,7 @@ from ._buffers import Points, Strands
 from ._camera_pass import camera_depth_far, camera_pass
 from ._context import get_context
 from ._occluder import OccluderLight, OccluderSurface, occluder_shadow
-from ._patches import render_patches_gl
+from ._patches import patch_head, render_patches_gl
 from ._programs import programs
 from ._shadow_passes import gl_shadow_pass
 
@@ -148,16 +148,18 @@ def render_gl(
 
 
 def _render_patches(scene: Scene, params, omega, order, occluder) -> GLResult:
-    """docs/model.md §18: slide 17's four passes in GL over the patch mesh. The per-point
-    colours come from the JAX shading (`scene_point_colors`): GL here checks visibility
-    and compositing, not the shading (the ribbon path checks that)."""
+    """docs/model.md §18: slide 17's four passes in GL over the patch mesh, after the
+    scene's occluder (the head, slide 16). The per-point colours and the occluder's part
+    of the light (Ω and V at its surface) come from the JAX geometry and shading: GL here
+    checks visibility and compositing, not the shading (the ribbon path checks that)."""
     if omega is not None or order is not None or occluder is not None:
         raise ValueError("a hair-patch scene takes none of `omega`, `order`, `occluder`")
     clock = time.perf_counter()
     colors = np.asarray(scene_point_colors(scene, params), np.float64)
+    head = patch_head(scene, params)
     shaded = time.perf_counter()
     image = render_patches_gl(
-        get_context(), camera_view(scene.camera), scene_patches(scene), colors, scene.background
+        get_context(), camera_view(scene.camera), scene_patches(scene), colors, scene.background, head
     )
     timings = {"point colours (JAX)": shaded - clock, "four passes": time.perf_counter() - shaded}
     return GLResult(image, None, timings)

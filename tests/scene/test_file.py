@@ -17,7 +17,7 @@ import hairjax as hj
 from hairjax import Camera, Light, Occluder, Ordering, Shadows
 from hairjax._errors import HairFormatError, SceneError
 from hairjax._scene._file import default_scene_path, load_scene, scene_from_dict
-from hairjax._scene._procedural import furball, scalp
+from hairjax._scene._procedural import combed, furball, scalp
 from hairjax._scene._strands import Strands
 
 PONYTAIL_TAIL = DATA / "tressfx" / "ponytail_tail.tfx"  # read in place (shared/data/README.md)
@@ -336,6 +336,13 @@ width = 2.5
     want = furball(strands=50, points=4, inertia=(0.1, 0, 0))
     np.testing.assert_array_equal(got.points, want.points)
 
+    text = '[hair]\nsource = "combed"\nstrands = 12\npoints = 6\nseed = 3\nlength = 1.5\n'
+    text += "radius = 0.8\nlayers = 2\n"
+    got = load_scene(write(tmp_path, text)).strands
+    want = combed(strands=12, points=6, seed=3, length=1.5, radius=0.8, layers=2)
+    np.testing.assert_array_equal(got.points, want.points)
+    np.testing.assert_array_equal(got.offsets, want.offsets)
+
 
 # --------------------------------------------------------------------------- transforms
 
@@ -461,7 +468,7 @@ ERROR_CASES = [
     (
         "source-unknown",
         '[hair]\nsource = "furbal"\n',
-        ["hair.source must be 'furball', 'scalp', or a path to a .hair/.tfx/.ply file", "'furbal'"],
+        ["hair.source must be 'furball', 'scalp', 'combed', or a path to a .hair/.tfx/.ply file", "'furbal'"],
     ),
     ("source-suffix", '[hair]\nsource = "head.obj"\n', ["hair.source must be", ".tfx"]),
     ("missing-file", '[hair]\nsource = "nope.tfx"\n', ["hair.source file not found", "nope.tfx"]),
@@ -515,6 +522,21 @@ ERROR_CASES = [
     ),
     ("radius-furball", HAIR + "radius = 1\n", ["hair.radius applies only to source = 'scalp'"]),
     ("coverage-furball", HAIR + "coverage = 0.5\n", ["hair.coverage applies only to"]),
+    (
+        "layers-scalp",
+        '[hair]\nsource = "scalp"\nlayers = 2\n',
+        ["hair.layers applies only to source = 'combed'"],
+    ),
+    (
+        "gravity-combed",
+        '[hair]\nsource = "combed"\ngravity = [0, -1, 0]\n',
+        ["hair.gravity applies only to source = 'furball' or 'scalp'", "'combed'"],
+    ),
+    (
+        "layers-zero",
+        '[hair]\nsource = "combed"\nlayers = 0\n',
+        ["hair.layers must be an integer >= 1, got 0"],
+    ),
     (
         "coverage-zero",
         '[hair]\nsource = "scalp"\nstrands = 5\ncoverage = 0\n',

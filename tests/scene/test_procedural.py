@@ -42,6 +42,38 @@ def test_scalp_roots_on_the_sphere_growing_outward():
     )
 
 
+def test_combed_hair_lies_on_its_layers():
+    """`combed` (docs/scenes.md): each strand on its layer's sphere down to the equator, then
+    straight down; points evenly spaced along it; the face left open."""
+    radius, gap, layers = 0.8, 0.06, 3
+    hair = hj.combed(strands=60, points=24, seed=5, length=2.0, radius=radius, layers=layers)
+    pts = hair.points.reshape(60, 24, 3)
+    shell = radius * (1 + gap * (np.arange(60) % layers + 1))  # layer i mod 3, innermost 0
+    upper = pts[..., 1] >= 0
+    dist = np.linalg.norm(pts, axis=2)
+    np.testing.assert_allclose(dist[upper], np.broadcast_to(shell[:, None], dist.shape)[upper], rtol=1e-12)
+    # Below the equator: straight down at the layer's radius in x, z.
+    below = ~upper
+    np.testing.assert_allclose(
+        np.linalg.norm(pts[..., [0, 2]], axis=2)[below], np.broadcast_to(shell[:, None], dist.shape)[below]
+    )
+    # Roots near the crown: polar angle in [0.1, 0.2] rad.
+    polar = np.arccos(pts[:, 0, 1] / shell)
+    assert polar.min() >= 0.1 - 1e-12 and polar.max() <= 0.2 + 1e-12
+    # Evenly spaced points along each strand (a chord of an arc of at most 2/23 of the
+    # length is within 0.1 % of the arc).
+    steps = np.linalg.norm(np.diff(pts, axis=1), axis=2)
+    np.testing.assert_allclose(steps, steps[:, :1] * np.ones_like(steps), rtol=1e-3)
+    # The face (azimuth within 0.9 rad of +z) is open: those strands end at polar angle 1.
+    azimuth = np.arctan2(pts[:, 0, 0], pts[:, 0, 2])
+    over_face = np.abs(azimuth) < 0.9
+    assert over_face.any() and (~over_face).any()
+    tip_polar = np.arccos(np.clip(pts[:, -1, 1] / shell, -1, 1))
+    assert np.all(tip_polar[over_face] <= 1.0 + 1e-9)
+    assert np.all(pts[~over_face, -1, 1] < 0)  # the others hang below the equator
+    np.testing.assert_array_equal(hj.combed(10, 4, seed=1).points, hj.combed(10, 4, seed=1).points)
+
+
 @pytest.mark.parametrize("kwargs", [dict(strands=0), dict(points=1)])
 def test_bad_arguments(kwargs):
     with pytest.raises(ValueError):

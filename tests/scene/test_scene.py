@@ -61,8 +61,15 @@ def test_optional_parts_of_the_wrong_type_are_refused():
         hj.Scene(HAIR, patches=0.04)
     with pytest.raises(hj.SceneError, match=r"^background\.color must be a non-negative number"):
         hj.Scene(HAIR, background=(0.1, -0.2, 0.3))
-    with pytest.raises(hj.SceneError, match=r"does not draw an occluder"):
-        hj.Scene(HAIR, patches=hj.PatchGeometry(width=0.04), occluder=hj.Occluder())
+    # Patches take an occluder: the head, drawn first (docs/model.md §18).
+    assert hj.Scene(HAIR, patches=hj.PatchGeometry(width=0.04), occluder=hj.Occluder()).occluder is not None
+    for key, value, name in [
+        ("strands", 0, "patch_strands"),
+        ("strand_alpha", -0.1, "patch_strand_alpha"),
+        ("tips", 2.0, "patch_strand_tips"),
+    ]:
+        with pytest.raises(hj.SceneError, match=rf"^hair\.{name} must be"):
+            hj.PatchGeometry(width=0.04, **{key: value})
 
 
 def test_defaults_and_the_background():

@@ -5,6 +5,8 @@
 
 in vec3 in_position;
 in float in_u;
+in float in_v;
+in uint in_patch;
 in vec3 in_color;
 
 uniform View view;
@@ -12,6 +14,8 @@ uniform vec2 raster_size;
 
 out vec3 v_position;
 out float v_u;
+out float v_v;
+flat out uint v_patch;
 out vec3 v_color;
 
 void main() {
@@ -21,5 +25,7 @@ void main() {
     gl_Position = vec4(ndc * w, 0.0, w);
     v_position = in_position;
     v_u = in_u;
+    v_v = in_v;
+    v_patch = in_patch;
     v_color = in_color;
 }
