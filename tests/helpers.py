@@ -116,6 +116,7 @@ def shadow_method(method: str, maps: int = 8, resolution: int = 32):
     options = {
         "opacity-maps": dict(maps=maps, resolution=resolution),
         "exact": dict(resolution=resolution),
+        "deep": dict(resolution=resolution),  # its default 4 layers
     }.get(method, {})
     return hj.Shadows(method, **options)
 

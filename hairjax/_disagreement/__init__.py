@@ -4,7 +4,8 @@ rounding (docs/model.md §11).
 The model has discontinuities: a pixel centre belongs to a segment only for 0 ≤ s < L
 (§5), a light-space fragment adds to the slice its depth falls in and a point reads the
 texels around the one it falls in (§7), `exact` counts fragments strictly nearer than the
-point, and the occluder is point-sampled (§9). GLSL computes in float32, JAX in float64
+point, deep opacity maps put a fragment in a layer behind its texel's first depth z₀, and
+the occluder is point-sampled (§9). GLSL computes in float32, JAX in float64
 (or float32 in another order of operations), so a pixel centre, fragment or point within
 rounding of such a boundary may land on either side. Everything here is computed from the
 geometry alone, in NumPy (JAX only for the rasteriser's kernel and the geometry stage's Ω),
@@ -28,7 +29,7 @@ Tolerances (tests/gl/test_renderer.py gives the measurements behind them):
 - MAX_BAND = 1e-3: the share of pixels the camera band may hold (the cross-check's bound).
 """
 
-from . import _exact, _opacity_maps  # noqa: F401 (they register their light bands)
+from . import _deep, _exact, _opacity_maps  # noqa: F401 (they register their light bands)
 from ._band import renderer_band as renderer_band
 from ._camera import camera_band as camera_band
 from ._camera import end_band as end_band

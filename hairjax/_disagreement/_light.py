@@ -31,11 +31,13 @@ __all__ = [
 class LightBand:
     """A shadow method's boundaries. `terms(shadows, frame, frags, near_end, opacity, r)`
     returns `(uncertain, omega_at)`: per point (x, y texel, index) the bound on Ω from
-    fragments near a boundary, and Ω itself from the fragments; `planes(shadows)`: the
-    number of slice planes whose boundaries a receiver's depth may fall on (None: none)."""
+    fragments near a boundary, and Ω itself from the fragments; `receivers(shadows, plan,
+    frame, index)`: which of the receivers `index` (into `frame`, the light's frame with
+    them, §13; `plan` the method's set-up) lie within rounding of a boundary of their own
+    depth, where Ω jumps or the renderers pick a different slice (None: none do)."""
 
     terms: Callable
-    planes: Callable = lambda shadows: None
+    receivers: Callable | None = None
 
 
 _LIGHT_BANDS: dict[str, LightBand] = {}

@@ -9,7 +9,7 @@ from .._geometry._occluder import occluder_hits, occluder_light_view, shadow_bia
 from .._geometry._setup import prepare
 from .._geometry._shadows import light_frame, with_receivers
 from ._light import light_band
-from ._tolerances import OCCLUDER_EDGE_DELTA, SLICE_DELTA
+from ._tolerances import OCCLUDER_EDGE_DELTA
 
 __all__ = ["occluder_light_uncertainty"]
 
@@ -20,7 +20,8 @@ def occluder_light_uncertainty(scene) -> tuple[np.ndarray, np.ndarray]:
     of a texel edge of the occluder's light raster, at a texel within OCCLUDER_EDGE_DELTA
     of the occluder's outline there, or within 1e-5 (relative) of the bias threshold; and
     at an occluder pixel, also Ω when its surface point lies within 1e-4 texel of an
-    opacity-map texel edge or (opacity maps) SLICE_DELTA of a plane. Not covered: an
+    opacity-map texel edge or within rounding of a boundary of its depth (the method's
+    `LightBand.receivers`: opacity maps' planes, deep maps' last boundary). Not covered: an
     occluder point's Ω moved by hair fragments near their segment ends (as
     `omega_uncertainty` bounds for strand points). All False without an occluder or
     shadows."""
@@ -55,10 +56,10 @@ def occluder_light_uncertainty(scene) -> tuple[np.ndarray, np.ndarray]:
     )
     receiver = slice(s.num_points, None)
     unsure[receiver] |= near_edge(frame.xy[receiver])
-    planes = light_band(scene.shadows).planes(scene.shadows)
-    if planes is not None:  # a receiver's depth near a slice plane may fall on either side
-        u = frame.slice_coordinate(frame.depth[receiver], planes)
-        unsure[receiver] |= np.abs(u - np.round(u)) < SLICE_DELTA
+    near_boundary = light_band(scene.shadows).receivers
+    if near_boundary is not None:  # a receiver's depth near a boundary may fall on either side
+        index = np.arange(s.num_points, len(frame.depth))
+        unsure[receiver] |= near_boundary(scene.shadows, setup.shadow, frame, index)
     points_out[:] = unsure[: s.num_points]
     pixels_out[setup.occluder_pixel] = unsure[receiver]
     return points_out, pixels_out

@@ -49,4 +49,10 @@ def opacity_map_terms(shadows, frame, frags, near_end, opacity, r):
     return uncertain, omega_at
 
 
-register_light_band("opacity-maps", LightBand(opacity_map_terms, planes=lambda shadows: shadows.maps))
+def receivers_near_a_plane(shadows, plan, frame, index):
+    """`LightBand.receivers` for `OpacityMaps`: within SLICE_DELTA of a plane."""
+    u = frame.slice_coordinate(frame.depth[index], shadows.maps)
+    return np.abs(u - np.round(u)) < SLICE_DELTA
+
+
+register_light_band("opacity-maps", LightBand(opacity_map_terms, receivers=receivers_near_a_plane))

@@ -7,8 +7,9 @@ transmittance, and Ω. So every gain image is recomputed at each step, with the 
 recomputed from the set-up's fragments (`composite_weights`), through plain autodiff; no
 fragment is dropped behind low transmittance, since that depends on α. Ω is linear in the
 strands' opacities for every shadow method (kim-2003 §4: the maps accumulate α·coverage;
-the exact Ω sums it), so Ω(α) = α·Ω(1), computed once (`tests/fit/test_opacity_fit.py`
-checks it against the geometry stage at α for each method).
+the exact Ω sums it; deep maps' first depths and layers are the geometry's), so
+Ω(α) = α·Ω(1), computed once (`tests/fit/test_opacity_fit.py` checks it against the
+geometry stage at α for each method).
 """
 
 from __future__ import annotations

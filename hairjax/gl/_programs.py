@@ -53,6 +53,12 @@ _PROGRAMS = {
     "light_list": dict(
         vertex_shader="strand.vert", geometry_shader="ribbon.geom", fragment_shader="light_list.frag"
     ),
+    "deep_first": dict(
+        vertex_shader="strand.vert", geometry_shader="ribbon.geom", fragment_shader="deep_first.frag"
+    ),
+    "deep_layers": dict(
+        vertex_shader="strand.vert", geometry_shader="ribbon.geom", fragment_shader="deep_layers.frag"
+    ),
     "occluder_sphere": dict(vertex_shader="fullscreen.vert", fragment_shader="occluder_sphere.frag"),
     "occluder_mesh": dict(vertex_shader="occluder_mesh.vert", fragment_shader="occluder_mesh.frag"),
     "occluder_color": dict(vertex_shader="fullscreen.vert", fragment_shader="occluder_color.frag"),
@@ -61,6 +67,7 @@ _PROGRAMS = {
 _COMPUTE = {
     "omega_maps": "omega_maps.comp",
     "omega_exact": "omega_exact.comp",
+    "omega_deep": "omega_deep.comp",
     "occluder_visibility": "occluder_visibility.comp",
 }
 _CACHE: dict = {}

@@ -23,7 +23,7 @@ from .._geometry._setup import visibility_order
 from .._geometry._shadows import light_frame, with_receivers
 from .._patches import scene_patches, scene_point_colors
 from .._scene._scene import Scene
-from . import _exact_opacity, _opacity_maps  # noqa: F401 (they register their passes)
+from . import _deep_maps, _exact_opacity, _opacity_maps  # noqa: F401 (they register their passes)
 from ._buffers import Points, Strands
 from ._camera_pass import camera_depth_far, camera_pass
 from ._context import get_context

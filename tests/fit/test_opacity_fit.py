@@ -25,7 +25,7 @@ def terms_and_point(scene, params, alpha):
     return model, data, point
 
 
-@pytest.mark.parametrize("shadows", ["opacity-maps", "exact", "none", "sphere"])
+@pytest.mark.parametrize("shadows", ["opacity-maps", "exact", "deep", "none", "sphere"])
 def test_the_fit_image_at_alpha_is_the_render_at_alpha(shadows):
     """The fit recomputes the weights and scales Ω(1) by α (Ω linear in the strands'
     opacity); the renderer runs the geometry stage at α itself. Both, at an α other than

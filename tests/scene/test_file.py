@@ -111,6 +111,7 @@ EXAMPLE_NAMES = [
     "furball_animated",
     "scheuermann",
     "patches",
+    "deep",
 ]
 
 
@@ -256,6 +257,17 @@ def test_absent_tables_take_dataclass_defaults(tmp_path):
 def test_keys_another_method_would_ignore_are_refused(tmp_path, table, message):
     with pytest.raises(SceneError, match=message):
         load_scene(write(tmp_path, HAIR + table))
+
+
+def test_deep_shadows_are_read(tmp_path):
+    text = HAIR + '[shadows]\nmethod = "deep"\nlayers = 6\nresolution = 64\nlayer_spacing = 0.05\n'
+    scene = load_scene(write(tmp_path, text))
+    assert scene.shadows == Shadows("deep", layers=6, resolution=64, layer_spacing=0.05)
+    assert (scene.shadows.layers, scene.shadows.resolution, scene.shadows.layer_spacing) == (6, 64, 0.05)
+    # Absent keys take the defaults: 4 layers, 256², spacing 0 (the depth extent over K);
+    # an integer spacing is a number.
+    default = load_scene(write(tmp_path, HAIR + '[shadows]\nmethod = "deep"\nlayer_spacing = 1\n')).shadows
+    assert (default.layers, default.resolution, default.layer_spacing) == (4, 256, 1.0)
 
 
 def test_name_must_come_before_the_tables(tmp_path):
@@ -640,7 +652,7 @@ ERROR_CASES = [
     (
         "shadows-method",
         HAIR + '[shadows]\nmethod = "pcf"\n',
-        ["shadows.method must be one of 'exact', 'none', 'opacity-maps'"],
+        ["shadows.method must be one of 'opacity-maps', 'deep', 'exact', 'none'"],
     ),
     (
         "shadows-resolution-zero",
@@ -649,6 +661,32 @@ ERROR_CASES = [
     ),
     ("shadows-maps-zero", HAIR + "[shadows]\nmaps = 0\n", ["shadows.maps must be an integer in"]),
     ("shadows-maps-float", HAIR + "[shadows]\nmaps = 1.5\n", ["shadows.maps must be an integer"]),
+    (
+        "deep-layers-zero",
+        HAIR + '[shadows]\nmethod = "deep"\nlayers = 0\n',
+        ["shadows.layers must be an integer in [1, 65536], got 0"],
+    ),
+    ("deep-layers-float", HAIR + '[shadows]\nmethod = "deep"\nlayers = 2.5\n', ["shadows.layers", "2.5"]),
+    (
+        "deep-spacing-negative",
+        HAIR + '[shadows]\nmethod = "deep"\nlayer_spacing = -0.1\n',
+        ["shadows.layer_spacing must be ≥ 0", "got -0.1"],
+    ),
+    (
+        "deep-spacing-string",
+        HAIR + '[shadows]\nmethod = "deep"\nlayer_spacing = "a"\n',
+        ["shadows.layer_spacing"],
+    ),
+    (
+        "deep-maps",
+        HAIR + '[shadows]\nmethod = "deep"\nmaps = 8\n',
+        ["shadows.maps is not a key of method = 'deep'"],
+    ),
+    (
+        "maps-layers",
+        HAIR + '[shadows]\nmethod = "opacity-maps"\nlayers = 8\n',
+        ["shadows.layers is not a key of method = 'opacity-maps'"],
+    ),
     ("width-units", HAIR + 'width_units = "mm"\n', ["hair.width_units must be one of 'pixels', 'world'"]),
     (
         "ordering-method",

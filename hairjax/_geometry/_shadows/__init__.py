@@ -1,6 +1,7 @@
 """Self-shadowing of the hair (kim-2003 §4, docs/model.md §7): one module per method,
-registered by method name: `none`, `opacity-maps` (kim-2003's opacity shadow maps) and
-`exact` (their N → ∞ limit). `_frame.py` holds what they share: the light's view.
+registered by method name: `none`, `opacity-maps` (kim-2003's opacity shadow maps),
+`exact` (their N → ∞ limit) and `deep` (Yuksel & Keyser 2008's deep opacity maps, layers
+behind each texel's first hair). `_frame.py` holds what they share: the light's view.
 """
 
 from ._base import AbstractShadowMethod as AbstractShadowMethod
@@ -8,6 +9,11 @@ from ._base import Shadows as Shadows
 from ._base import register_shadow_method as register_shadow_method
 from ._base import shadow_method_class as shadow_method_class
 from ._base import shadow_method_names as shadow_method_names
+from ._deep import DeepOpacityMaps as DeepOpacityMaps
+from ._deep import DeepSetup as DeepSetup
+from ._deep import deep_points as deep_points
+from ._deep import first_depths as first_depths
+from ._deep import layer_coordinate as layer_coordinate
 from ._exact import ExactSetup as ExactSetup
 from ._exact import ExactShadows as ExactShadows
 from ._exact import exact_opacity as exact_opacity

@@ -136,6 +136,12 @@ int slice_of(float z, float zmin, float span, int maps) {
     return int(clamp(floor((z - zmin) * float(maps) / span), 0.0, float(maps)));
 }
 
+// §7 deep opacity maps: u = (z − z₀)·K/(KΔ), the depth behind a texel's first hair z₀ in
+// layers (hairjax/_geometry/_shadows/_deep.py's layer_coordinate, term by term).
+float deep_layer_coordinate(float z, float z0, int layers, float depth_range) {
+    return (z - z0) * float(layers) / depth_range;
+}
+
 // docs/model.md §7: the transmittance τ = exp(−κΩ) through the opacity Ω in front of a point.
 float transmittance(float kappa, float omega) {
     return exp(-kappa * omega);

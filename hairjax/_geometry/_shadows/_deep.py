@@ -1,0 +1,195 @@
+"""`method = "deep"`: deep opacity maps (Yuksel & Keyser 2008, "Deep Opacity Maps";
+docs/model.md §7).
+
+Opacity maps whose slices follow the hair's lit surface instead of fixed planes: a depth
+pass from the light gives each texel's first hair depth z₀ (its nearest light-space
+fragment), and K layers of spacing Δ follow it, boundaries at z₀ + kΔ, k = 0 … K. On
+boundary k a texel holds the alpha of its fragments with z < z₀ + kΔ (boundary 0: none),
+and the texel's total beyond the last one. A point at depth z with layer coordinate
+u = (z − z₀)·K/(KΔ), z₀ its own texel's, gets
+
+    Ω = (1 − f) Ω̄_k + f Ω̄_{k+1},   k = ⌊u⌋ clamped to 0 … K − 1,  f = u − k ∈ [0, 1],
+
+or the box-filtered total Ω̄_tot for u > K; Ω = 0 where its texel holds no hair. Ω̄ is the
+3 × 3 box average of the boundary maps (`box_filter`); z₀ is not filtered. z₀ and the
+layers depend on geometry alone, so set-up (NumPy) plans the gathers and evaluation (JAX)
+is linear in fragment alpha, as for opacity maps: differentiable in opacity.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import numbers
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+
+from ..._errors import SceneError
+from .._projection import View
+from ._base import AbstractShadowMethod, check_resolution, register_shadow_method
+from ._frame import LightFrame, light_fragments
+from ._opacity_maps import MAX_MAP_CELLS, opacity_maps, point_opacity
+
+__all__ = ["DeepOpacityMaps", "DeepSetup", "first_depths", "layer_coordinate", "deep_points"]
+
+
+@dataclasses.dataclass(frozen=True)
+class DeepSetup:
+    """What Ω needs that does not depend on opacity: light-space fragments
+    `frag_strand[F]`, `frag_coverage[F]` and `frag_cell[F]` = slice · R² + texel (slice j
+    holds the fragments with j ≤ u < j + 1 of their texel, slice K those with u ≥ K); per
+    point the lower boundary `plane[P]` (K for points beyond the last boundary, which read
+    the total), its weight `f[P]` and texel `texel[P]` (−1 outside the map or where the
+    texel holds no hair); `first_depth[R²]`, each texel's z₀ (+∞ without hair)."""
+
+    view: View
+    frag_strand: np.ndarray
+    frag_coverage: np.ndarray
+    frag_cell: np.ndarray
+    plane: np.ndarray
+    f: np.ndarray
+    texel: np.ndarray
+    first_depth: np.ndarray
+
+
+@register_shadow_method
+@dataclasses.dataclass(frozen=True)
+class DeepOpacityMaps(AbstractShadowMethod):
+    """`layers` (K) layers of `layer_spacing` (Δ, world units along the light) behind each
+    texel's first hair, on a `resolution` × `resolution` light raster. `layer_spacing = 0`
+    (the default) is the hair's light-depth extent over K, (D_N − D₀)/K: the coarsest
+    spacing whose layers hold all the hair behind any texel's z₀ ≥ D₀."""
+
+    layers: int = 4
+    resolution: int = 256
+    layer_spacing: float = 0.0
+    method = "deep"
+
+    def __post_init__(self):
+        k = self.layers
+        if (
+            isinstance(k, bool)
+            or not isinstance(k, numbers.Real)
+            or not math.isfinite(k)
+            or int(k) != k
+            or not 1 <= k <= 65536
+        ):
+            raise SceneError(f"shadows.layers must be an integer in [1, 65536], got {k!r}")
+        spacing = self.layer_spacing
+        if isinstance(spacing, bool) or not isinstance(spacing, numbers.Real) or not math.isfinite(spacing):
+            raise SceneError(f"shadows.layer_spacing must be a finite number ≥ 0, got {spacing!r}")
+        if spacing < 0:
+            raise SceneError(
+                f"shadows.layer_spacing must be ≥ 0 (0: the hair's depth extent over layers), got {spacing!r}"
+            )
+        object.__setattr__(self, "layers", int(k))
+        object.__setattr__(self, "layer_spacing", float(spacing))
+        object.__setattr__(self, "resolution", check_resolution(self.resolution))
+
+    def depth_range(self, frame: LightFrame) -> float:
+        """KΔ, the depth the K layers span behind z₀: K·`layer_spacing`, or by default the
+        hair's light-depth extent D_N − D₀ (`frame.span`)."""
+        return self.layers * self.layer_spacing if self.layer_spacing > 0 else frame.span
+
+    def setup(
+        self,
+        points,
+        segments,
+        seg_strand,
+        width,
+        light,
+        *,
+        receivers=None,
+        segment_alpha=None,
+        width_units="pixels",
+    ) -> DeepSetup:
+        layers, resolution = self.layers, self.resolution
+        if (layers + 2) * resolution**2 > MAX_MAP_CELLS:
+            raise ValueError(
+                f"{layers} layers of {resolution}² exceed {MAX_MAP_CELLS} map cells; "
+                "use fewer layers or a lower resolution"
+            )
+        lf = light_fragments(
+            points,
+            segments,
+            seg_strand,
+            width,
+            light,
+            resolution,
+            receivers=receivers,
+            segment_alpha=segment_alpha,
+            width_units=width_units,
+        )
+        depth_range = self.depth_range(lf.frame)
+        first = first_depths(lf.frags.pixel, lf.frags.depth, resolution)
+        u = layer_coordinate(lf.frags.depth, first[lf.frags.pixel], layers, depth_range)
+        # The minimum fires for fragments at or beyond the last boundary (u ≥ K): slice K,
+        # counted in the texel's total only. u ≥ 0: z₀ is the texel's nearest fragment.
+        j = np.minimum(np.floor(u), layers).astype(np.int64)
+        texel = np.where(lf.inside, lf.ty * resolution + lf.tx, -1)
+        plane, f, texel = deep_points(lf.frame.depth, texel, first, layers, depth_range)
+        return DeepSetup(
+            view=lf.frame.view,
+            frag_strand=lf.frag_strand,
+            frag_coverage=lf.frag_coverage,
+            frag_cell=(j * resolution**2 + lf.frags.pixel).astype(np.int32),
+            plane=plane.astype(np.int32),
+            f=f,
+            texel=texel.astype(np.int32),
+            first_depth=first,
+        )
+
+    def omega(self, setup: DeepSetup, alpha):
+        dtype = jnp.result_type(float)
+        return _deep_opacity(
+            alpha,
+            setup.frag_strand,
+            jnp.asarray(setup.frag_coverage, dtype),
+            setup.frag_cell,
+            setup.plane,
+            jnp.asarray(setup.f, dtype),
+            setup.texel,
+            self.layers,
+            self.resolution,
+        )
+
+
+@eqx.filter_jit
+def _deep_opacity(alpha, frag_strand, frag_coverage, frag_cell, plane, f, texel, layers, resolution):
+    # Slices 0 … K accumulated behind each other: boundaries 0 … K, then the total (K + 2 maps).
+    boundaries = opacity_maps(alpha[frag_strand] * frag_coverage, frag_cell, layers + 1, resolution)
+    return point_opacity(boundaries, plane, f, texel)
+
+
+def first_depths(pixel: np.ndarray, depth: np.ndarray, resolution: int) -> np.ndarray:
+    """z₀ per texel (`[R²]`): the depth of its nearest light-space fragment (every
+    fragment has coverage > 0), +∞ where it has none."""
+    first = np.full(resolution * resolution, np.inf)
+    np.minimum.at(first, pixel, depth)
+    return first
+
+
+def layer_coordinate(z: np.ndarray, first: np.ndarray, layers: int, depth_range: float) -> np.ndarray:
+    """u = (z − z₀)·K/(KΔ): depth behind the texel's first hair in layers (as the GL
+    shaders' `deep_layer_coordinate`, term by term; exactly K at z₀ + KΔ)."""
+    return (z - first) * layers / depth_range
+
+
+def deep_points(
+    depth: np.ndarray, texel: np.ndarray, first: np.ndarray, layers: int, depth_range: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per point at light `depth` in `texel` (−1 outside the map): its lower boundary k,
+    weight f and texel, the texel −1 where it holds no hair (Ω = 0 there)."""
+    # Fires for points outside the map: any texel, dropped below.
+    z0 = first[np.maximum(texel, 0)]
+    texel = np.where((texel >= 0) & np.isfinite(z0), texel, -1)
+    # Fires for the points dropped above (z₀ = ∞ there): their own depth, u = 0, any finite value.
+    u = layer_coordinate(depth, np.where(texel >= 0, z0, depth), layers, depth_range)
+    beyond = u > layers
+    # The clips fire in front of z₀ (u < 0: boundary 0, f = 0, Ω = 0) and at z₀ + KΔ (u = K:
+    # k = K − 1, f = 1); beyond it k = K and f = 1 read the texel's total.
+    plane = np.where(beyond, layers, np.clip(np.floor(u), 0, layers - 1)).astype(np.int64)
+    f = np.where(beyond, 1.0, np.clip(u - plane, 0.0, 1.0))
+    return plane, f, texel

@@ -1,0 +1,112 @@
+"""Ω by deep opacity maps (docs/model.md §7; Yuksel & Keyser 2008, "Deep Opacity Maps"):
+a depth pass from the light gives each texel's first hair depth z₀, layer passes add each
+fragment's alpha to the boundaries behind its layer, four boundaries to an RGBA target,
+and a compute pass reads each point's Ω between the two boundaries around it."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._geometry._shadows import DeepOpacityMaps, LightFrame
+from .._scene._scene import Scene
+from ._buffers import Points, Strands
+from ._context import check, release
+from ._programs import workgroups
+from ._shadow_passes import register_gl_shadow_pass
+from ._uniforms import light_pass_uniforms, set_uniforms, view_uniforms
+
+__all__ = ["deep_opacity_maps"]
+
+# Boundaries per RGBA32F target: one per channel.
+BOUNDARIES_PER_TARGET = 4
+
+
+@register_gl_shadow_pass("deep")
+def deep_opacity_maps(
+    ctx, progs, scene: Scene, strands: Strands, frame: LightFrame, points: Points, *, clip_slices: bool = True
+) -> np.ndarray:
+    """z₀ by MIN blending; then for each group of four boundaries (1 … K and the total,
+    K + 1), the layers drawn additively into one RGBA target and the points whose upper
+    boundary is in the group evaluated between it and the group before. (Layers follow
+    each texel's z₀, not global depth slices: `clip_slices` does not apply.)"""
+    import moderngl
+
+    shadows = scene.shadows
+    if not isinstance(shadows, DeepOpacityMaps):  # the pass registered for it: never fires
+        raise TypeError(f"the deep pass got shadows.method = {shadows.method!r}")
+    k, r = shadows.layers, shadows.resolution
+    groups = -(-(k + 1) // BOUNDARIES_PER_TARGET)  # ⌈(K + 1)/4⌉
+    ibo = strands.index_buffer(frame.drawable)
+    draw = 2 * len(frame.drawable)
+    seen = np.flatnonzero(frame.seen).astype("u4")
+    ids = ctx.buffer(seen.tobytes() if seen.size else b"\0" * 4)  # fires when no point is seen
+    omega_buf = ctx.buffer(np.zeros(points.count, "f4").tobytes())
+
+    first = ctx.texture((r, r), 1, dtype="f4")
+    targets = [ctx.texture((r, r), 4, dtype="f4") for _ in range(2)]
+    for tex in (first, *targets):
+        tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+    first_fbo = ctx.framebuffer(color_attachments=[first])
+    fbos = [ctx.framebuffer(color_attachments=[t]) for t in targets]
+    fbos[1].clear(0.0, 0.0, 0.0, 0.0)  # group 0's "group before": read, never used
+    depth_prog, layer_prog, comp = progs["deep_first"], progs["deep_layers"], progs["omega_deep"]
+    depth_vao = strands.vertex_array(depth_prog, ibo)
+    layer_vao = strands.vertex_array(layer_prog, ibo)
+    depth_range = float(shadows.depth_range(frame))
+    try:
+        ctx.viewport = (0, 0, r, r)
+        ctx.disable(moderngl.DEPTH_TEST)
+        ctx.enable(moderngl.BLEND)
+        # z₀: the nearest fragment per texel; +∞ stays where no hair is.
+        first_fbo.use()
+        first_fbo.clear(float("inf"), 0.0, 0.0, 0.0)
+        ctx.blend_equation = moderngl.MIN
+        set_uniforms(depth_prog, **light_pass_uniforms(scene, frame))
+        if draw:
+            depth_vao.render(moderngl.LINES, vertices=draw)
+        check(ctx, "deep opacity maps: depth pass")
+
+        ctx.blend_equation = moderngl.FUNC_ADD
+        ctx.blend_func = moderngl.ONE, moderngl.ONE
+        first.use(0)
+        set_uniforms(
+            layer_prog,
+            first_map=0,
+            layers=k,
+            depth_range=depth_range,
+            **light_pass_uniforms(scene, frame),
+        )
+        set_uniforms(
+            comp,
+            first_map=0,
+            prev_map=1,
+            cur_map=2,
+            layers=k,
+            depth_range=depth_range,
+            resolution=r,
+            count=len(seen),
+            **view_uniforms("light", frame.view),
+        )
+        points.buffer.bind_to_storage_buffer(0)
+        ids.bind_to_storage_buffer(1)
+        omega_buf.bind_to_storage_buffer(2)
+        for g in range(groups):
+            cur, prev = g % 2, (g + 1) % 2  # the group before is in the other target
+            fbos[cur].use()
+            fbos[cur].clear(0.0, 0.0, 0.0, 0.0)
+            set_uniforms(layer_prog, group=g)
+            if draw:
+                layer_vao.render(moderngl.LINES, vertices=draw)
+            if len(seen):
+                first.use(0)
+                targets[prev].use(1)
+                targets[cur].use(2)
+                set_uniforms(comp, group=g)
+                comp.run(group_x=workgroups(len(seen)))
+                ctx.memory_barrier()
+        check(ctx, f"deep opacity maps: {groups} layer passes")
+        return np.frombuffer(omega_buf.read(), dtype="f4").copy()
+    finally:
+        ctx.blend_equation = moderngl.FUNC_ADD
+        ctx.disable(moderngl.BLEND)
+        release(ctx, depth_vao, layer_vao, ibo, ids, omega_buf, first_fbo, *fbos, first, *targets)
