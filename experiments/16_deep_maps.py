@@ -15,10 +15,13 @@ point's own depth, docs/model.md §7):
   the shadow pass alone (`GLResult.timings["shadows"]`: light frame, maps or layers, Ω
   per point) and of the whole render.
 The summary sets each deep-map setting beside the opacity-map curve at the same shadow
-time (log-log interpolation between the two nearest settings).
+time (log-log interpolation between the two nearest settings). Deep maps are measured with
+each of `--lookups` (docs/model.md §7: "layer", the paper's, reads every neighbour texel at
+the point's own layer; "depth" reads each at the point's depth behind its own first hair).
 
     python experiments/16_deep_maps.py --docs docs      # default scene, bear, Sintel
     python experiments/16_deep_maps.py --quick          # tiny, for the test suite
+    python experiments/16_deep_maps.py --lookups depth  # deep maps with one lookup only
 
 Writes DIR/deep_maps.csv (one row per scene and setting), DIR/deep_maps.md (the tables),
 DIR/deep_maps_<scene>.png (error against time) and DIR/deep_maps_bear.png (the bear's
@@ -47,11 +50,13 @@ DEFAULT_LAYERS = (2, 3, 4, 6, 8)
 # (docs/model.md §7): 1 spreads the K layers over the whole hair, 1/4 packs them into its
 # lit quarter, where Yuksel & Keyser place them (the opacity saturates a few strands in).
 DEFAULT_SPACINGS = (1.0, 0.25)
+LOOKUPS = ("layer", "depth")
 CSV_COLUMNS = (
     "scene",
     "method",
     "count",
     "spacing",
+    "lookup",
     "shadow_s",
     "total_s",
     "tau_rmse",
@@ -83,6 +88,13 @@ def _fractions(text: str) -> list[float]:
     return values
 
 
+def _lookups(text: str) -> list[str]:
+    values = list(dict.fromkeys(x.strip() for x in text.split(",") if x.strip()))
+    if not values or not set(values) <= set(LOOKUPS):
+        raise argparse.ArgumentTypeError(f"expected some of {', '.join(LOOKUPS)}: {text!r}")
+    return values
+
+
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--scenes", default=",".join(SCENES), help=f"of {', '.join(SCENES)} (default: all)")
@@ -95,6 +107,12 @@ def _parser() -> argparse.ArgumentParser:
         type=_fractions,
         default=list(DEFAULT_SPACINGS),
         help="deep layers' spacing as fractions of the hair's light-depth extent over K (default 1,0.25)",
+    )
+    p.add_argument(
+        "--lookups",
+        type=_lookups,
+        default=list(LOOKUPS),
+        help="deep maps' lookups, of layer, depth (default both)",
     )
     p.add_argument("--repeats", type=int, default=3, help="timed renders per setting, median (default 3)")
     p.add_argument("--out", type=Path, default=Path("out/deep_maps"), help="output folder")
@@ -152,9 +170,9 @@ def light_extent(scene) -> float:
     return float(depth.max() - depth.min())
 
 
-def shadows_of(scene, method: str, count: int, spacing: float, resolution: int):
+def shadows_of(scene, method: str, count: int, spacing: float, lookup: str, resolution: int):
     """The shadow method of one setting: N opacity maps, or K deep layers at `spacing` times
-    the default spacing."""
+    the default spacing, read with `lookup`."""
     import hairjax as hj
 
     if method == "opacity-maps":
@@ -162,12 +180,12 @@ def shadows_of(scene, method: str, count: int, spacing: float, resolution: int):
     # 0 is the method's own default, extent / K: passed as is, so the full spacing is the
     # scene file's default exactly.
     delta = 0.0 if spacing == 1.0 else spacing * light_extent(scene) / count
-    return hj.Shadows(method, layers=count, resolution=resolution, layer_spacing=delta)
+    return hj.Shadows(method, layers=count, resolution=resolution, layer_spacing=delta, lookup=lookup)
 
 
 def measure(name: str, scene, settings, resolution: int, repeats: int) -> tuple[list[dict], dict]:
-    """One row per setting of `settings` (`(method, count, spacing)`), each against exact
-    shadows; and the images by setting (for the figure)."""
+    """One row per setting of `settings` (`(method, count, spacing, lookup)`), each against
+    exact shadows; and the images by setting (for the figure)."""
     import hairjax as hj
 
     exact = scene.replace(shadows=hj.Shadows("exact", resolution=resolution))
@@ -182,6 +200,7 @@ def measure(name: str, scene, settings, resolution: int, repeats: int) -> tuple[
             "method": "exact",
             "count": "",
             "spacing": "",
+            "lookup": "",
             "shadow_s": ref_shadow,
             "total_s": ref_total,
             "tau_rmse": 0.0,
@@ -189,9 +208,9 @@ def measure(name: str, scene, settings, resolution: int, repeats: int) -> tuple[
             "rel_rmse": 0.0,
         }
     ]
-    images = {("exact", 0, ""): ref_image}
-    for method, count, spacing in settings:
-        variant = scene.replace(shadows=shadows_of(scene, method, count, spacing, resolution))
+    images = {("exact", 0, "", ""): ref_image}
+    for method, count, spacing, lookup in settings:
+        variant = scene.replace(shadows=shadows_of(scene, method, count, spacing, lookup, resolution))
         image, omega, shadow_s, total_s = _render(variant, repeats)
         dtau = np.exp(-kappa * np.asarray(omega, np.float64)) - tau_ref
         drgb = np.asarray(image[..., :3], np.float64) - rgb_ref
@@ -201,6 +220,7 @@ def measure(name: str, scene, settings, resolution: int, repeats: int) -> tuple[
                 "method": method,
                 "count": count,
                 "spacing": spacing,
+                "lookup": lookup,
                 "shadow_s": shadow_s,
                 "total_s": total_s,
                 "tau_rmse": float(np.sqrt(np.mean(dtau**2))),
@@ -208,9 +228,10 @@ def measure(name: str, scene, settings, resolution: int, repeats: int) -> tuple[
                 "rel_rmse": float(np.sqrt(np.mean(drgb**2))) / peak,
             }
         )
-        images[(method, count, spacing)] = image
+        images[(method, count, spacing, lookup)] = image
         print(
-            f"  {name:8s} {method:12s} {count:4d} {spacing or '':>5}: shadows {1e3 * shadow_s:8.1f} ms, "
+            f"  {name:8s} {method:12s} {count:4d} {spacing or '':>5} {lookup:5s}: "
+            f"shadows {1e3 * shadow_s:8.1f} ms, "
             f"τ RMSE {rows[-1]['tau_rmse']:.4f}, image {100 * rows[-1]['rel_rmse']:.3f} %",
             flush=True,
         )
@@ -235,13 +256,14 @@ def at_equal_time(rows: list[dict], scene: str, shadow_s: float, key: str) -> fl
 def summary(rows: list[dict]) -> str:
     """Per scene: every setting, then each deep setting beside opacity maps at its time."""
     lines = [
-        "| scene | method | N or K | Δ / default | shadow pass (ms) | whole render (ms) | τ RMSE "
-        "| τ max | image rel. RMSE |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| scene | method | N or K | Δ / default | lookup | shadow pass (ms) | whole render (ms) "
+        "| τ RMSE | τ max | image rel. RMSE |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         lines.append(
-            f"| {r['scene']} | {r['method']} | {r['count']} | {r['spacing']} | {1e3 * r['shadow_s']:.1f} | "
+            f"| {r['scene']} | {r['method']} | {r['count']} | {r['spacing']} | {r['lookup']} | "
+            f"{1e3 * r['shadow_s']:.1f} | "
             f"{1e3 * r['total_s']:.1f} | {r['tau_rmse']:.4f} | {r['tau_max']:.3f} | "
             f"{100 * r['rel_rmse']:.3f} % |"
         )
@@ -251,9 +273,9 @@ def summary(rows: list[dict]) -> str:
         "interpolated in log-log; — where the deep setting is faster or slower than every "
         "opacity-map setting):",
         "",
-        "| scene | K | Δ / default | shadow pass (ms) | deep τ RMSE | opacity maps τ RMSE | ratio "
-        "| deep image | opacity maps image |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| scene | K | Δ / default | lookup | shadow pass (ms) | deep τ RMSE | opacity maps τ RMSE "
+        "| ratio | deep image | opacity maps image |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         if r["method"] != "deep":
@@ -262,7 +284,7 @@ def summary(rows: list[dict]) -> str:
         img = at_equal_time(rows, r["scene"], r["shadow_s"], "rel_rmse")
         ratio = "—" if tau is None or r["tau_rmse"] == 0 else f"{tau / r['tau_rmse']:.1f}×"
         lines.append(
-            f"| {r['scene']} | {r['count']} | {r['spacing']} | {1e3 * r['shadow_s']:.1f} | "
+            f"| {r['scene']} | {r['count']} | {r['spacing']} | {r['lookup']} | {1e3 * r['shadow_s']:.1f} | "
             f"{r['tau_rmse']:.4f} | "
             f"{'—' if tau is None else f'{tau:.4f}'} | {ratio} | {100 * r['rel_rmse']:.3f} % | "
             f"{'—' if img is None else f'{100 * img:.3f} %'} |"
@@ -278,16 +300,22 @@ def plot(path: Path, rows: list[dict], scene: str) -> None:
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
     for ax, key, label in zip(axes, ("tau_rmse", "rel_rmse"), ("τ RMSE against exact", "image RMSE / peak")):
-        curves = [("opacity-maps", "", "o-", "N", "opacity maps")]
-        spacings = sorted({r["spacing"] for r in rows if r["method"] == "deep"}, reverse=True)
-        curves += [("deep", f, "s-", "K", f"deep, Δ × {f:g}") for f in spacings]
-        for method, spacing, marker, tag, legend in curves:
+        curves = [("opacity-maps", "", "", "o-", "N", "opacity maps")]
+        deep = sorted(
+            {(r["spacing"], r["lookup"]) for r in rows if r["method"] == "deep"},
+            key=lambda d: (-d[0], LOOKUPS.index(d[1])),
+        )
+        curves += [
+            ("deep", f, lookup, "s-" if lookup == "layer" else "^--", "K", f"deep, Δ × {f:g}, {lookup}")
+            for f, lookup in deep
+        ]
+        for method, spacing, lookup, marker, tag, legend in curves:
             pts = [
                 r
                 for r in rows
                 if r["scene"] == scene
                 and r["method"] == method
-                and (method != "deep" or r["spacing"] == spacing)
+                and (method != "deep" or (r["spacing"], r["lookup"]) == (spacing, lookup))
             ]
             if not pts:
                 continue
@@ -311,21 +339,22 @@ def _display(image) -> np.ndarray:
     return np.clip(np.asarray(image, np.float64)[..., :3], 0.0, 1.0) ** (1 / 2.2)
 
 
-def stripes_figure(path: Path, images: dict, title: str) -> None:
-    """Opacity maps, deep maps and exact side by side (sRGB), each one's |difference| from
-    exact below it, ×10."""
+def stripes_figure(path: Path, images: dict, lookups: list[str], title: str) -> None:
+    """Opacity maps, deep maps (each of `lookups`) and exact side by side (sRGB), each
+    one's |difference| from exact below it, ×10."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    panels = [
-        (f"{FIGURE_MAPS} opacity maps", images[("opacity-maps", FIGURE_MAPS, "")]),
-        (f"deep, {FIGURE_LAYERS} layers", images[("deep", FIGURE_LAYERS, 1.0)]),
-        ("exact", images[("exact", 0, "")]),
+    panels = [(f"{FIGURE_MAPS} opacity maps", images[("opacity-maps", FIGURE_MAPS, "", "")])]
+    panels += [
+        (f"deep, {FIGURE_LAYERS} layers, {lookup}", images[("deep", FIGURE_LAYERS, 1.0, lookup)])
+        for lookup in lookups
     ]
-    ref = np.asarray(images[("exact", 0, "")][..., :3], np.float64)
-    fig, axes = plt.subplots(2, 3, figsize=(10, 6.8))
+    panels.append(("exact", images[("exact", 0, "", "")]))
+    ref = np.asarray(images[("exact", 0, "", "")][..., :3], np.float64)
+    fig, axes = plt.subplots(2, len(panels), figsize=(3.4 * len(panels), 6.8))
     for col, (name, image) in enumerate(panels):
         axes[0, col].imshow(_display(image))
         axes[0, col].set_title(name)
@@ -349,11 +378,14 @@ def main(argv=None) -> int:
         args.maps, args.layers, args.repeats = [4, 16, FIGURE_MAPS], [2, FIGURE_LAYERS], 1
     else:
         scenes = [s.strip() for s in args.scenes.split(",") if s.strip()]
-    settings = [("opacity-maps", n, "") for n in args.maps]
-    settings += [("deep", k, f) for f in args.spacings for k in args.layers]
+    settings = [("opacity-maps", n, "", "") for n in args.maps]
+    settings += [
+        ("deep", k, f, lookup) for lookup in args.lookups for f in args.spacings for k in args.layers
+    ]
     figure_scene = "tiny" if args.quick else "bear"
-    if figure_scene in scenes:  # the figure's two settings, measured like the others
-        figure = (("opacity-maps", FIGURE_MAPS, ""), ("deep", FIGURE_LAYERS, 1.0))
+    if figure_scene in scenes:  # the figure's settings, measured like the others
+        figure = (("opacity-maps", FIGURE_MAPS, "", ""),)
+        figure += tuple(("deep", FIGURE_LAYERS, 1.0, lookup) for lookup in args.lookups)
         settings += [s for s in figure if s not in settings]
     args.out.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
@@ -368,7 +400,8 @@ def main(argv=None) -> int:
         figures.append(figure)
         if name == figure_scene:
             stripes = args.out / f"deep_maps_{'bear' if name == 'bear' else name}_stripes.png"
-            stripes_figure(stripes, images, f"{name} at {args.size}², light raster {args.resolution}²")
+            title = f"{name} at {args.size}², light raster {args.resolution}²"
+            stripes_figure(stripes, images, args.lookups, title)
             figures.append(stripes)
     text = summary(rows)
     write_csv(args.out / "deep_maps.csv", CSV_COLUMNS, rows, float_format=".6g")

@@ -2,12 +2,14 @@
 fragment near a segment end may be drawn or not, one near a layer boundary of its texel
 may count towards it or not, a texel's first depth z₀ may be another fragment's when one
 near a segment end is (or ties with) the nearest, and a point near the last boundary may
-read the texel's total or not."""
+read the texel's total or not. With `lookup = "depth"` the same, texel by texel: each of
+the point's 3 × 3 texels at its own k', f' from the point's depth behind that texel's z₀."""
 
 from __future__ import annotations
 
 import numpy as np
 
+from .._constants import SHADOW_FILTER_RADIUS
 from .._geometry._shadows import first_depths, layer_coordinate
 from ._light import LightBand, WindowSums, register_light_band
 from ._tolerances import SLICE_DELTA
@@ -60,6 +62,15 @@ def deep_terms(shadows, frame, frags, near_end, opacity, r):
     shifted = WindowSums(key, frags.pixel[moved], np.zeros(int(moved.sum())), opacity[moved], r)
     z = frame.depth
 
+    def weights(uu):
+        """Lower boundary k and weight f at layer coordinate uu, as _deep.deep_points."""
+        beyond = uu > n
+        k = np.where(beyond, n, np.clip(np.floor(uu), 0, n - 1))
+        return k, np.where(beyond, 1.0, np.clip(uu - k, 0.0, 1.0))
+
+    if shadows.lookup == "depth":
+        return _depth_lookup_terms(n, depth_range, du, z, first, unsure, weights, ends, bounds, every, r)
+
     def point(x, y, i):
         """Per point i placed in texel (x, y): its texel, whether it holds hair, k, f, u."""
         inside = (x >= 0) & (x < r) & (y >= 0) & (y < r)
@@ -67,9 +78,7 @@ def deep_terms(shadows, frame, frags, near_end, opacity, r):
         hair = inside & np.isfinite(first[t])
         # Fires where there is no hair (z₀ = ∞): the point's own depth, u = 0, masked.
         uu = layer_coordinate(z[i], np.where(hair, first[t], z[i]), n, depth_range)
-        beyond = uu > n
-        k = np.where(beyond, n, np.clip(np.floor(uu), 0, n - 1))  # as _deep.deep_points
-        f = np.where(beyond, 1.0, np.clip(uu - k, 0.0, 1.0))
+        k, f = weights(uu)
         return inside, t, hair, k, f, uu
 
     def uncertain(x, y, i):
@@ -95,19 +104,67 @@ def deep_terms(shadows, frame, frags, near_end, opacity, r):
     return uncertain, omega_at
 
 
+def _depth_lookup_terms(n, depth_range, du, z, first, unsure, weights, ends, bounds, every, r):
+    """`deep_terms` for `lookup = "depth"`: the layer lookup's terms per filter texel t',
+    each at the point's own k', f' in t' and /9; a texel whose z₀ is unsure may hold
+    anything from 0 to its total."""
+    side = (2 * SHADOW_FILTER_RADIUS + 1) ** 2
+
+    def over_texels(x, y, i, value):
+        """(1/9) Σ over the point's filter texels t' of value(t', hair, k', f', u')."""
+        total = np.zeros(np.shape(x))
+        offsets = range(-SHADOW_FILTER_RADIUS, SHADOW_FILTER_RADIUS + 1)
+        for oy in offsets:
+            for ox in offsets:
+                nx, ny = x + ox, y + oy
+                valid = (nx >= 0) & (nx < r) & (ny >= 0) & (ny < r)
+                t = np.where(valid, ny * r + nx, -1)
+                z0 = first[np.maximum(t, 0)]  # fires outside the map: any texel, masked
+                hair = valid & np.isfinite(z0)
+                # Fires where there is no hair (z₀ = ∞): the point's own depth, u' = 0, masked.
+                uu = layer_coordinate(z[i], np.where(hair, z0, z[i]), n, depth_range)
+                k, f = weights(uu)
+                total += value(t, valid & unsure[np.maximum(t, 0)], hair, k, f, uu)
+        return total / side
+
+    def uncertain_in(t, moved, hair, k, f, uu):
+        layered = (
+            ends.texel(t, 0, k - 1)
+            + f * ends.texel(t, k, k)
+            + (1 - f) * bounds.texel(t, k, k)
+            + f * bounds.texel(t, k + 1, k + 1)
+            # Near the last boundary: Ω_K or the total, which adds slice K.
+            + np.where(np.abs(uu - n) < du, every.texel(t, n, n), 0.0)
+        )
+        # An unsure z₀ moves this texel's value anywhere from 0 to its total.
+        return np.where(moved, every.texel(t, 0, n), np.where(hair, layered, 0.0))
+
+    def omega_in(t, moved, hair, k, f, uu):
+        # Boundary k sums slices < k, boundary k + 1 (the total beyond) slices ≤ k.
+        return np.where(hair, (1 - f) * every.texel(t, 0, k - 1) + f * every.texel(t, 0, k), 0.0)
+
+    def uncertain(x, y, i):
+        return over_texels(x, y, i, uncertain_in)
+
+    def omega_at(x, y, i):
+        return over_texels(x, y, i, omega_in)
+
+    return uncertain, omega_at
+
+
 def receivers_near_the_last_boundary(shadows, plan, frame, index):
     """`LightBand.receivers` for `DeepOpacityMaps`: within rounding of z₀ + KΔ of their
-    texel (JAX's z₀, `plan.first_depth`), where Ω jumps from B̄_K to the total. Elsewhere
-    Ω is continuous in the receiver's depth."""
+    texel (JAX's z₀, `plan.first_depth`; with `lookup = "depth"` any of their 3 × 3
+    texels'), where Ω jumps from B̄_K to the total. Elsewhere Ω is continuous in the
+    receiver's depth."""
     texel = plan.texel[index]
+    depth = frame.depth[index]
+    if texel.ndim == 2:  # lookup "depth": [P, 9], each texel's own z₀
+        depth = np.broadcast_to(depth[:, None], texel.shape)
     z0 = plan.first_depth[np.maximum(texel, 0)]  # fires outside or without hair: masked below
-    u = layer_coordinate(
-        frame.depth[index],
-        np.where(texel >= 0, z0, frame.depth[index]),
-        shadows.layers,
-        shadows.depth_range(frame),
-    )
-    return (texel >= 0) & (np.abs(u - shadows.layers) < _layer_delta(shadows, frame))
+    u = layer_coordinate(depth, np.where(texel >= 0, z0, depth), shadows.layers, shadows.depth_range(frame))
+    near = (texel >= 0) & (np.abs(u - shadows.layers) < _layer_delta(shadows, frame))
+    return near.any(axis=1) if near.ndim == 2 else near
 
 
 register_light_band("deep", LightBand(deep_terms, receivers=receivers_near_the_last_boundary))

@@ -77,13 +77,17 @@ class WindowSums:
             for ox in range(-k, k + 1):
                 nx, ny = tx + ox, ty + oy
                 valid = (nx >= 0) & (nx < r) & (ny >= 0) & (ny < r)
-                t = np.where(valid, ny * r + nx, 0)
-                sums = (
-                    self.prefix[np.searchsorted(self.keys, self.key(t, hi), "right")]
-                    - self.prefix[np.searchsorted(self.keys, self.key(t, lo), "left")]
-                )
-                total += np.where(valid, sums, 0.0)
+                total += self.texel(np.where(valid, ny * r + nx, -1), lo, hi)
         return total / (2 * k + 1) ** 2
+
+    def texel(self, t, lo, hi) -> np.ndarray:
+        """Σ values with lo ≤ level ≤ hi in texel `t` alone (−1: none, 0), unaveraged."""
+        safe = np.maximum(t, 0)  # fires for t = −1: any texel, masked below
+        sums = (
+            self.prefix[np.searchsorted(self.keys, self.key(safe, hi), "right")]
+            - self.prefix[np.searchsorted(self.keys, self.key(safe, lo), "left")]
+        )
+        return np.where(t >= 0, sums, 0.0)
 
 
 def omega_uncertainty(scene) -> np.ndarray:

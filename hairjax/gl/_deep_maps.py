@@ -1,7 +1,9 @@
 """Ω by deep opacity maps (docs/model.md §7; Yuksel & Keyser 2008, "Deep Opacity Maps"):
 a depth pass from the light gives each texel's first hair depth z₀, layer passes add each
 fragment's alpha to the boundaries behind its layer, four boundaries to an RGBA target,
-and a compute pass reads each point's Ω between the two boundaries around it."""
+and a compute pass reads each point's Ω between the two boundaries around it (lookup
+"layer"), or adds, pass by pass, each of its 3 × 3 texels' value at its depth behind that
+texel's z₀ (lookup "depth")."""
 
 from __future__ import annotations
 
@@ -85,6 +87,7 @@ def deep_opacity_maps(
             depth_range=depth_range,
             resolution=r,
             count=len(seen),
+            depth_lookup=shadows.lookup == "depth",
             **view_uniforms("light", frame.view),
         )
         points.buffer.bind_to_storage_buffer(0)

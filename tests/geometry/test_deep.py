@@ -1,6 +1,9 @@
 """Deep opacity maps (docs/model.md §7; Yuksel & Keyser 2008, "Deep Opacity Maps"): Ω by
-hand on slabs of parallel hairs, the limits of one wide layer and of many thin ones,
-linearity in opacity and the gradients of τ = exp(−κΩ) in opacity and κ."""
+hand on slabs of parallel hairs, flat and tilted (both lookups), the limits of one wide
+layer and of many thin ones, linearity in opacity and the gradients of τ = exp(−κΩ) in
+opacity and κ."""
+
+import dataclasses
 
 import jax
 import jax.numpy as jnp
@@ -100,10 +103,83 @@ def test_omega_of_a_split_slab_by_hand(method, layers, spacing, right, left):
         np.testing.assert_allclose(omega[idx], np.asarray(expected, float)[lay], rtol=0, atol=1e-12)
 
 
+# --- the two lookups on a tilted slab ---------------------------------------------------
+
+TILT = 3.0  # light depth per unit z: 0.3 per texel, against the slab's 1 of thickness
+
+
+def tilted_slab(lookup, layers=4, spacing=0.25):
+    """The unsplit slab tilted along z (y = layer − TILT·z): each texel column's first hair
+    lies 0.3 deeper than its neighbour's towards −z, three layers ½ apart behind it."""
+    zs = -X + SPACING * np.arange(33)
+    xs = np.linspace(-X, X, 9)
+    strands = [np.stack([xs, np.full(9, y - TILT * z), np.full(9, z)], axis=1) for y in LAYERS for z in zs]
+    shadows = hj.Shadows("deep", layers, R, spacing, lookup=lookup)
+    return slab(shadows)[0].replace(strands=hj.Strands.from_list(strands, alpha=A), shadows=shadows)
+
+
+def omega_by_formula(scene, lookup):
+    """docs/model.md §7 written out point by point and texel by texel from the light's
+    fragments: per texel t the slices j = min(⌊u⌋, K) of its fragments (u from t's own z₀),
+    boundary k the alpha of slices < k (k = K + 1: all); a point reads its own u in every
+    texel ("layer", 0 where its own texel has no hair) or its u' from each texel's z₀
+    ("depth"), k = clamp(⌊u⌋, 0, K − 1), f = clamp(u − k, 0, 1) (k = K, f = 1 beyond K)."""
+    sh, s = scene.shadows, scene.strands
+    n, r = sh.layers, R
+    segs = s.segments()
+    lf = light_fragments(s.points, segs, s.strand_of_point[segs[:, 0]], s.width, scene.light, r)
+    kd = sh.depth_range(lf.frame)
+    alpha = s.alpha[lf.frag_strand] * lf.frag_coverage
+    pixel, z = lf.frags.pixel, lf.frags.depth
+    z0 = {t: z[pixel == t].min() for t in np.unique(pixel)}
+    # Per texel its fragments' (slice, alpha).
+    held = {t: (np.minimum(np.floor((z[pixel == t] - z0[t]) * n / kd), n), alpha[pixel == t]) for t in z0}
+
+    def value(t, u):
+        k = n if u > n else min(max(int(np.floor(u)), 0), n - 1)
+        f = 1.0 if u > n else min(max(u - k, 0.0), 1.0)
+        slices, a = held[t]
+        return (1 - f) * a[slices < k].sum() + f * a[slices < k + 1].sum()
+
+    out = np.zeros(s.num_points)
+    for p in range(s.num_points):
+        own = lf.ty[p] * r + lf.tx[p]
+        if lookup == "layer" and own not in z0:
+            continue
+        for dy in (-1, 0, 1):
+            for dx in (-1, 0, 1):
+                x, y = lf.tx[p] + dx, lf.ty[p] + dy
+                t = y * r + x
+                if not (0 <= x < r and 0 <= y < r) or t not in z0:
+                    continue
+                ref = z0[own] if lookup == "layer" else z0[t]
+                out[p] += value(t, (lf.frame.depth[p] - ref) * n / kd) / 9
+    return out
+
+
+def test_both_lookups_on_a_tilted_slab_by_formula():
+    """Where neighbours' first hairs differ by 0.3 (more than Δ = 0.25), "layer" compares a
+    neighbour's fragments at the point's depth behind the *neighbour's* first hair and
+    "depth" at the point's own depth: each matches the formula, and "depth" is the closer
+    to `exact` (which counts, in the 9 texels, the alpha strictly in front of the point)."""
+    omega = {}
+    for lookup in ("layer", "depth"):
+        scene = tilted_slab(lookup)
+        omega[lookup] = np.asarray(geometry_stage(scene).omega)
+        # Sums of the same alphas in another order: float64 rounding only.
+        np.testing.assert_allclose(omega[lookup], omega_by_formula(scene, lookup), rtol=0, atol=1e-12)
+    exact = np.asarray(
+        geometry_stage(tilted_slab("layer").replace(shadows=hj.Shadows("exact", resolution=R))).omega
+    )
+    assert np.abs(omega["layer"] - omega["depth"]).max() > 0.8 * A  # the lookups do differ here
+    # Measured: mean |Ω − Ω_exact| 0.042 ("depth") against 0.084 ("layer"), exact's mean 0.32.
+    assert np.abs(omega["depth"] - exact).mean() < 0.6 * np.abs(omega["layer"] - exact).mean()
+
+
 def test_receivers_in_a_texel_without_hair_outside_the_map_and_beyond_the_last_boundary():
     """Occluder-style receivers (docs/model.md §13) under the whole slab at depth D₀ + 0.8,
     between its middle (D₀ + ½) and bottom (D₀ + 1) layers; K = 2, Δ = 0.3."""
-    scene, _, _ = slab(hj.Shadows("deep", 2, R, 0.3), split=False)
+    scene, _, _ = slab(hj.Shadows("deep", 2, R, 0.3, lookup="layer"), split=False)
     s = scene.strands
     receivers = np.array(
         [
@@ -129,9 +205,10 @@ def test_receivers_in_a_texel_without_hair_outside_the_map_and_beyond_the_last_b
     np.testing.assert_allclose(deep[-3:], [0.0, 0.0, 3 * A], atol=1e-12)
 
 
-def test_omega_is_linear_in_opacity():
-    a = geometry_stage(slab(hj.Shadows("deep", 3, R, 0.2), alpha=0.2)[0]).omega
-    b = geometry_stage(slab(hj.Shadows("deep", 3, R, 0.2), alpha=0.4)[0]).omega
+@pytest.mark.parametrize("lookup", ["layer", "depth"])
+def test_omega_is_linear_in_opacity(lookup):
+    a = geometry_stage(slab(hj.Shadows("deep", 3, R, 0.2, lookup), alpha=0.2)[0]).omega
+    b = geometry_stage(slab(hj.Shadows("deep", 3, R, 0.2, lookup), alpha=0.4)[0]).omega
     np.testing.assert_allclose(2 * np.asarray(a), np.asarray(b), rtol=1e-12, atol=1e-15)
 
 
@@ -154,7 +231,9 @@ def layer_limit(scene, layers):
     hair; `offset`, the alpha on which Ω_∞ and `exact`'s [z < z_p] disagree (0 where the 9
     texels share one z₀; all of exact's Ω where t_p holds none); and per K in `layers`
     `inside`, the alpha of the fragments in the point's own layer k, which the
-    interpolation weighs by f instead of 0 or 1: |Ω_K − Ω_∞| ≤ inside."""
+    interpolation weighs by f instead of 0 or 1: |Ω_K − Ω_∞| ≤ inside; and `inside_depth`,
+    the same for `lookup = "depth"`: (1/9) Σ_{t'} the alpha of t' in the point's layer k'
+    behind z₀(t'), which bounds |Ω_K − Ω_exact| there (its limit is `exact`)."""
     s = scene.strands
     segs = s.segments()
     lf = light_fragments(s.points, segs, s.strand_of_point[segs[:, 0]], s.width, scene.light, 32)
@@ -180,6 +259,7 @@ def layer_limit(scene, layers):
     first = np.append(np.where(np.isfinite(z0), z0, 0.0), 0.0)  # any finite value where no hair
     limit, offset = np.zeros(n), np.zeros(n)
     inside = {k: np.zeros(n) for k in layers}
+    inside_depth = {k: np.zeros(n) for k in layers}
     for oy in (-1, 0, 1):
         for ox in (-1, 0, 1):
             x, y = tx + ox, ty + oy
@@ -194,20 +274,26 @@ def layer_limit(scene, layers):
                 inside[k] += np.sum(
                     weight * (np.floor(behind_first * k / span) == own_layer[:, None]), axis=1
                 )
-    return limit, hair, offset, {k: np.where(hair, v, 0.0) for k, v in inside.items()}
+                # Texels without hair or outside the map have empty rows: any layer, weight 0.
+                its_layer = np.clip(np.floor((zp - first[there]) * k / span), 0, k - 1)
+                inside_depth[k] += np.sum(
+                    weight * (np.floor(behind_first * k / span) == its_layer[:, None]), axis=1
+                )
+    inside = {k: np.where(hair, v, 0.0) for k, v in inside.items()}
+    return limit, hair, offset, inside, inside_depth
 
 
 def test_many_thin_layers_approach_their_limit_and_exact_within_the_z0_offsets():
-    """|Ω_K − Ω_∞| ≤ the alpha in the point's own layer (it shrinks as K grows); Ω_∞ differs
+    """lookup "layer": |Ω_K − Ω_∞| ≤ the alpha in the point's own layer (it shrinks as K grows); Ω_∞ differs
     from `exact` only by the fragments the per-texel offsets z₀(t') − z₀(t_p) move across
     the point's depth (docs/model.md §7: deep maps are not `exact` in the limit where a
     point's 3 × 3 texels start at different depths)."""
     exact = np.asarray(geometry_stage(ball(hj.Shadows("exact", resolution=32))).omega)
     layers = (4, 64, 1024)
-    limit, hair, offset, inside = layer_limit(ball(hj.Shadows("none")), layers)
+    limit, hair, offset, inside, _ = layer_limit(ball(hj.Shadows("none")), layers)
     errors = []
     for k in layers:
-        omega = np.asarray(geometry_stage(ball(hj.Shadows("deep", k, 32))).omega)
+        omega = np.asarray(geometry_stage(ball(hj.Shadows("deep", k, 32, lookup="layer"))).omega)
         # The bounds are sums of the same alphas: float64 rounding only.
         assert np.all(np.abs(omega - limit) <= inside[k] + 1e-9)
         assert np.all(np.abs(omega - exact) <= inside[k] + offset + 1e-9)
@@ -217,14 +303,34 @@ def test_many_thin_layers_approach_their_limit_and_exact_within_the_z0_offsets()
     assert np.mean(offset) > 0.1 * np.mean(exact)  # this sparse ball's z₀ does differ
 
 
+def test_the_depth_lookups_many_layer_limit_is_exact():
+    """lookup "depth" reads each texel t' at the point's own depth behind z₀(t'), so as K
+    grows (KΔ the hair's extent) Ω → `exact`'s Ω: |Ω_K − Ω_exact| ≤ the alpha of each t' in
+    the point's layer k' there, which the interpolation weighs by f' instead of 0 or 1
+    (docs/model.md §7), on the sparse ball whose z₀ jumps from texel to texel."""
+    exact = np.asarray(geometry_stage(ball(hj.Shadows("exact", resolution=32))).omega)
+    layers = (4, 64, 1024)
+    *_, inside = layer_limit(ball(hj.Shadows("none")), layers)
+    errors = []
+    for k in layers:
+        omega = np.asarray(geometry_stage(ball(hj.Shadows("deep", k, 32, lookup="depth"))).omega)
+        # The bound is a sum of the same alphas: float64 rounding only.
+        assert np.all(np.abs(omega - exact) <= inside[k] + 1e-9)
+        errors.append(np.abs(omega - exact).mean())
+    # Measured: 0.82, 0.074, 0.011 against exact's mean Ω 5.1 (the "layer" lookup stays at 2.0).
+    assert errors[0] > errors[1] > errors[2] and errors[2] < 0.005 * np.mean(exact)
+
+
 # --- gradients ------------------------------------------------------------------------
 
 
-def test_transmittance_gradients_in_kappa_and_opacity_match_finite_differences():
+@pytest.mark.parametrize("lookup", ["layer", "depth"])
+def test_transmittance_gradients_in_kappa_and_opacity_match_finite_differences(lookup):
     """Σ_p w_p·τ_p with τ = exp(−κΩ(α)) (docs/model.md §7) through the method's own Ω,
     differentiated in κ and in each strand's opacity α (the image reaches both only through
     τ; the shading and composite after it are the other methods' and tested with them)."""
     scene = small_furball_scene(strands=80, size=16, shadows="deep", resolution=32)
+    scene = scene.replace(shadows=dataclasses.replace(scene.shadows, lookup=lookup))
     plan = hj.prepare(scene).shadow
     weights = jnp.asarray(np.random.default_rng(0).uniform(size=scene.strands.num_points))
 

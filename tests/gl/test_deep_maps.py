@@ -16,7 +16,7 @@ from hairjax._geometry._shadows import light_fragments
 SPHERE = hj.Occluder(center=(0.0, 0.0, 0.0), radius=0.3, color=(0.8, 0.6, 0.5))
 
 
-def ball(occluder=None, layers=4, spacing=0.0) -> hj.Scene:
+def ball(occluder=None, layers=4, spacing=0.0, lookup="layer") -> hj.Scene:
     """300 strands from one root at 48² (tests/disagreement/test_band.py's Ω scene: dense
     enough that GL's float32 puts some fragments on the other side of a boundary)."""
     return hj.Scene(
@@ -26,7 +26,7 @@ def ball(occluder=None, layers=4, spacing=0.0) -> hj.Scene:
         shading=hj.KajiyaKay(
             hj.ShadingParams(kd=(0.6, 0.4, 0.3), ks=0.4, shininess=20.0, kappa=2.0, ambient=0.05)
         ),
-        shadows=hj.Shadows("deep", layers, 64, spacing),
+        shadows=hj.Shadows("deep", layers, 64, spacing, lookup=lookup),
         occluder=occluder,
     )
 
@@ -51,11 +51,12 @@ def rounding_bound(scene, omega):
     return 1e-5 * (1 + omega) + du * np.where(lf.inside[:n], box[ty, tx], 0.0)
 
 
+@pytest.mark.parametrize("lookup", ["layer", "depth"])
 @pytest.mark.parametrize("occluder", [None, SPHERE], ids=["ball", "sphere"])
-def test_gl_matches_jax_outside_the_band(gl, occluder):
+def test_gl_matches_jax_outside_the_band(gl, occluder, lookup):
     from hairjax.gl import occluder_light, render_gl
 
-    scene = ball(occluder)
+    scene = ball(occluder, lookup=lookup)
     geometry = hj.geometry_stage(scene)
     jax_image = np.asarray(hj.shading_stage(geometry, scene.params))
     omega = np.asarray(geometry.omega)
@@ -74,22 +75,25 @@ def test_gl_matches_jax_outside_the_band(gl, occluder):
     assert np.abs(result.omega).max() > 1.0  # the scene does shadow
 
 
-def test_more_layer_passes_and_a_set_spacing(gl):
+@pytest.mark.parametrize("lookup", ["layer", "depth"])
+def test_more_layer_passes_and_a_set_spacing(gl, lookup):
     """K = 9: three passes of four boundaries (the total in the third); Δ = 0.05, so much
-    of the hair lies beyond the last boundary."""
+    of the hair lies beyond the last boundary. With lookup "depth" a point's nine texels
+    fall in different passes, each adding its share."""
     from hairjax.gl import render_gl
 
-    scene = ball(layers=9, spacing=0.05)
+    scene = ball(layers=9, spacing=0.05, lookup=lookup)
     omega = np.asarray(hj.geometry_stage(scene).omega)
     slack = np.abs(render_gl(scene).omega - omega) - omega_uncertainty(scene)
     assert np.all(slack <= rounding_bound(scene, omega))
 
 
-def test_a_wrong_layer_coordinate_fails_the_check(gl):
+@pytest.mark.parametrize("lookup", ["layer", "depth"])
+def test_a_wrong_layer_coordinate_fails_the_check(gl, lookup):
     """Layers 1 % thinner in GLSL than in JAX: Ω differs where no boundary explains it."""
     from hairjax.gl import _programs, render_gl
 
-    scene = ball()
+    scene = ball(lookup=lookup)
     omega = np.asarray(hj.geometry_stage(scene).omega)
     original = _programs.shader_source
 

@@ -263,6 +263,9 @@ def test_deep_shadows_are_read(tmp_path):
     text = HAIR + '[shadows]\nmethod = "deep"\nlayers = 6\nresolution = 64\nlayer_spacing = 0.05\n'
     scene = load_scene(write(tmp_path, text))
     assert scene.shadows == Shadows("deep", layers=6, resolution=64, layer_spacing=0.05)
+    for lookup in ("layer", "depth"):
+        read = load_scene(write(tmp_path, text + f'lookup = "{lookup}"\n')).shadows
+        assert read == Shadows("deep", layers=6, resolution=64, layer_spacing=0.05, lookup=lookup)
     assert (scene.shadows.layers, scene.shadows.resolution, scene.shadows.layer_spacing) == (6, 64, 0.05)
     # Absent keys take the defaults: 4 layers, 256², spacing 0 (the depth extent over K);
     # an integer spacing is a number.
@@ -678,6 +681,17 @@ ERROR_CASES = [
         ["shadows.layer_spacing"],
     ),
     (
+        "deep-lookup",
+        HAIR + '[shadows]\nmethod = "deep"\nlookup = "nearest"\n',
+        ["shadows.lookup must be one of 'layer', 'depth', got 'nearest'"],
+    ),
+    ("deep-lookup-number", HAIR + '[shadows]\nmethod = "deep"\nlookup = 2\n', ["shadows.lookup"]),
+    (
+        "maps-lookup",
+        HAIR + '[shadows]\nmethod = "opacity-maps"\nlookup = "depth"\n',
+        ["shadows.lookup is not a key of method = 'opacity-maps'"],
+    ),
+    (
         "deep-maps",
         HAIR + '[shadows]\nmethod = "deep"\nmaps = 8\n',
         ["shadows.maps is not a key of method = 'deep'"],
@@ -715,7 +729,7 @@ def test_error_names_key_and_file(tmp_path, text, fragments):
     with pytest.raises(SceneError) as err:
         load_scene(path)
     msg = str(err.value)
-    assert msg.startswith(f"{path}: "), msg
+    assert msg.startswith(f"{path}: ") and "\n" not in msg, msg
     for fragment in fragments:
         assert fragment in msg, (fragment, msg)
 

@@ -12,6 +12,7 @@ from ._base import shadow_method_names as shadow_method_names
 from ._deep import DeepOpacityMaps as DeepOpacityMaps
 from ._deep import DeepSetup as DeepSetup
 from ._deep import deep_points as deep_points
+from ._deep import filter_texels as filter_texels
 from ._deep import first_depths as first_depths
 from ._deep import layer_coordinate as layer_coordinate
 from ._exact import ExactSetup as ExactSetup

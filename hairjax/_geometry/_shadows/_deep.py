@@ -11,9 +11,17 @@ u = (z − z₀)·K/(KΔ), z₀ its own texel's, gets
     Ω = (1 − f) Ω̄_k + f Ω̄_{k+1},   k = ⌊u⌋ clamped to 0 … K − 1,  f = u − k ∈ [0, 1],
 
 or the box-filtered total Ω̄_tot for u > K; Ω = 0 where its texel holds no hair. Ω̄ is the
-3 × 3 box average of the boundary maps (`box_filter`); z₀ is not filtered. z₀ and the
-layers depend on geometry alone, so set-up (NumPy) plans the gathers and evaluation (JAX)
-is linear in fragment alpha, as for opacity maps: differentiable in opacity.
+3 × 3 box average of the boundary maps (`box_filter`); z₀ is not filtered. That is
+`lookup = "layer"`, the paper's: every neighbour texel is read at the point's own layer.
+`lookup = "depth"` reads each of the 3 × 3 texels t' at the point's depth behind that
+texel's own first hair, u' = (z − z₀(t'))·K/(KΔ), k' and f' as above from u', 0 where
+t' has no hair or lies outside the map, and averages the nine:
+
+    Ω = (1/9) Σ_{t'} [(1 − f') Ω_{k'}(t') + f' Ω_{k'+1}(t')],
+
+whose many-layer limit is `exact`'s Ω. z₀ and the layers depend on geometry alone, so
+set-up (NumPy) plans the gathers and evaluation (JAX) is linear in fragment alpha, as for
+opacity maps: differentiable in opacity.
 """
 
 from __future__ import annotations
@@ -26,13 +34,26 @@ import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 
+from ..._constants import SHADOW_FILTER_RADIUS
 from ..._errors import SceneError
 from .._projection import View
 from ._base import AbstractShadowMethod, check_resolution, register_shadow_method
 from ._frame import LightFrame, light_fragments
-from ._opacity_maps import MAX_MAP_CELLS, opacity_maps, point_opacity
+from ._opacity_maps import MAX_MAP_CELLS, accumulated_maps, opacity_maps, point_opacity
 
-__all__ = ["DeepOpacityMaps", "DeepSetup", "first_depths", "layer_coordinate", "deep_points"]
+__all__ = [
+    "DeepOpacityMaps",
+    "DeepSetup",
+    "LOOKUPS",
+    "first_depths",
+    "layer_coordinate",
+    "deep_points",
+    "filter_texels",
+]
+
+# How a point reads the 3 × 3 texels around it (docs/model.md §7): at its own layer
+# (Yuksel & Keyser 2008) or at its depth behind each texel's own z₀.
+LOOKUPS = ("layer", "depth")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -42,7 +63,9 @@ class DeepSetup:
     holds the fragments with j ≤ u < j + 1 of their texel, slice K those with u ≥ K); per
     point the lower boundary `plane[P]` (K for points beyond the last boundary, which read
     the total), its weight `f[P]` and texel `texel[P]` (−1 outside the map or where the
-    texel holds no hair); `first_depth[R²]`, each texel's z₀ (+∞ without hair)."""
+    texel holds no hair); `first_depth[R²]`, each texel's z₀ (+∞ without hair). With
+    `lookup = "depth"` `plane`, `f` and `texel` are `[P, 9]`, one per texel of the 3 × 3
+    filter, each from that texel's z₀."""
 
     view: View
     frag_strand: np.ndarray
@@ -60,11 +83,14 @@ class DeepOpacityMaps(AbstractShadowMethod):
     """`layers` (K) layers of `layer_spacing` (Δ, world units along the light) behind each
     texel's first hair, on a `resolution` × `resolution` light raster. `layer_spacing = 0`
     (the default) is the hair's light-depth extent over K, (D_N − D₀)/K: the coarsest
-    spacing whose layers hold all the hair behind any texel's z₀ ≥ D₀."""
+    spacing whose layers hold all the hair behind any texel's z₀ ≥ D₀. `lookup`: how a
+    point reads its 3 × 3 texels, `"layer"` (the paper's: at its own layer coordinate in
+    all nine) or `"depth"` (at its depth behind each texel's own z₀), `LOOKUPS`."""
 
     layers: int = 4
     resolution: int = 256
     layer_spacing: float = 0.0
+    lookup: str = "depth"
     method = "deep"
 
     def __post_init__(self):
@@ -84,6 +110,9 @@ class DeepOpacityMaps(AbstractShadowMethod):
             raise SceneError(
                 f"shadows.layer_spacing must be ≥ 0 (0: the hair's depth extent over layers), got {spacing!r}"
             )
+        if not isinstance(self.lookup, str) or self.lookup not in LOOKUPS:
+            allowed = ", ".join(repr(name) for name in LOOKUPS)
+            raise SceneError(f"shadows.lookup must be one of {allowed}, got {self.lookup!r}")
         object.__setattr__(self, "layers", int(k))
         object.__setattr__(self, "layer_spacing", float(spacing))
         object.__setattr__(self, "resolution", check_resolution(self.resolution))
@@ -128,8 +157,12 @@ class DeepOpacityMaps(AbstractShadowMethod):
         # The minimum fires for fragments at or beyond the last boundary (u ≥ K): slice K,
         # counted in the texel's total only. u ≥ 0: z₀ is the texel's nearest fragment.
         j = np.minimum(np.floor(u), layers).astype(np.int64)
-        texel = np.where(lf.inside, lf.ty * resolution + lf.tx, -1)
-        plane, f, texel = deep_points(lf.frame.depth, texel, first, layers, depth_range)
+        if self.lookup == "depth":
+            texel = filter_texels(lf.frame.xy, lf.frame.seen, resolution)
+            depth = np.broadcast_to(lf.frame.depth[:, None], texel.shape)
+        else:
+            texel, depth = np.where(lf.inside, lf.ty * resolution + lf.tx, -1), lf.frame.depth
+        plane, f, texel = deep_points(depth, texel, first, layers, depth_range)
         return DeepSetup(
             view=lf.frame.view,
             frag_strand=lf.frag_strand,
@@ -143,7 +176,8 @@ class DeepOpacityMaps(AbstractShadowMethod):
 
     def omega(self, setup: DeepSetup, alpha):
         dtype = jnp.result_type(float)
-        return _deep_opacity(
+        evaluate = _deep_depth_opacity if self.lookup == "depth" else _deep_opacity
+        return evaluate(
             alpha,
             setup.frag_strand,
             jnp.asarray(setup.frag_coverage, dtype),
@@ -161,6 +195,31 @@ def _deep_opacity(alpha, frag_strand, frag_coverage, frag_cell, plane, f, texel,
     # Slices 0 … K accumulated behind each other: boundaries 0 … K, then the total (K + 2 maps).
     boundaries = opacity_maps(alpha[frag_strand] * frag_coverage, frag_cell, layers + 1, resolution)
     return point_opacity(boundaries, plane, f, texel)
+
+
+@eqx.filter_jit
+def _deep_depth_opacity(alpha, frag_strand, frag_coverage, frag_cell, plane, f, texel, layers, resolution):
+    # Each texel's own boundaries (unfiltered), read at [P, 9] per-texel (k', f'), then
+    # summed over the nine and divided by 9 as `exact` (its omega_exact.comp) does.
+    boundaries = accumulated_maps(alpha[frag_strand] * frag_coverage, frag_cell, layers + 1, resolution)
+    side = 2 * SHADOW_FILTER_RADIUS + 1
+    return jnp.sum(point_opacity(boundaries, plane, f, texel), axis=-1) / (side * side)
+
+
+def filter_texels(xy: np.ndarray, seen: np.ndarray, resolution: int) -> np.ndarray:
+    """`[P, 9]`: the texels of each point's 3 × 3 filter (row-major, dy then dx, as the
+    shaders loop), −1 outside the map or for points the light does not see."""
+    r = SHADOW_FILTER_RADIUS
+    # The clip keeps the cast finite (unseen points lie at ~1e300); beyond −2 or R + 1 every
+    # neighbour is outside the map, as at the true texel.
+    tx = np.floor(np.clip(xy[:, 0], -r - 1, resolution + r)).astype(np.int64)
+    ty = np.floor(np.clip(xy[:, 1], -r - 1, resolution + r)).astype(np.int64)
+    offs = np.arange(-r, r + 1)
+    oy, ox = np.meshgrid(offs, offs, indexing="ij")
+    nx = tx[:, None] + ox.ravel()[None, :]
+    ny = ty[:, None] + oy.ravel()[None, :]
+    valid = (nx >= 0) & (nx < resolution) & (ny >= 0) & (ny < resolution) & seen[:, None]
+    return np.where(valid, ny * resolution + nx, -1)
 
 
 def first_depths(pixel: np.ndarray, depth: np.ndarray, resolution: int) -> np.ndarray:

@@ -33,6 +33,7 @@ __all__ = [
     "point_planes",
     "box_filter",
     "opacity_maps",
+    "accumulated_maps",
     "point_opacity",
     "MAX_MAP_CELLS",
 ]
@@ -163,17 +164,25 @@ def opacity_maps(
 ) -> Float[Array, "n1 r r"]:
     """Box-filtered Ω̄ on the N + 1 planes (plane 0 is empty): kim-2003 Routine 2's
     accumulation, with each slice added to the ones behind it (GL_ONE, GL_ONE)."""
+    return box_filter(accumulated_maps(frag_alpha, frag_cell, maps, resolution))
+
+
+def accumulated_maps(
+    frag_alpha: Float[Array, " f"], frag_cell: Int[Array, " f"], maps: int, resolution: int
+) -> Float[Array, "n1 r r"]:
+    """`opacity_maps` per texel, before the box filter: plane i holds the texel's alpha
+    in slices 0 … i − 1."""
     cells = resolution * resolution
     slices = jax.ops.segment_sum(frag_alpha, frag_cell, num_segments=(maps + 1) * cells)
     slices = slices.reshape(maps + 1, resolution, resolution)[:maps]
-    omega = jnp.concatenate([jnp.zeros_like(slices[:1]), jnp.cumsum(slices, axis=0)])
-    return box_filter(omega)
+    return jnp.concatenate([jnp.zeros_like(slices[:1]), jnp.cumsum(slices, axis=0)])
 
 
 def point_opacity(
-    maps: Float[Array, "n1 r r"], plane: Int[Array, " p"], f: Float[Array, " p"], texel: Int[Array, " p"]
-) -> Float[Array, " p"]:
-    """Ω at points: linear interpolation between the two planes around each point."""
+    maps: Float[Array, "n1 r r"], plane: Int[Array, "*p"], f: Float[Array, "*p"], texel: Int[Array, "*p"]
+) -> Float[Array, "*p"]:
+    """Ω at points: linear interpolation between the two planes around each point (any
+    shape of `plane`, `f`, `texel`: elementwise)."""
     flat = maps.reshape(maps.shape[0], -1)
     safe = jnp.maximum(texel, 0)  # fires for texel −1 (outside): any valid index, dropped below
     omega = (1 - f) * flat[plane, safe] + f * flat[plane + 1, safe]
