@@ -7,7 +7,11 @@ to `points.jsonl` at once, so an interrupted sweep resumes where it stopped; the
 (`hairjax/tools/_sweep_report.py`) is built from that file.
 
 Knobs (each point changes one; the others keep the scene's settings):
-- `maps`: number of opacity maps N; `map_resolution`: their size in texels;
+- `shadows`: the shadow method (every registered one, docs/model.md §7), keeping the
+  scene's options that it takes;
+- `maps`: number of opacity maps N; `map_resolution`: the light's raster in texels;
+  `layers`: a method's layer count, for one registered with a `layers` field (each only
+  where the scene's method has the field);
 - `bins`: visibility bins, and `exact` (a full depth sort);
 - `width`: ribbons f× as wide with opacity a/f (the same opacity per unit length until a/f
   reaches 1), against the reference at f = 1;
@@ -25,11 +29,23 @@ import numpy as np
 from .._progress import Progress, progress_of
 from .._scene._scene import Scene
 from ._compare import check_repeats
-from ._knobs import KNOBS, SHADOW_KNOBS, SweepError, knob_scene
+from ._knobs import KNOBS, SHADOW_KNOBS, SHADOW_OPTIONS, SweepError, knob_scene, method_options
 from ._measure import PATHS, errors, measure, path_reference, renderer, scene_digest, target_reference
 from ._sweep_store import append_point, check_config, load_points, rewrite_points
 
-__all__ = ["PATHS", "run_sweep", "load_points", "scene_digest"]
+__all__ = ["PATHS", "run_sweep", "load_points", "scene_digest", "sweep_knobs"]
+
+
+def sweep_knobs(scene: Scene, knobs: dict) -> dict:
+    """The knobs that turn something in `scene`: a scene without shadows has no shadow
+    knobs, and a knob setting a field its shadow method lacks (`maps` of exact shadows)
+    is dropped."""
+    takes = method_options(scene.shadows.method)
+    return {
+        k: v
+        for k, v in knobs.items()
+        if (scene.shadows.casts or k not in SHADOW_KNOBS) and (k not in SHADOW_OPTIONS or k in takes)
+    }
 
 
 def run_sweep(
@@ -73,9 +89,7 @@ def run_sweep(
     except ValueError as err:
         raise SweepError(str(err)) from None
     given = None if target is None else target_reference(scene, target)
-    if not scene.shadows.casts:
-        # A scene without shadows has no shadow knobs to turn.
-        knobs = {k: v for k, v in knobs.items() if k not in SHADOW_KNOBS}
+    knobs = sweep_knobs(scene, knobs)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     config = {
@@ -117,13 +131,14 @@ def run_sweep(
                     report(count, total, f"{path} reference")
                 else:
                     references[path] = given
-            variant, s = knob_scene(scene, knob, value)
             label = f"{path} {knob} = {value}"
             try:
+                variant, s = knob_scene(scene, knob, value)
                 image, omega, median, times = measure(runs[path], variant, s, repeats)
             except ValueError as err:
-                # A setting the renderer refuses (e.g. JAX's cap on opacity-map memory) is
-                # recorded as skipped, with the reason, and the sweep goes on.
+                # A setting the scene or the renderer refuses (e.g. JAX's cap on
+                # opacity-map memory) is recorded as skipped, with the reason, and the
+                # sweep goes on.
                 append_point(out, {"path": path, "knob": knob, "value": value, "skipped": str(err)})
                 count += 1
                 report(count, total, f"{label} (skipped)")
