@@ -15,6 +15,8 @@ from .._scene._scene import Scene
 __all__ = [
     "KNOBS",
     "QUICK_KNOBS",
+    "JOINT_KNOBS",
+    "QUICK_JOINT_KNOBS",
     "SHADOW_KNOBS",
     "SHADOW_OPTIONS",
     "SweepError",
@@ -58,6 +60,27 @@ QUICK_KNOBS: dict[str, tuple] = {
     "width": (0.5, 1.0, 2.0),
     "supersampling": (1, 2),
     "shadows": _methods(),
+}
+# The joint search's values (docs/results.md, "Joint search"): coarser than the sweep's
+# (maps and bins in steps of 4, the raster one step either side of the default 256, no
+# 1 or 2 maps, which the sweep shows to be an order of magnitude off), since it evaluates
+# combinations; pass KNOBS to search those.
+JOINT_KNOBS: dict[str, tuple] = {
+    "shadows": _methods(),
+    "maps": (4, 16, 64, 256),
+    "map_resolution": (128, 256, 512),
+    "layers": (2, 4, 8),
+    "bins": (4, 16, 64, 256, "exact"),
+    "width": (0.5, 1.0, 2.0),
+    "supersampling": (1, 2, 3, 4),
+}
+# A tiny space, for a smoke run and the test suite's run of experiments/09_results.py.
+QUICK_JOINT_KNOBS: dict[str, tuple] = {
+    "shadows": _methods(),
+    "maps": (4, 16),
+    "layers": (2, 4),
+    "bins": (16, "exact"),
+    "supersampling": (1, 2),
 }
 # The knobs that mean nothing for a scene without shadows.
 SHADOW_KNOBS = (*SHADOW_OPTIONS, "shadows")

@@ -10,8 +10,8 @@ from helpers import small_furball_scene
 import hairjax as hj
 from hairjax._geometry._shadows import AbstractShadowMethod, register_shadow_method, shadow_method_names
 from hairjax._geometry._shadows._base import SHADOW_METHODS
-from hairjax.tools import KNOBS, knob_scene
-from hairjax.tools._knobs import method_options, settings_scene
+from hairjax.tools import KNOBS, knob_scene, knob_space, settings_scene
+from hairjax.tools._knobs import method_options
 from hairjax.tools._sweep import sweep_knobs
 
 
@@ -77,5 +77,9 @@ def layered():
 
 def test_a_method_with_a_layers_field_is_searched_in_layers(scene, layered):
     assert method_options("layered-test") == ("map_resolution", "layers")
+    knobs = {"shadows": ("none", "layered-test"), "maps": (4,), "map_resolution": (16, 32), "layers": (2, 8)}
+    space = knob_space(scene, knobs)
+    assert "maps" not in space.knobs  # no method of the space has a map count
+    assert {"shadows": "layered-test", "map_resolution": 32, "layers": 8} in list(space.grid())
     variant, _ = settings_scene(scene, {"shadows": "layered-test", "layers": 8, "map_resolution": 32})
     assert variant.shadows == layered(layers=8, resolution=32, layer_spacing=1.0)
