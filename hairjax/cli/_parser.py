@@ -42,6 +42,14 @@ def non_negative_float(text: str) -> float:
     return value
 
 
+def positive_float(text: str) -> float:
+    """argparse type: a finite number > 0."""
+    value = non_negative_float(text)
+    if value == 0:
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
+    return value
+
+
 def parse_size(text: str) -> tuple[int, int | None]:
     """argparse type for --size: `W` (height follows the scene's aspect) or `WxH`."""
     width, sep, height = text.lower().partition("x")
@@ -292,6 +300,12 @@ def build_parser() -> argparse.ArgumentParser:
         type=positive_int,
         metavar="N",
         help="with --joint: at most N points per renderer (default: no bound)",
+    )
+    p.add_argument(
+        "--budget-s",
+        type=positive_float,
+        metavar="SECONDS",
+        help="with --joint: at most this much measuring per renderer, e.g. 1800 (default: no bound)",
     )
 
     p = command("info", "summarise a hair file (.hair, .tfx, .ply)", scene_options=False)

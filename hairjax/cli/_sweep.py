@@ -51,8 +51,8 @@ def run(args: argparse.Namespace) -> int:
                 "converged reference"
             )
         return _run_joint(args)
-    if args.stop_at is not None or args.budget is not None:
-        raise SweepError("--stop-at and --budget are options of --joint")
+    if args.stop_at is not None or args.budget is not None or args.budget_s is not None:
+        raise SweepError("--stop-at, --budget and --budget-s are options of --joint")
     return _run_sweep(args)
 
 
@@ -110,7 +110,8 @@ def _run_joint(args: argparse.Namespace) -> int:
     check_outputs([Output(out, (), "--out")])
     knobs = _knobs(args, QUICK_JOINT_KNOBS if args.quick else JOINT_KNOBS, JOINT_KNOBS)
     paths = _paths(args)
-    search = SearchConfig(stop_at=5e-4 if args.stop_at is None else args.stop_at, budget=args.budget)
+    stop_at = 5e-4 if args.stop_at is None else args.stop_at
+    search = SearchConfig(stop_at=stop_at, budget=args.budget, budget_s=args.budget_s)
     scene = load_cli_scene(args, args.scene)
     try:
         with reporter("joint search", quiet=args.quiet) as progress:

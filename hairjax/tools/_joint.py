@@ -12,6 +12,7 @@ report (`_joint_report.py`) is built from the points."""
 from __future__ import annotations
 
 import dataclasses
+import time
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
@@ -68,6 +69,7 @@ class _Evaluator:
         if self.replayed:
             return self.stored[key]
         reference = self._reference()
+        start = time.perf_counter()
         try:
             variant, s = settings_scene(self.scene, setting)
             repeats = 0 if self.cost else self.repeats  # a cost model: the error's render only
@@ -82,6 +84,7 @@ class _Evaluator:
                 "settings": setting,
                 "time_s": median if self.cost is None else float(self.cost(setting)),
                 "times": times,
+                "wall_s": time.perf_counter() - start,  # warm-up and timed renders: the point's cost
                 **errors(image, omega, reference, self.kappa),
             }
         append_point(self.out, point, POINTS_FILE)
@@ -106,7 +109,8 @@ def run_joint(
 
     A point is a dict: path, settings (knob → value: the knobs of its shadow method, the
     others), and either `skipped` or the one-knob sweep's measures (`run_sweep`): time_s,
-    times, rmse, max_abs, rel_rmse, tau_rmse, tau_max. `search=None` evaluates the full
+    times, rmse, max_abs, rel_rmse, tau_rmse, tau_max; and wall_s, the seconds its
+    measurement took (warm-up and timed renders). `search=None` evaluates the full
     grid instead, every combination (to check the search on a small space). `cost`
     (tests): the seconds charged to a setting, instead of timed renders (only the warm-up
     render, for the error, is made). `progress(done, total, message)` after each point."""

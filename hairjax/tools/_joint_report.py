@@ -12,7 +12,7 @@ from pathlib import Path
 
 from .._io._files import atomic_path, write_csv, write_text
 from ._knob_space import KnobSpace, setting_key
-from ._pareto import pareto_front
+from ._pareto import SearchConfig, pareto_front
 
 __all__ = ["JOINT_THRESHOLDS", "write_joint_report", "joint_markdown", "joint_plot", "floors", "front_rows"]
 
@@ -78,10 +78,17 @@ def floors(points: list[dict], config: dict, path: str) -> list[str]:
         "skipped" in measured[k] or measured[k]["rel_rmse"] >= best["rel_rmse"] for k in switches
     ):
         reasons.append("no other shadow method reduced the error")
-    budget = (config.get("search") or {}).get("budget")
-    if untried and budget is not None and len(measured) >= budget:
-        reasons.append(f"the budget of {budget} points ran out before the best point's steps were tried")
+    search = SearchConfig(**config["search"]) if config.get("search") else None
+    if untried and search is not None and search.spent(list(measured.values())):
+        budget = _budget_text(search)
+        reasons.append(f"the budget ({budget}) ran out before the best point's steps were tried")
     return reasons
+
+
+def _budget_text(search: SearchConfig) -> str:
+    parts = [] if search.budget is None else [f"{search.budget} points"]
+    parts += [] if search.budget_s is None else [f"{search.budget_s:.0f} s of measuring"]
+    return " and ".join(parts) + (" per path" if parts else "")
 
 
 def _fmt(x) -> str:
@@ -101,13 +108,16 @@ def joint_markdown(points: list[dict], config: dict) -> str:
     paths = _paths(points, config)
     search = config.get("search")
     counts = ", ".join(f"{path} {len(_of(points, path))}" for path in paths)
+    walls = {path: sum(p.get("wall_s", 0.0) for p in _of(points, path)) for path in paths}
+    spent = ", ".join(f"{path} {walls[path]:.0f} s" for path in paths)
     if search is None:
         how = f"every combination ({space.size()} per path)"
     else:
-        budget = "" if search.get("budget") is None else f", budget {search['budget']} points"
+        searched = SearchConfig(**search)
+        budget = "" if not _budget_text(searched) else f", budget {_budget_text(searched)}"
         how = (
             f"{counts} of the {space.size()} combinations per path (search stopping at "
-            f"{search['stop_at']:.2%}{budget})"
+            f"{searched.stop_at:.2%}{budget})"
         )
     timing = (
         "times from a cost model"
@@ -119,7 +129,8 @@ def joint_markdown(points: list[dict], config: dict) -> str:
         "",
         f"Reference per path: shadows {ref['shadows']}, ordering {ref['ordering']}, supersampling "
         f"{ref['supersampling']}×{ref['supersampling']}. All knobs change together; evaluated: "
-        f"{how}. Relative RMSE = RMSE / the reference's peak value; {timing}.",
+        f"{how}; measuring them took {spent}. Relative RMSE = RMSE / the reference's peak value; "
+        f"{timing}.",
         "",
         "## Cheapest combination reaching each error",
         "",

@@ -10,8 +10,9 @@ The search, in two phases, never evaluating a setting twice:
 
 1. Greedy descent (the cheapest route to the target): from the cheapest setting, evaluate
    every step from the current setting and move to the one with the largest error
-   reduction per second of added time (a step that reduces the error and takes no longer
-   comes first); stop at the error target `stop_at` or when no step reduces the error.
+   reduction per second of added time (the added time taken as at least
+   `time_tolerance` of the current time, so that a step whose time differs by noise is
+   not free); stop at the error target `stop_at` or when no step reduces the error.
 2. Closing the front, a Pareto local search (Paquete, Chiarandini and Stützle, "Pareto
    local optimum sets in the bi-objective traveling salesman problem", 2004): while a
    point near the front of everything evaluated has an error above the target and has
@@ -28,7 +29,8 @@ It ends when every point near the front and above the target is expanded: a poin
 full grid's front is missed only if no chain of steps leads to it through such points.
 tests/tools/test_joint.py checks against the full grid of a small space that none is
 missed. The front below the target is not searched (its points cost more than the first
-point reaching it). `budget` bounds the settings evaluated.
+point reaching it). `budget` bounds the settings evaluated, `budget_s` the seconds spent
+measuring them: the search stops before the first setting past either.
 """
 
 from __future__ import annotations
@@ -37,23 +39,25 @@ import bisect
 import dataclasses
 import itertools
 import math
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 
 from .._progress import Progress
 from ._knob_space import KnobSpace, setting_key, setting_label
 
-__all__ = ["SearchConfig", "pareto_front", "near_front", "pareto_search"]
+__all__ = ["SearchConfig", "pareto_front", "near_front", "pareto_search", "measuring_time"]
 
 
 @dataclasses.dataclass(frozen=True)
 class SearchConfig:
     """`stop_at`: the relative RMSE at which the search stops descending (the front below
-    it is not searched); `budget`: the most settings evaluated per path (None: no bound);
-    `time_tolerance`: a point is expanded unless another is this fraction faster and no
-    worse (0.1: the spread of repeated timings)."""
+    it is not searched); `budget`: the most settings evaluated per path, `budget_s`: the
+    most seconds spent measuring them per path (each point's `wall_s`, or its `time_s`
+    where it has none), None for no bound; `time_tolerance`: a point is expanded unless
+    another is this fraction faster and no worse (0.1: the spread of repeated timings)."""
 
     stop_at: float = 5e-4
     budget: int | None = None
+    budget_s: float | None = None
     time_tolerance: float = 0.1
 
     def __post_init__(self):
@@ -61,8 +65,21 @@ class SearchConfig:
             raise ValueError(f"stop_at must be a relative RMSE ≥ 0, got {self.stop_at!r}")
         if self.budget is not None and (not isinstance(self.budget, int) or self.budget < 1):
             raise ValueError(f"budget must be a positive integer or None, got {self.budget!r}")
+        if self.budget_s is not None and not (isinstance(self.budget_s, (int, float)) and self.budget_s > 0):
+            raise ValueError(f"budget_s must be a positive number of seconds or None, got {self.budget_s!r}")
         if not (isinstance(self.time_tolerance, (int, float)) and self.time_tolerance >= 0):
             raise ValueError(f"time_tolerance must be ≥ 0, got {self.time_tolerance!r}")
+
+    def spent(self, points: Sequence[Mapping]) -> bool:
+        """Whether `points` (one path's) use up the budget: no further point is evaluated."""
+        if self.budget is not None and len(points) >= self.budget:
+            return True
+        return self.budget_s is not None and sum(measuring_time(p) for p in points) >= self.budget_s
+
+
+def measuring_time(point: Mapping) -> float:
+    """The seconds a point's measurement took: its `wall_s`, else its `time_s`, else 0."""
+    return float(point.get("wall_s", point.get("time_s", 0.0)))
 
 
 def near_front(points: Iterable[Mapping], tolerance: float = 0.0) -> list:
@@ -108,7 +125,7 @@ def pareto_search(
     def ev(setting: dict) -> str:
         key = setting_key(setting)
         if key not in points:
-            if config.budget is not None and len(points) >= config.budget:
+            if config.spent(list(points.values())):
                 raise _BudgetSpent
             points[key], settings[key] = evaluate(setting), setting
             if progress is not None:
@@ -147,6 +164,9 @@ def pareto_search(
                 if reduces(key, current):
                     p = points[key]
                     gain, added = here["rel_rmse"] - p["rel_rmse"], p["time_s"] - here["time_s"]
+                    # Timing noise of `time_tolerance` makes no step free: a step within
+                    # it is charged that much, so a tiny gain cannot win by noise alone.
+                    added = max(added, config.time_tolerance * here["time_s"])
                     rank = (math.inf if added <= 0 else gain / added, gain)
                     if rank > best_rank:
                         best, best_rank = key, rank

@@ -91,6 +91,7 @@ def test_version(capsys):
         (["sweep", "--joint", "--budget", "0"], "--budget"),
         (["sweep", "--joint", "--stop-at", "-0.1"], "--stop-at"),
         (["sweep", "--joint", "--stop-at", "nan"], "--stop-at"),
+        (["sweep", "--joint", "--budget-s", "0"], "--budget-s"),
         (["render", "--size", "12x0"], "--size"),
         (["render", "--set", "camera.fov"], "--set"),
         (["animate", "s.toml", "--frames", "0"], "--frames"),

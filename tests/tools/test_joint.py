@@ -139,6 +139,8 @@ def _table_evaluate(calls):
         # front point is expanded already.
         (SearchConfig(stop_at=0.01, time_tolerance=0.0), [(0, 0), (1, 0), (2, 0), (0, 1), (2, 1)]),
         (SearchConfig(stop_at=1e-4, budget=3), [(0, 0), (1, 0), (2, 0)]),
+        # 1 s + 2 s spent (each point's time_s, as it has no wall_s): nothing after.
+        (SearchConfig(stop_at=1e-4, budget_s=3.0), [(0, 0), (1, 0)]),
     ],
 )
 def test_the_search_on_a_table_by_hand(config, order):
@@ -153,6 +155,41 @@ def test_the_target_stops_the_descent():
     # (2, 0) at 2 % reaches it: (2, 1) is never evaluated; (0, 0), the only front point
     # above it, is expanded already.
     assert calls == [(0, 0), (1, 0), (2, 0), (0, 1)]
+
+
+# a = 1 is 1 % faster than a = 0 and barely better: within timing noise, not a free step.
+NOISY = {
+    (0, 0): (1.0, 0.1),
+    (1, 0): (0.99, 0.099),
+    (0, 1): (1.5, 0.05),
+    (1, 1): (1.6, 0.04),
+    (0, 2): (2.0, 1e-4),
+    (1, 2): (2.1, 5e-5),
+}
+
+
+@pytest.mark.parametrize(
+    "tolerance, order",
+    [
+        # Charged no time, a = 1 has an infinite gain per second and the descent takes it,
+        # then b up twice; closing the front then finds (0, 2).
+        (0.0, [(0, 0), (1, 0), (0, 1), (1, 1), (1, 2), (0, 2)]),
+        # Charged 10 % of 1 s: 0.001 / 0.1 s loses to b = 1's 0.05 / 0.5 s, and the descent
+        # reaches the target at (0, 2) with one expansion fewer on its way.
+        (0.1, [(0, 0), (1, 0), (0, 1), (1, 1), (0, 2), (1, 2)]),
+    ],
+)
+def test_a_step_faster_by_noise_alone_is_not_free(tolerance, order):
+    space = KnobSpace({"a": (0, 1), "b": (0, 1, 2)}, {"m": ()}, "m")
+    calls = []
+
+    def evaluate(setting):
+        calls.append((setting["a"], setting["b"]))
+        time_s, error = NOISY[calls[-1]]
+        return {"settings": setting, "time_s": time_s, "rel_rmse": error}
+
+    pareto_search(space, evaluate, SearchConfig(stop_at=1e-3, time_tolerance=tolerance))
+    assert calls == order
 
 
 def _model_cost(s):
@@ -259,13 +296,14 @@ def test_a_small_search_with_real_renders(tmp_path, gl):
     for p in points:
         peak = float(np.load(tmp_path / f"reference_{p['path']}.npz")["peak"])
         assert p["time_s"] > 0 and len(p["times"]) == 1 and p["rel_rmse"] == pytest.approx(p["rmse"] / peak)
+        assert p["wall_s"] > p["time_s"]  # the warm-up and the timed render
     assert calls[0] == (0, 1, "jax reference") and calls[1][:2] == (1, 3)
     assert calls[1][2].startswith("jax bins=1 maps=2: ")
     config = json.loads((tmp_path / "joint.json").read_text())
     files = write_joint_report(tmp_path, points, config)
     assert files["pareto"].read_text().splitlines()[0] == "path,bins,maps,time_s,rel_rmse,rmse,max_abs"
     assert files["plot"].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert "the budget of 3 points ran out" in files["summary"].read_text()
+    assert "the budget (3 points per path) ran out" in files["summary"].read_text()
 
 
 REPORT_SPACE = KnobSpace(
@@ -357,7 +395,7 @@ def test_the_command_line(tmp_path, capsys, gl):
     assert "## Cheapest combination reaching each error" in printed and "wrote" in printed
     config = json.loads((out / "joint.json").read_text())
     assert config["space"]["knobs"] == {"shadows": ["none", "exact", "opacity-maps"], "bins": [16, "exact"]}
-    assert config["search"] == {"stop_at": 5e-4, "budget": 5, "time_tolerance": 0.1}
+    assert config["search"] == {"stop_at": 5e-4, "budget": 5, "budget_s": None, "time_tolerance": 0.1}
     assert len(load_joint(out)) == 5 and (out / "pareto.csv").exists() and (out / "joint_pareto.png").exists()
     for extra, message in [
         (["--target", str(toml)], "--target is for the one-knob sweep"),
@@ -367,6 +405,6 @@ def test_the_command_line(tmp_path, capsys, gl):
         err = capsys.readouterr().err
         assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
     assert cli.main(["sweep", str(toml), "--out", str(out), "--budget", "3"]) == 2
-    assert "--stop-at and --budget are options of --joint" in capsys.readouterr().err
+    assert "--stop-at, --budget and --budget-s are options of --joint" in capsys.readouterr().err
     assert cli.main(["sweep", str(toml), "--out", str(out), "--knobs", "bins", "--quick"]) == 2
     assert "holds another kind of sweep (joint.json)" in capsys.readouterr().err
