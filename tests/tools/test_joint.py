@@ -12,7 +12,9 @@ from helpers import small_furball_scene
 
 import hairjax.tools._joint as joint_mod
 from hairjax import cli
+from hairjax._geometry._shadows import shadow_method_names
 from hairjax.tools import (
+    QUICK_JOINT_KNOBS,
     KnobSpace,
     SearchConfig,
     knob_space,
@@ -195,7 +197,12 @@ def test_a_step_faster_by_noise_alone_is_not_free(tolerance, order):
 def _model_cost(s):
     """Seconds charged to a setting (a cost model: fixed, so the check is exact): more
     samples, maps, raster texels, bins and wider ribbons all cost more."""
-    method = {"none": 0.0, "opacity-maps": 0.05 * s.get("maps", 0), "exact": 1.7}[s["shadows"]]
+    method = {
+        "none": 0.0,
+        "opacity-maps": 0.05 * s.get("maps", 0),
+        "deep": 0.1 * s.get("layers", 0),
+        "exact": 1.7,
+    }[s["shadows"]]
     raster = (s.get("map_resolution", 16) / 16) ** 2
     order = 0.35 if s["bins"] == "exact" else 0.1 * math.log2(1 + s["bins"])
     return s.get("supersampling", 1) ** 2 * (0.5 + s.get("width", 1.0)) * (1 + method * raster + order)
@@ -394,7 +401,8 @@ def test_the_command_line(tmp_path, capsys, gl):
     printed = capsys.readouterr().out
     assert "## Cheapest combination reaching each error" in printed and "wrote" in printed
     config = json.loads((out / "joint.json").read_text())
-    assert config["space"]["knobs"] == {"shadows": ["none", "exact", "opacity-maps"], "bins": [16, "exact"]}
+    assert config["space"]["knobs"] == {"shadows": list(QUICK_JOINT_KNOBS["shadows"]), "bins": [16, "exact"]}
+    assert set(QUICK_JOINT_KNOBS["shadows"]) == set(shadow_method_names())  # every registered method
     assert config["search"] == {"stop_at": 5e-4, "budget": 5, "budget_s": None, "time_tolerance": 0.1}
     assert len(load_joint(out)) == 5 and (out / "pareto.csv").exists() and (out / "joint_pareto.png").exists()
     for extra, message in [
@@ -408,3 +416,18 @@ def test_the_command_line(tmp_path, capsys, gl):
     assert "--stop-at, --budget and --budget-s are options of --joint" in capsys.readouterr().err
     assert cli.main(["sweep", str(toml), "--out", str(out), "--knobs", "bins", "--quick"]) == 2
     assert "holds another kind of sweep (joint.json)" in capsys.readouterr().err
+
+
+def test_deep_maps_are_searched_in_layers(tmp_path, gl):
+    """The registered deep opacity maps, through the `layers` knob their field gives them,
+    rendered: more layers, a different error (no edit of the search named them)."""
+    scene = small_furball_scene(strands=60, size=24, maps=4, resolution=16)
+    knobs = {"shadows": ("none", "deep"), "layers": (2, 8), "maps": (4,), "bins": ("exact",)}
+    points = run_joint(scene, tmp_path, knobs=knobs, paths=("gl",), search=None, cost=_model_cost)
+    assert [p["settings"] for p in points] == [
+        {"shadows": "none", "bins": "exact"},
+        {"shadows": "deep", "layers": 2, "bins": "exact"},
+        {"shadows": "deep", "layers": 8, "bins": "exact"},
+    ]
+    errors = [p["rel_rmse"] for p in points]
+    assert len(set(errors)) == 3 and errors[0] > max(errors[1:])  # deep shadows beat none
