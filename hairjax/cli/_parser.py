@@ -31,6 +31,25 @@ def positive_int(text: str) -> int:
     return value
 
 
+def non_negative_float(text: str) -> float:
+    """argparse type: a finite number ≥ 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number ≥ 0, got {text!r}") from None
+    if not 0 <= value < float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a number ≥ 0, got {text!r}")
+    return value
+
+
+def positive_float(text: str) -> float:
+    """argparse type: a finite number > 0."""
+    value = non_negative_float(text)
+    if value == 0:
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
+    return value
+
+
 def parse_size(text: str) -> tuple[int, int | None]:
     """argparse type for --size: `W` (height follows the scene's aspect) or `WxH`."""
     width, sep, height = text.lower().partition("x")
@@ -237,16 +256,22 @@ def build_parser() -> argparse.ArgumentParser:
         "--plot", type=Path, help="PNG of target, fit and residual side by side (the first target)"
     )
 
-    p = command("sweep", "error against run time, one quality knob at a time (resumable)")
+    p = command(
+        "sweep",
+        "error against run time: one quality knob at a time, or (--joint) a search of their "
+        "combinations for the Pareto front (resumable)",
+    )
     p.add_argument("scene", nargs="?", type=Path, help=_SCENE_HELP + " (default: the built-in fur ball)")
     p.add_argument(
         "--out",
         type=Path,
-        default=Path("out/sweep"),
-        help="folder for points.jsonl, sweep.csv, pareto.png, summary.md",
+        help="folder for points.jsonl, sweep.csv, pareto.png, summary.md (default: out/sweep); with "
+        "--joint for joint.jsonl, pareto.csv, joint.csv, joint_pareto.png, joint.md (default: out/joint)",
     )
     p.add_argument(
-        "--knobs", help="comma list among maps, map_resolution, bins, width, supersampling (default: all)"
+        "--knobs",
+        help="comma list among shadows, maps, map_resolution, layers, bins, width, supersampling "
+        "(default: all)",
     )
     p.add_argument("--paths", default="jax,gl", help="renderers to time: jax, gl or both")
     p.add_argument("--repeats", type=positive_int, default=3, help="timed renders per point (their median)")
@@ -256,7 +281,31 @@ def build_parser() -> argparse.ArgumentParser:
         "--target",
         type=Path,
         help="measure every point against this image (e.g. `hairjax reference`'s) instead of "
-        "each renderer's converged reference",
+        "each renderer's converged reference (not with --joint)",
+    )
+    p.add_argument(
+        "--joint",
+        action="store_true",
+        help="search combinations of the knobs for the cheapest settings at each error "
+        "(docs/results.md, Joint search)",
+    )
+    p.add_argument(
+        "--stop-at",
+        type=non_negative_float,
+        metavar="REL_RMSE",
+        help="with --joint: the relative RMSE at which the search stops descending (default 0.0005)",
+    )
+    p.add_argument(
+        "--budget",
+        type=positive_int,
+        metavar="N",
+        help="with --joint: at most N points per renderer (default: no bound)",
+    )
+    p.add_argument(
+        "--budget-s",
+        type=positive_float,
+        metavar="SECONDS",
+        help="with --joint: at most this much measuring per renderer, e.g. 1800 (default: no bound)",
     )
 
     p = command("info", "summarise a hair file (.hair, .tfx, .ply)", scene_options=False)

@@ -61,6 +61,7 @@ COMMANDS = {
     "bench --json": (["bench", "--quick"], "--json", ".json", "hairjax.tools.bench_main"),
     "animate -o": (["animate", "scene.toml"], "-o", "folder", "hairjax._animate.load_animation"),
     "sweep --out": (["sweep"], "--out", "folder", "hairjax.cli._scenes.load_cli_scene"),
+    "sweep --joint --out": (["sweep", "--joint"], "--out", "folder", "hairjax.cli._scenes.load_cli_scene"),
 }
 CASES = ("parent is a file", "read-only folder", "unsupported extension", "directory as output")
 

@@ -54,28 +54,28 @@ def test_resume_redoes_nothing_and_drops_a_cut_line(scene, tmp_path, monkeypatch
     (tmp_path / "points.jsonl").write_text("\n".join(lines[:2]) + "\n" + lines[2][:15])
     assert len(load_points(tmp_path)) == 2
     calls = []
-    original = sweep_mod._measure
-    monkeypatch.setattr(sweep_mod, "_measure", lambda *a: calls.append(a[1]) or original(*a))
+    original = sweep_mod.measure
+    monkeypatch.setattr(sweep_mod, "measure", lambda *a: calls.append(a[1]) or original(*a))
     points = run_sweep(scene, tmp_path, knobs=knobs, paths=("jax",), repeats=1, progress=False)
     assert len(calls) == 1 and len(points) == 3  # only the cut point, reference kept on disk
     assert sorted(str(p["value"]) for p in points) == ["1", "4", "exact"]
 
 
 def test_interrupted_sweep_keeps_finished_points(scene, tmp_path, monkeypatch):
-    original = sweep_mod._measure
+    original = sweep_mod.measure
     count = {"n": 0}
 
     def flaky(*args):
         count["n"] += 1
-        if count["n"] == 3:  # the reference, one point, then Ctrl-C
+        if count["n"] == 2:  # one point, then Ctrl-C (the reference renders in _measure.py)
             raise KeyboardInterrupt
         return original(*args)
 
-    monkeypatch.setattr(sweep_mod, "_measure", flaky)
+    monkeypatch.setattr(sweep_mod, "measure", flaky)
     with pytest.raises(KeyboardInterrupt):
         run_sweep(scene, tmp_path, knobs={"bins": (1, 4, 16)}, paths=("jax",), repeats=1, progress=False)
     assert [p["value"] for p in load_points(tmp_path)] == [1]
-    monkeypatch.setattr(sweep_mod, "_measure", original)
+    monkeypatch.setattr(sweep_mod, "measure", original)
     points = run_sweep(scene, tmp_path, knobs={"bins": (1, 4, 16)}, paths=("jax",), repeats=1, progress=False)
     assert [p["value"] for p in points] == [1, 4, 16]
 
@@ -103,7 +103,7 @@ def test_bad_arguments(scene, tmp_path, kwargs, message, monkeypatch):
     def no_render(path):
         raise AssertionError("a renderer was made before the arguments were checked")
 
-    monkeypatch.setattr(sweep_mod, "_renderer", no_render)
+    monkeypatch.setattr(sweep_mod, "renderer", no_render)
     with pytest.raises(SweepError, match=message):
         run_sweep(scene, tmp_path, **{"knobs": {"bins": (1,)}, **kwargs})
 
@@ -184,14 +184,14 @@ def test_cli_sweep(tmp_path, capsys):
 
 
 def test_a_refused_setting_is_recorded_and_the_sweep_goes_on(scene, tmp_path, monkeypatch):
-    original = sweep_mod._measure
+    original = sweep_mod.measure
 
     def refuse_four(run, variant, s, repeats):
         if variant.ordering == hj.Ordering("bins", 4):
             raise ValueError("4 bins exceed the test's budget")
         return original(run, variant, s, repeats)
 
-    monkeypatch.setattr(sweep_mod, "_measure", refuse_four)
+    monkeypatch.setattr(sweep_mod, "measure", refuse_four)
     points = run_sweep(scene, tmp_path, knobs={"bins": (1, 4, 16)}, paths=("jax",), repeats=1, progress=False)
     assert [p["value"] for p in points] == [1, 4, 16]
     assert points[1]["skipped"] == "4 bins exceed the test's budget" and "rmse" not in points[1]
