@@ -20,10 +20,9 @@ import numpy as np
 
 from .._progress import Progress, progress_of
 from .._scene._scene import Scene
-from ._compare import check_repeats
 from ._knob_space import KnobSpace, knob_space, setting_key
-from ._knobs import JOINT_KNOBS, KNOBS, SweepError, settings_scene
-from ._measure import PATHS, errors, measure, path_reference, renderer, scene_digest
+from ._knobs import JOINT_KNOBS, settings_scene
+from ._measure import PATHS, check_run, errors, measure, path_reference, renderer, scene_digest
 from ._pareto import SearchConfig, pareto_search
 from ._sweep_store import append_point, check_config, load_points, rewrite_points
 
@@ -115,18 +114,7 @@ def run_joint(
     (tests): the seconds charged to a setting, instead of timed renders (only the warm-up
     render, for the error, is made). `progress(done, total, message)` after each point."""
     knobs = dict(JOINT_KNOBS if knobs is None else knobs)
-    for k, values in knobs.items():
-        if k not in KNOBS:
-            raise SweepError(f"unknown knob {k!r}; knobs: {', '.join(KNOBS)}")
-        if not values:
-            raise SweepError(f"knob {k!r} has no values")
-    for p in paths:
-        if p not in PATHS:
-            raise SweepError(f"unknown path {p!r}; paths: {', '.join(PATHS)}")
-    try:
-        repeats = check_repeats(repeats)
-    except ValueError as err:
-        raise SweepError(str(err)) from None
+    repeats = check_run(knobs, paths, repeats, empty_values=False)
     space = knob_space(scene, knobs)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

@@ -22,12 +22,31 @@ import numpy as np
 from .._io._files import atomic_path
 from .._scene._scene import Scene
 from .._supersample import supersample
-from ._compare import image_stats
-from ._knobs import SweepError, reference_scene
+from ._compare import check_repeats, image_stats
+from ._knobs import KNOBS, SweepError, reference_scene
 
 __all__ = ["PATHS", "renderer", "measure", "errors", "path_reference", "target_reference", "scene_digest"]
 
 PATHS = ("jax", "gl")
+
+
+def check_run(knobs, paths, repeats: int, *, empty_values: bool = True) -> int:
+    """The knob names, paths and repeats of a sweep or a joint search, checked before any
+    work (`SweepError`, one line naming the bad one); the repeats as an int.
+    `empty_values=False` also refuses a knob given no values."""
+    for k, values in knobs.items():
+        if k not in KNOBS:
+            raise SweepError(f"unknown knob {k!r}; knobs: {', '.join(KNOBS)}")
+        if not empty_values and not values:
+            raise SweepError(f"knob {k!r} has no values")
+    for p in paths:
+        if p not in PATHS:
+            raise SweepError(f"unknown path {p!r}; paths: {', '.join(PATHS)}")
+    try:
+        return check_repeats(repeats)
+    except ValueError as err:
+        raise SweepError(str(err)) from None
+
 
 Renderer = Callable[[Scene], tuple[np.ndarray, np.ndarray | None]]
 

@@ -28,9 +28,17 @@ import numpy as np
 
 from .._progress import Progress, progress_of
 from .._scene._scene import Scene
-from ._compare import check_repeats
-from ._knobs import KNOBS, SHADOW_KNOBS, SHADOW_OPTIONS, SweepError, knob_scene, method_options
-from ._measure import PATHS, errors, measure, path_reference, renderer, scene_digest, target_reference
+from ._knobs import KNOBS, SHADOW_KNOBS, SHADOW_OPTIONS, knob_scene, method_options
+from ._measure import (
+    PATHS,
+    check_run,
+    errors,
+    measure,
+    path_reference,
+    renderer,
+    scene_digest,
+    target_reference,
+)
 from ._sweep_store import append_point, check_config, load_points, rewrite_points
 
 __all__ = ["PATHS", "run_sweep", "load_points", "scene_digest", "sweep_knobs"]
@@ -78,16 +86,7 @@ def run_sweep(
     reference: the error then includes the model's own (docs/results.md). No reference is
     rendered, and tau_rmse and tau_max are None."""
     knobs = dict(KNOBS if knobs is None else knobs)
-    for k in knobs:
-        if k not in KNOBS:
-            raise SweepError(f"unknown knob {k!r}; knobs: {', '.join(KNOBS)}")
-    for p in paths:
-        if p not in PATHS:
-            raise SweepError(f"unknown path {p!r}; paths: {', '.join(PATHS)}")
-    try:
-        repeats = check_repeats(repeats)
-    except ValueError as err:
-        raise SweepError(str(err)) from None
+    repeats = check_run(knobs, paths, repeats)
     given = None if target is None else target_reference(scene, target)
     knobs = sweep_knobs(scene, knobs)
     out = Path(out)

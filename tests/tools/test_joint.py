@@ -17,6 +17,7 @@ from hairjax.tools import (
     QUICK_JOINT_KNOBS,
     KnobSpace,
     SearchConfig,
+    SweepError,
     knob_space,
     load_joint,
     pareto_front,
@@ -431,3 +432,25 @@ def test_deep_maps_are_searched_in_layers(tmp_path, gl):
     ]
     errors = [p["rel_rmse"] for p in points]
     assert len(set(errors)) == 3 and errors[0] > max(errors[1:])  # deep shadows beat none
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(knobs={"gamma": (1,)}), "unknown knob 'gamma'"),
+        (dict(knobs={"bins": ()}), "knob 'bins' has no values"),
+        (dict(paths=("vulkan",)), "unknown path 'vulkan'"),
+        (dict(repeats=0), r"^repeats must be a positive integer, got 0$"),
+    ],
+)
+def test_bad_arguments_are_refused_before_any_render(tmp_path, kwargs, message, monkeypatch):
+    """The joint search checks its knobs, paths and repeats as the one-knob sweep does
+    (`check_run`), before a renderer is made or a folder written."""
+
+    def no_render(path):
+        raise AssertionError("a renderer was made before the arguments were checked")
+
+    monkeypatch.setattr(joint_mod, "renderer", no_render)
+    with pytest.raises(SweepError, match=message):
+        run_joint(small_furball_scene(), tmp_path / "out", **{"knobs": {"bins": (1,)}, **kwargs})
+    assert not (tmp_path / "out").exists()

@@ -10,7 +10,8 @@ from helpers import small_furball_scene
 import hairjax as hj
 import hairjax.tools._sweep as sweep_mod
 from hairjax import cli
-from hairjax.tools._sweep import SweepError, knob_scene, load_points, run_sweep
+from hairjax.tools import SweepError
+from hairjax.tools._sweep import knob_scene, load_points, run_sweep
 from hairjax.tools._sweep_report import cheapest, summary_markdown, write_report
 
 KNOBS = {"bins": (1, "exact"), "maps": (2, 8)}
