@@ -156,7 +156,7 @@ taking the step with the largest error reduction per added second, then a Pareto
 search closing the front above it (`hairjax/tools/_pareto.py`). Each point is measured as
 in section 1, against the same reference. `{scene.name}` ({scene.strands.num_strands} strands)
 at {size}, timed renders per point: {repeats}; this step took {time.perf_counter() - started:.0f} s
-(a resumed run: the time since it resumed).
+(for a resumed run, the time since it resumed).
 
 ![joint search](figures/joint_pareto.png)
 
