@@ -40,6 +40,8 @@ __all__ = [
     "silhouette_pixels",
     "interpolation_bound",
     "corner_nudges",
+    "box_candidates",
+    "perspective_correct",
 ]
 
 _CHUNK = 1 << 22  # (triangle, pixel) candidates per batch: bounds memory to ~1 GB
@@ -146,6 +148,24 @@ def _mesh_raster(view: View, vertices: np.ndarray, triangles: np.ndarray, normal
     return best_depth, normal_out, point_out, winner
 
 
+def box_candidates(x0: np.ndarray, y0: np.ndarray, nx: np.ndarray, count: np.ndarray):
+    """Every pixel of each triangle's bounding box, in batches of at most _CHUNK: triangle
+    k's box has `count[k]` pixels (`nx[k]` per row, 0 to drop it), row-major from (x0[k],
+    y0[k]). Yields (k `[N]`, px `[N]`, py `[N]`)."""
+    tri_of = np.repeat(np.arange(len(count)), count)
+    within = np.arange(tri_of.size) - np.repeat(np.cumsum(count) - count, count)
+    for lo in range(0, tri_of.size, _CHUNK):
+        k, r = tri_of[lo : lo + _CHUNK], within[lo : lo + _CHUNK]
+        yield k, x0[k] + r % nx[k], y0[k] + r // nx[k]
+
+
+def perspective_correct(lam: np.ndarray, vertex_depth: np.ndarray) -> np.ndarray:
+    """Screen-space barycentrics `[N, 3]` made perspective-correct: λ'_i ∝ λ_i / D_i with
+    `vertex_depth` `[N, 3]` the triangles' vertex depths, normalised to sum to 1."""
+    lam = lam / vertex_depth
+    return lam / lam.sum(axis=1, keepdims=True)
+
+
 def pixel_fragments(view: View, xy: np.ndarray, depth: np.ndarray, tri: np.ndarray):
     """Every (triangle, pixel centre) pair where the centre lies in the projected triangle
     (module docstring: λ ≥ 0, edges included, zero-area projections dropped), in batches of
@@ -164,12 +184,7 @@ def pixel_fragments(view: View, xy: np.ndarray, depth: np.ndarray, tri: np.ndarr
     ny = np.maximum(y1 - y0 + 1, 0).astype(np.int64)
     # Zero-area projections (edge-on triangles) cover no pixel centre's open set: dropped.
     count = np.where(area != 0, nx * ny, 0)
-    tri_of = np.repeat(np.arange(len(tri)), count)
-    within = np.arange(tri_of.size) - np.repeat(np.cumsum(count) - count, count)
-    for lo in range(0, tri_of.size, _CHUNK):
-        k, r = tri_of[lo : lo + _CHUNK], within[lo : lo + _CHUNK]
-        px = x0[k] + r % nx[k]
-        py = y0[k] + r // nx[k]
+    for k, px, py in box_candidates(x0, y0, nx, count):
         cx, cy = px + 0.5, py + 0.5
         ak, bk, ck = a[k], b[k], c[k]
         # Barycentrics from edge functions, each over the signed area: both windings.
@@ -181,8 +196,7 @@ def pixel_fragments(view: View, xy: np.ndarray, depth: np.ndarray, tri: np.ndarr
         k, lam = k[inside], lam[inside]
         pixel = (py[inside] * w + px[inside]).astype(np.int64)
         if view.perspective:
-            lam = lam / depth[tri[k]]
-            lam /= lam.sum(axis=1, keepdims=True)
+            lam = perspective_correct(lam, depth[tri[k]])
         yield k, pixel, lam
 
 

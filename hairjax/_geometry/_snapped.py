@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._constants import RASTER_SUBPIXEL_BITS
+from ._occluder import box_candidates, perspective_correct
 from ._projection import View
 
 __all__ = ["snapped_fragments"]
@@ -15,7 +16,6 @@ _SUBPIXEL = 1 << RASTER_SUBPIXEL_BITS
 # Window coordinates are clipped to ±2²¹ px before rounding, so the int64 edge functions
 # (products of differences < 2³⁰ units of 1/256 px) cannot overflow.
 _WINDOW_LIMIT = float(1 << 21)
-_CHUNK = 1 << 22  # (triangle, pixel) candidates per batch: bounds memory to ~1 GB
 
 
 def snapped_fragments(view: View, xy: np.ndarray, depth: np.ndarray, tri: np.ndarray):
@@ -60,12 +60,7 @@ def snapped_fragments(view: View, xy: np.ndarray, depth: np.ndarray, tri: np.nda
     ny = np.maximum(y1 - y0 + 1, 0)
     # Zero-area rounded projections are not drawn (GL culls them).
     count = np.where(area_fixed != 0, nx * ny, 0)
-    tri_of = np.repeat(np.arange(len(tri)), count)
-    within = np.arange(tri_of.size) - np.repeat(np.cumsum(count) - count, count)
-    for lo in range(0, tri_of.size, _CHUNK):
-        k, r = tri_of[lo : lo + _CHUNK], within[lo : lo + _CHUNK]
-        px = x0[k] + r % nx[k]
-        py = y0[k] + r // nx[k]
+    for k, px, py in box_candidates(x0, y0, nx, count):
         cx, cy = px * _SUBPIXEL + half, py * _SUBPIXEL + half
         inside = np.ones(k.size, bool)
         for i, (p, q) in enumerate(ends):
@@ -79,6 +74,5 @@ def snapped_fragments(view: View, xy: np.ndarray, depth: np.ndarray, tri: np.nda
         lam_b = ((ck[:, 0] - fx) * (ak[:, 1] - fy) - (ck[:, 1] - fy) * (ak[:, 0] - fx)) / area[k]
         lam = np.stack([lam_a, lam_b, 1.0 - lam_a - lam_b], axis=1)
         if view.perspective:
-            lam = lam / depth[tri[k]]
-            lam /= lam.sum(axis=1, keepdims=True)
+            lam = perspective_correct(lam, depth[tri[k]])
         yield k, (py * w + px).astype(np.int64), lam, area_fixed[k] < 0
