@@ -21,7 +21,7 @@ import numpy as np
 from .._progress import Progress, progress_of
 from .._scene._scene import Scene
 from ._knob_space import KnobSpace, knob_space, setting_key
-from ._knobs import JOINT_KNOBS, settings_scene
+from ._knobs import JOINT_KNOBS, reference_config, settings_scene
 from ._measure import PATHS, check_run, errors, measure, path_reference, renderer, scene_digest
 from ._pareto import SearchConfig, pareto_search
 from ._sweep_store import append_point, check_config, load_points, rewrite_points
@@ -123,11 +123,7 @@ def run_joint(
         "scene_digest": scene_digest(scene),
         "repeats": repeats,
         "timing": "measured" if cost is None else "cost model",
-        "reference": {
-            "shadows": "none" if not scene.shadows.casts else f"exact at {scene.shadows.resolution}²",
-            "ordering": "exact",
-            "supersampling": int(max(space.knobs.get("supersampling", (1,)))),
-        },
+        "reference": reference_config(scene, space.knobs),
         "space": space.to_json(),
         "search": None if search is None else dataclasses.asdict(search),
         "paths": list(paths),

@@ -23,6 +23,7 @@ __all__ = [
     "knob_scene",
     "method_options",
     "reference_scene",
+    "reference_config",
     "settings_scene",
 ]
 
@@ -149,7 +150,7 @@ def settings_scene(scene: Scene, settings: Mapping) -> tuple[Scene, int]:
     return scene, s
 
 
-def reference_scene(scene: Scene, knobs: dict) -> tuple[Scene, int]:
+def reference_scene(scene: Scene, knobs: Mapping) -> tuple[Scene, int]:
     """Exact shadows (when the scene has shadows) at the scene's map resolution, exact
     ordering, the finest supersampling swept.
 
@@ -159,3 +160,14 @@ def reference_scene(scene: Scene, knobs: dict) -> tuple[Scene, int]:
     shadows = Shadows("exact", resolution=scene.shadows.resolution) if scene.shadows.casts else scene.shadows
     s = max(knobs.get("supersampling", (1,)))
     return scene.replace(shadows=shadows, ordering=Ordering("exact")), int(s)
+
+
+def reference_config(scene: Scene, knobs: Mapping) -> dict:
+    """`reference_scene(scene, knobs)` in words, for a sweep's or a search's config file."""
+    reference, s = reference_scene(scene, knobs)
+    shadows = reference.shadows
+    return {
+        "shadows": f"exact at {shadows.resolution}²" if shadows.casts else "none",
+        "ordering": "exact",
+        "supersampling": s,
+    }

@@ -28,7 +28,7 @@ import numpy as np
 
 from .._progress import Progress, progress_of
 from .._scene._scene import Scene
-from ._knobs import KNOBS, SHADOW_KNOBS, SHADOW_OPTIONS, knob_scene, method_options
+from ._knobs import KNOBS, SHADOW_KNOBS, SHADOW_OPTIONS, knob_scene, method_options, reference_config
 from ._measure import (
     PATHS,
     check_run,
@@ -95,15 +95,7 @@ def run_sweep(
         "scene": scene.name,
         "scene_digest": scene_digest(scene),
         "repeats": repeats,
-        "reference": (
-            {
-                "shadows": ("none" if not scene.shadows.casts else f"exact at {scene.shadows.resolution}²"),
-                "ordering": "exact",
-                "supersampling": int(max(knobs.get("supersampling", (1,)))),
-            }
-            if given is None
-            else {"target": given["digest"]}
-        ),
+        "reference": reference_config(scene, knobs) if given is None else {"target": given["digest"]},
         "knobs": {k: list(v) for k, v in knobs.items()},
         "paths": list(paths),
         "size": [scene.camera.width, scene.camera.height],
