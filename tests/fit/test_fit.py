@@ -103,6 +103,38 @@ def test_nnls_matches_scipy():
             assert np.all(np.isfinite(got))
 
 
+def test_nnls_derivative_matches_central_differences():
+    """nnls's JVP (implicit differentiation on the support) against float64 central
+    differences, on problems with coefficients at the bound, a zero column and a few
+    columns to six."""
+    import jax
+
+    rng = np.random.default_rng(1)
+    at_bound = 0
+    for trial in range(40):
+        n = 1 + trial % 6
+        phi = rng.normal(size=(50, n))
+        rhs = rng.normal(size=50)
+        d_phi, d_rhs = rng.normal(size=(50, n)), rng.normal(size=50)
+        if trial % 7 == 3 and n > 1:
+            # A zero column (a gain with no effect) moved only along others: its coefficient
+            # stays 0, and so does its derivative. (Moving the column itself off 0 is a kink:
+            # a column of size h can take a coefficient of order 1/h.)
+            phi[:, 1] = d_phi[:, 1] = 0.0
+        c, dc = jax.jvp(
+            _nnls.nnls, (jnp.asarray(phi), jnp.asarray(rhs)), (jnp.asarray(d_phi), jnp.asarray(d_rhs))
+        )
+        at_bound += int(np.sum(np.asarray(c) == 0.0))
+        h = 1e-6  # central differences: error O(h²) ≈ 1e-12 plus rounding ε/h ≈ 1e-10
+
+        def solution(s):
+            return np.asarray(_nnls.nnls(jnp.asarray(phi + s * d_phi), jnp.asarray(rhs + s * d_rhs)))
+
+        fd = (solution(h) - solution(-h)) / (2 * h)
+        np.testing.assert_allclose(np.asarray(dc), fd, atol=1e-8)
+    assert at_bound > 10  # the bound is exercised, not only interior solutions
+
+
 def test_subset_and_scalar(scene, target):
     start = TRUE.__class__(
         kd=TRUE.kd, ks=0.1, shininess=TRUE.shininess, kappa=TRUE.kappa, ambient=TRUE.ambient
@@ -484,6 +516,7 @@ def test_a_stalled_solver_converges_only_where_nothing_is_left(
     """A solver that never moves and never says it is done (as LM at the float32 floor,
     rejecting every step): at the optimum `fit` stops after STALL_STEPS steps as converged;
     far from it, it runs to max_steps and says so."""
+
     monkeypatch.setattr(_convergence, "step", lambda opt, fn, z, problem, state: (z, state))
     monkeypatch.setattr(_convergence, "terminate", lambda *args: (False, None))
     r = hj.fit(scene, target, init=start, max_steps=3 * _convergence.STALL_STEPS)
