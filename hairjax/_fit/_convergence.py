@@ -23,6 +23,7 @@ __all__ = [
     "solve",
     "init",
     "step",
+    "state_loss",
     "terminate",
 ]
 
@@ -87,8 +88,21 @@ def init(opt, fn, z, problem):
 
 @eqx.filter_jit
 def step(opt, fn, z, problem, state):
+    """(z, state, ½‖r‖² at z): one solver step and the loss at the point it returns, read
+    off the solver's state rather than evaluated again (each evaluation composites every
+    fragment). The solver returns its last accepted point; its state holds what `fn` gave
+    there (`state_loss`)."""
     z, state, _ = opt.step(fn, z, problem, {}, state, frozenset())
-    return z, state
+    return z, state, state_loss(state)
+
+
+def state_loss(state):
+    """½‖r‖² at a solver's current point from its state: the Gauss-Newton family keeps
+    the residuals (`FunctionInfo.ResidualJac`), BFGS the value of its `fn`, ½‖r‖²."""
+    info = state.f_info
+    if hasattr(info, "residual"):
+        return 0.5 * jnp.sum(info.residual**2)
+    return info.f
 
 
 @eqx.filter_jit
@@ -132,7 +146,10 @@ def solve(
         restart = False
         if bool(done) or stalled:
             decrease, effect = stationarity(residuals, z, problem)
-            loss = float(half_square(residuals, z, problem))
+            # After a step, losses[-1] is the loss at z (every change of z is a step's, or a
+            # plateau's restart followed by a step); before the first, losses[0] is the
+            # start's with its own gains, not z's with the gains solved for.
+            loss = losses[-1] if steps else float(half_square(residuals, z, problem))
             if float(decrease) <= rtol * loss + atol:
                 # A stationary point, unless a parameter has no effect there (`plateau`).
                 lower = (
@@ -157,9 +174,9 @@ def solve(
             state = init(opt, fn, z, problem)
         if steps >= max_steps:
             break
-        z, state = step(opt, fn, z, problem, state)
+        z, state, loss = step(opt, fn, z, problem, state)
         steps += 1
-        losses.append(float(half_square(residuals, z, problem)))
+        losses.append(float(loss))
         report(steps, losses[-1])
         if not np.isfinite(losses[-1]):
             # Fires for a solver that accepts every step (none of ours: trust regions and

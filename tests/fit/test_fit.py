@@ -9,7 +9,7 @@ import pytest
 from helpers import fit_image, fit_terms, small_furball_scene
 
 import hairjax as hj
-from hairjax._fit import _convergence, _entry, _nnls, _problem, _shading_fit, _solvers, _varpro
+from hairjax._fit import _convergence, _entry, _nnls, _problem, _shading_fit, _solvers, _space, _varpro
 
 TRUE = hj.ShadingParams(kd=(0.3, 0.5, 0.2), ks=0.4, shininess=25.0, kappa=2.5, ambient=0.05)
 INIT = hj.ShadingParams(kd=0.5, ks=0.2, shininess=10.0, kappa=1.0, ambient=0.05)
@@ -133,6 +133,28 @@ def test_nnls_derivative_matches_central_differences():
         fd = (solution(h) - solution(-h)) / (2 * h)
         np.testing.assert_allclose(np.asarray(dc), fd, atol=1e-8)
     assert at_bound > 10  # the bound is exercised, not only interior solutions
+
+
+@pytest.mark.parametrize("solver", ["levenberg-marquardt", "gauss-newton", "dogleg", "bfgs"])
+def test_the_step_loss_is_the_loss_at_the_point_it_returns(scene, target, solver):
+    """`step` reads ½‖r‖² off the solver's state instead of evaluating it again: for every
+    solver, it is the loss at the z the step returns (the fit's losses and stall test rely
+    on it), over accepted and rejected steps alike."""
+    opt, least_squares = _solvers.make_solver(solver, 1e-5, 1e-7)
+    model = _shading_fit.fit_model(hj.KajiyaKay)
+    names = ("kd", "ks", "shininess", "kappa")
+    data = [model.prepare(scene, INIT, names, *_problem.target_arrays(scene, target, None, None))]
+    problem = _problem.Problem(data, INIT, model, ("shininess", "kappa"), ("kd", "ks"), ())
+    z = _space.to_flat(INIT, problem.solved, (), model.transforms)
+    fn = _problem.residual_fn if least_squares else _problem.loss_fn
+    state = _convergence.init(opt, fn, z, problem)
+    for _ in range(4):
+        z, state, loss = _convergence.step(opt, fn, z, problem, state)
+        # The same float64 residuals from two compiled programs: each residual rounds by
+        # ≲ ε·|pixel| ≈ 1e-16, so the losses differ by ≲ ‖r‖·1e-16·√N ≈ ‖r‖·1e-14 (N ≈ 7000);
+        # 1e-13·‖r‖ leaves a factor 10.
+        want = float(_convergence.half_square(_problem.residuals, z, problem))
+        np.testing.assert_allclose(float(loss), want, rtol=0, atol=1e-13 * np.sqrt(2 * want))
 
 
 def test_subset_and_scalar(scene, target):
@@ -517,7 +539,10 @@ def test_a_stalled_solver_converges_only_where_nothing_is_left(
     rejecting every step): at the optimum `fit` stops after STALL_STEPS steps as converged;
     far from it, it runs to max_steps and says so."""
 
-    monkeypatch.setattr(_convergence, "step", lambda opt, fn, z, problem, state: (z, state))
+    def still(opt, fn, z, problem, state):  # the step's loss: at z, which never moves
+        return z, state, _convergence.half_square(_problem.residuals, z, problem)
+
+    monkeypatch.setattr(_convergence, "step", still)
     monkeypatch.setattr(_convergence, "terminate", lambda *args: (False, None))
     r = hj.fit(scene, target, init=start, max_steps=3 * _convergence.STALL_STEPS)
     assert r.termination.startswith(termination)
