@@ -18,6 +18,7 @@ __all__ = [
     "MAX_RESTARTS",
     "STALL_STEPS",
     "stationarity",
+    "state_stationarity",
     "half_square",
     "plateau_exit",
     "solve",
@@ -44,7 +45,20 @@ def stationarity(residuals: Callable, z, problem):
     poor curvature estimate (BFGS) or a shrunken trust region makes small far from one.
     `effect`: ‖∂r/∂z_i‖ per entry of z."""
     r, jvp = jax.linearize(lambda z: residuals(z, problem), z)
-    jac = jax.vmap(jvp, out_axes=1)(jnp.eye(z.size, dtype=z.dtype))
+    return _decrease(r, jax.vmap(jvp, out_axes=1)(jnp.eye(z.size, dtype=z.dtype)))
+
+
+@eqx.filter_jit
+def state_stationarity(state):
+    """`stationarity` at a Gauss-Newton-family solver's current point from its state: the
+    residuals there and their linearisation, kept by the step that evaluated them (only the
+    Jacobian's tangent side runs, not the composite again)."""
+    info = state.f_info
+    return _decrease(info.residual, info.jac.as_matrix())
+
+
+def _decrease(r, jac):
+    """(½‖U_kᵀ r‖², the columns' norms) of residuals `r` and their Jacobian `jac` (`stationarity`)."""
     u, sv, _ = jnp.linalg.svd(jac, full_matrices=False)
     keep = sv > NULL_RATIO * sv[0]
     return 0.5 * jnp.sum(jnp.where(keep, u.T @ r, 0.0) ** 2), jnp.linalg.norm(jac, axis=0)
@@ -145,7 +159,12 @@ def solve(
             break
         restart = False
         if bool(done) or stalled:
-            decrease, effect = stationarity(residuals, z, problem)
+            # Once it has stepped, a least-squares solver's state holds r and J at z
+            # (before, `first_step`, its f_info is a placeholder).
+            from_state = hasattr(state.f_info, "residual") and not bool(state.first_step)
+            decrease, effect = (
+                state_stationarity(state) if from_state else stationarity(residuals, z, problem)
+            )
             # After a step, losses[-1] is the loss at z (every change of z is a step's, or a
             # plateau's restart followed by a step); before the first, losses[0] is the
             # start's with its own gains, not z's with the gains solved for.

@@ -139,7 +139,8 @@ def test_nnls_derivative_matches_central_differences():
 def test_the_step_loss_is_the_loss_at_the_point_it_returns(scene, target, solver):
     """`step` reads ½‖r‖² off the solver's state instead of evaluating it again: for every
     solver, it is the loss at the z the step returns (the fit's losses and stall test rely
-    on it), over accepted and rejected steps alike."""
+    on it), over accepted and rejected steps alike; so is the convergence test read off a
+    least-squares solver's state (1e-9: two float64 SVDs of the same J, well conditioned here)."""
     opt, least_squares = _solvers.make_solver(solver, 1e-5, 1e-7)
     model = _shading_fit.fit_model(hj.KajiyaKay)
     names = ("kd", "ks", "shininess", "kappa")
@@ -155,6 +156,13 @@ def test_the_step_loss_is_the_loss_at_the_point_it_returns(scene, target, solver
         # 1e-13·‖r‖ leaves a factor 10.
         want = float(_convergence.half_square(_problem.residuals, z, problem))
         np.testing.assert_allclose(float(loss), want, rtol=0, atol=1e-13 * np.sqrt(2 * want))
+        if least_squares:  # the convergence test from the state's r and J, as evaluated
+            got, want = (
+                _convergence.state_stationarity(state),
+                _convergence.stationarity(_problem.residuals, z, problem),
+            )
+            np.testing.assert_allclose(float(got[0]), float(want[0]), rtol=1e-9, atol=1e-13 * float(loss))
+            np.testing.assert_allclose(np.asarray(got[1]), np.asarray(want[1]), rtol=1e-9)
 
 
 def test_subset_and_scalar(scene, target):
