@@ -22,6 +22,7 @@ from .._errors import EmptyViewWarning
 from .._scene._scene import Scene
 from .._scene._strands import tangents, unit_rows
 from .._shading import PointInputs
+from ._host import aligned_take
 from ._occluder import occluder_hits, occluder_light_view, occluder_visibility
 from ._ordering import segment_depth, stable_argsort_uint32
 from ._projection import View, camera_view
@@ -218,13 +219,14 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
         frags = frags.take(visible)
         lap("occluder")
 
-    # Only what compositing needs is permuted: pixel, segment, coverage, t (not depth).
+    # Only what compositing needs is permuted: pixel, segment, coverage, t (not depth),
+    # into aligned arrays that the geometry stage shares with JAX (`_host`).
     sort = stable_argsort_uint32(frags.pixel)
-    pixel, frag_coverage, frag_t = frags.pixel[sort], frags.coverage[sort], frags.t[sort]
+    pixel, frag_coverage, frag_t = (aligned_take(x, sort) for x in (frags.pixel, frags.coverage, frags.t))
     seg = near_first[frags.segment[sort]]
+    del frags, sort
     if segment_alpha is not None:  # §17's alpha texture scales the segment's opacity
-        frag_coverage = frag_coverage * segment_alpha[seg]
-    del frags
+        frag_coverage *= segment_alpha[seg]
     first = np.ones(pixel.size, bool)
     first[1:] = pixel[1:] != pixel[:-1]
     last = np.ones(pixel.size, bool)
@@ -261,9 +263,9 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
         base_color=base_color,
         light_rgb=light_rgb,
         frag_pixel=pixel,
-        frag_i0=segments[seg, 0].astype(np.int32),
+        frag_i0=aligned_take(segments[:, 0], seg, np.int32),
         frag_t=frag_t,
-        frag_strand=seg_strand[seg].astype(np.int32),
+        frag_strand=aligned_take(seg_strand, seg, np.int32),
         frag_coverage=frag_coverage,
         frag_first=first,
         frag_last=last,

@@ -19,6 +19,7 @@ from .._composite import over_weights
 from .._scene._scene import Scene
 from .._shading import AbstractShadingModel
 from .._shading._streaks import streak_factors
+from ._host import to_device
 from ._setup import prepare
 
 __all__ = ["Geometry", "composite_weights", "geometry_stage"]
@@ -95,11 +96,11 @@ def _geometry_stage(scene: Scene, alpha, order=None) -> Geometry:
     dtype = jnp.result_type(float)
     alpha = jnp.asarray(alpha, dtype=dtype)
     hw = scene.camera.width * scene.camera.height
-    last_pixel = np.where(setup.frag_last, setup.frag_pixel, hw)
+    last_pixel = np.where(setup.frag_last, setup.frag_pixel, np.int32(hw))  # int32, as frag_pixel
     weights, frag_alpha, transmittance, alpha_channel = composite_weights(
         alpha,
-        setup.frag_strand,
-        jnp.asarray(setup.frag_coverage, dtype),
+        to_device(setup.frag_strand, jnp.int32),
+        to_device(setup.frag_coverage, dtype),
         setup.frag_first,
         setup.frag_last,
         last_pixel,
@@ -127,9 +128,10 @@ def _geometry_stage(scene: Scene, alpha, order=None) -> Geometry:
         occluder_color=maybe(setup.occluder_color),
         occluder_omega=occluder_omega,
         occluder_visibility=maybe(setup.occluder_visibility),
-        frag_pixel=jnp.asarray(setup.frag_pixel, jnp.int32),
-        frag_i0=jnp.asarray(setup.frag_i0, jnp.int32),
-        frag_t=jnp.asarray(setup.frag_t, dtype),
+        # Shared with the set-up's aligned arrays where the dtypes agree (`_host`).
+        frag_pixel=to_device(setup.frag_pixel, jnp.int32),
+        frag_i0=to_device(setup.frag_i0, jnp.int32),
+        frag_t=to_device(setup.frag_t, dtype),
         frag_weight=weights,
         frag_alpha=frag_alpha,
         transmittance=transmittance,

@@ -1,0 +1,49 @@
+"""Host arrays the CPU device can share instead of copy.
+
+On the CPU backend `jax.device_put` aliases a NumPy array whose data are 64-byte aligned
+(XLA's minimum buffer alignment) instead of copying it; NumPy itself aligns only to 16
+bytes. The set-up's per-fragment arrays (tens of millions of entries at 100k strands /
+1024²) are written into aligned buffers, so that the geometry stage hands them to JAX
+without a second copy (BENCHMARKS.md, "Memory"). On another backend the transfer copies
+as before.
+"""
+
+from __future__ import annotations
+
+import jax
+import numpy as np
+
+__all__ = ["aligned_empty", "aligned_take", "to_device"]
+
+ALIGNMENT = 64  # bytes: XLA's CPU buffer alignment
+
+
+def aligned_empty(n: int, dtype) -> np.ndarray:
+    """An uninitialised `[n]` array of `dtype` whose data start on an ALIGNMENT boundary."""
+    dtype = np.dtype(dtype)
+    raw = np.empty(n * dtype.itemsize + ALIGNMENT, np.uint8)
+    offset = -raw.ctypes.data % ALIGNMENT
+    return raw[offset : offset + n * dtype.itemsize].view(dtype)
+
+
+def aligned_take(values: np.ndarray, index: np.ndarray, dtype=None) -> np.ndarray:
+    """`values[index]` (1-D), cast to `dtype` (default: `values`' own), in an aligned array."""
+    out = aligned_empty(index.shape[0], values.dtype if dtype is None else dtype)
+    if out.dtype == values.dtype:
+        np.take(values, index, out=out)
+    else:
+        out[...] = values[index]
+    return out
+
+
+def to_device(x: np.ndarray, dtype) -> jax.Array:
+    """`x` as a JAX array of `dtype`: shared, not copied, when `x` is aligned and of that
+    dtype on the CPU backend (`aligned_empty`); `x` is then made read-only."""
+    x = np.asarray(x)
+    if x.dtype != np.dtype(dtype):
+        x = x.astype(dtype)
+    else:
+        # Possibly shared from here on (any 64-byte aligned array is): a later write
+        # through NumPy would change the JAX array too.
+        x.flags.writeable = False
+    return jax.device_put(x)

@@ -1,0 +1,50 @@
+"""The set-up's aligned fragment arrays are shared with JAX, not copied (hairjax/_geometry/_host.py)."""
+
+import jax
+import numpy as np
+import pytest
+from helpers import small_furball_scene
+
+from hairjax._geometry._host import ALIGNMENT, aligned_empty, aligned_take, to_device
+from hairjax._geometry._setup import prepare
+from hairjax._geometry._stage import geometry_stage
+
+cpu_only = pytest.mark.skipif(jax.default_backend() != "cpu", reason="the CPU backend aliases host arrays")
+
+
+@pytest.mark.parametrize("n", [1, 7, 1000])  # (an empty array has no data to align)
+@pytest.mark.parametrize("dtype", [np.int32, np.float32, np.float64, np.bool_])
+def test_aligned_empty_is_aligned(n, dtype):
+    x = aligned_empty(n, dtype)
+    assert x.shape == (n,) and x.dtype == dtype and x.ctypes.data % ALIGNMENT == 0
+
+
+def test_aligned_take_is_a_take():
+    values = np.arange(100, dtype=np.int64) * 3
+    index = np.array([5, 0, 99, 5])
+    np.testing.assert_array_equal(aligned_take(values, index), values[index])
+    got = aligned_take(values, index, np.int32)
+    assert got.dtype == np.int32 and got.ctypes.data % ALIGNMENT == 0
+    np.testing.assert_array_equal(got, values[index])
+
+
+@cpu_only
+def test_to_device_shares_an_aligned_array_and_copies_otherwise():
+    x = aligned_empty(4096, np.int32)
+    x[:] = np.arange(4096)
+    shared = to_device(x, np.int32)
+    assert shared.unsafe_buffer_pointer() == x.ctypes.data
+    cast = to_device(x, np.float32)  # another dtype: converted, a new buffer
+    assert cast.unsafe_buffer_pointer() != x.ctypes.data
+    np.testing.assert_array_equal(np.asarray(cast), x)
+
+
+@cpu_only
+def test_the_geometry_stage_shares_the_set_ups_fragments():
+    """frag_pixel and frag_i0 (int32 in both) are the set-up's own buffers: the geometry
+    stage adds no copy of them (BENCHMARKS.md, "Memory")."""
+    scene = small_furball_scene(strands=100, size=32)
+    setup, geometry = prepare(scene), geometry_stage(scene)
+    assert setup.frag_pixel.size > 0
+    assert geometry.frag_pixel.unsafe_buffer_pointer() == setup.frag_pixel.ctypes.data
+    assert geometry.frag_i0.unsafe_buffer_pointer() == setup.frag_i0.ctypes.data
