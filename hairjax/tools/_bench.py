@@ -29,8 +29,11 @@ from ._bench_cases import (
     FOV,
     FULL_RENDER_TARGET_CONFIG,
     GL_TARGET_RATIO,
+    JAX_TARGET_CONFIGS,
+    JAX_TARGET_RATIO,
     KIM_2003_SEGMENTS_PER_S,
     ORDERING_BINS,
+    PEAK_RSS_TARGET_GIB,
     POINTS,
     QUICK_REPEATS,
     TARGET,
@@ -91,6 +94,10 @@ def _targets_met(cfg: dict, r: dict) -> dict:
     target_config = (cfg["strands"], cfg["size"]) == FULL_RENDER_TARGET_CONFIG
     if target_config and "jax_over_gl" in r:
         met["jax_over_gl"] = r["jax_over_gl"] >= GL_TARGET_RATIO
+    if (cfg["strands"], cfg["size"]) in JAX_TARGET_CONFIGS and "jax_over_gl" in r:
+        met["jax_no_slower_than_gl"] = r["jax_over_gl"] <= JAX_TARGET_RATIO
+    if target_config and r.get("peak_rss_kib"):
+        met["peak_rss"] = r["peak_rss_kib"] / 1024**2 <= PEAK_RSS_TARGET_GIB
     if "stages" not in r:
         return met
     met |= {
@@ -176,6 +183,9 @@ def bench_main(args) -> int:
                     "size": FULL_RENDER_TARGET_CONFIG[1],
                 },
                 jax_over_gl=GL_TARGET_RATIO,
+                jax_no_slower_than_gl=JAX_TARGET_RATIO,
+                jax_no_slower_than_gl_configs=[list(c) for c in JAX_TARGET_CONFIGS],
+                peak_rss_gib=PEAK_RSS_TARGET_GIB,
             ),
             "kim_2003_segments_per_s": KIM_2003_SEGMENTS_PER_S,
             "configurations": [

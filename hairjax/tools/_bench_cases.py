@@ -11,6 +11,9 @@ __all__ = [
     "STAGES",
     "STAGE_LABELS",
     "GL_PASSES",
+    "JAX_TARGET_CONFIGS",
+    "JAX_TARGET_RATIO",
+    "PEAK_RSS_TARGET_GIB",
     "BACKENDS",
     "QUICK_REPEATS",
 ]
@@ -35,6 +38,12 @@ FULL_RENDER_TARGET_CONFIG = (100_000, 1024)
 # --backend both: the GL full render of FULL_RENDER_TARGET_CONFIG (64 maps) is no slower
 # than the JAX path's, i.e. JAX full render / GL full render >= 1.
 GL_TARGET_RATIO = 1.0
+# --backend both, the geometry stage on the device: the JAX full render no slower than the
+# GL renderer on the same machine, i.e. JAX / GL <= 1, at these (strands, size).
+JAX_TARGET_CONFIGS = ((20_000, 512), (100_000, 1024))
+JAX_TARGET_RATIO = 1.0
+# Peak resident memory of a configuration's process, at FULL_RENDER_TARGET_CONFIG.
+PEAK_RSS_TARGET_GIB = 3.0
 BACKENDS = ("jax", "gl", "both")
 # Sub-timings of `render_gl`, in the order of its passes (GLResult.timings keys).
 GL_PASSES = ("upload", "shadows", "camera pass")

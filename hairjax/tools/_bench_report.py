@@ -10,6 +10,9 @@ from ._bench_cases import (
     FULL_RENDER_TARGET_CONFIG,
     GL_PASSES,
     GL_TARGET_RATIO,
+    JAX_TARGET_CONFIGS,
+    JAX_TARGET_RATIO,
+    PEAK_RSS_TARGET_GIB,
     STAGE_LABELS,
     TARGETS,
     config_name,
@@ -24,6 +27,10 @@ def _fmt_time(s) -> str:
     if s < 1.0:
         return f"{s * 1e3:.1f} ms"
     return f"{s:.2f} s"
+
+
+def _target_config() -> dict:
+    return dict(strands=FULL_RENDER_TARGET_CONFIG[0], size=FULL_RENDER_TARGET_CONFIG[1])
 
 
 def _mark(met) -> str:
@@ -158,12 +165,32 @@ def format_table(configs: list[dict], results: list[dict], header: str) -> str:
                     f"{FULL_RENDER_TARGET_CONFIG[1]}, 64 maps (GL no slower than JAX)",
                 )
             )
+            rows.append(
+                (
+                    "  JAX no slower than GL",
+                    cells(
+                        lambda c, r: (
+                            f"{r['jax_over_gl']:.2f}x" + _mark(r["targets_met"].get("jax_no_slower_than_gl"))
+                            if "jax_over_gl" in r
+                            else ""
+                        )
+                    ),
+                    f"<= {JAX_TARGET_RATIO:g}x at "
+                    + " and ".join(f"{n // 1000}k @ {s}" for n, s in JAX_TARGET_CONFIGS)
+                    + " (the geometry stage on the device)",
+                )
+            )
         rows.append(("GL status", [r.get("gl", {}).get("status", "-") for r in results], ""))
     rows.append(
         (
             "peak RSS",
-            [f"{r['peak_rss_kib'] / 1024**2:.2f} GiB" if r.get("peak_rss_kib") else "-" for r in results],
-            "",
+            [
+                f"{r['peak_rss_kib'] / 1024**2:.2f} GiB" + _mark(r.get("targets_met", {}).get("peak_rss"))
+                if r.get("peak_rss_kib")
+                else "-"
+                for r in results
+            ],
+            f"<= {PEAK_RSS_TARGET_GIB:g} GiB at {config_name(_target_config())}",
         )
     )
     rows.append(("status", [r.get("status", "?") for r in results], ""))

@@ -66,6 +66,7 @@ def test_bench_quick_both_backends(tmp_path, capsys):
         pytest.skip(gl["error"])
     assert gl["status"] == "ok", gl["error"]
     assert "GL full render" in printed and "JAX / GL full render" in printed
+    assert "JAX no slower than GL" in printed
     assert _positive_finite(gl["full_render"]["median_s"])
     assert len(gl["full_render"]["runs_s"]) == 2
     for key in GL_PASSES:
@@ -89,3 +90,30 @@ def test_bench_reports_gl_unavailable(monkeypatch):
     table = format_table([cfg], [{"status": "ok", "gl": r}], "header")
     assert "GL status" in table and "unavailable" in table
     assert "GL unavailable: no EGL here" in table
+
+
+def test_the_device_targets_are_marked():
+    """JAX / GL <= 1 at 20k @ 512 and 100k @ 1024 (the geometry stage on the device) and
+    peak RSS <= 3 GiB at 100k @ 1024 are marked ok or MISS from the figures, and only there."""
+    from hairjax.tools._bench import _targets_met
+
+    def result(ratio, rss_gib):
+        return {"status": "ok", "jax_over_gl": ratio, "peak_rss_kib": int(rss_gib * 1024**2)}
+
+    small, big, other = (
+        dict(strands=20_000, size=512),
+        dict(strands=100_000, size=1024),
+        dict(strands=2000, size=128),
+    )
+    assert _targets_met(small, result(0.9, 5.0)) == {"jax_no_slower_than_gl": True}
+    assert _targets_met(small, result(1.7, 5.0)) == {"jax_no_slower_than_gl": False}
+    met = _targets_met(big, result(2.9, 4.99))
+    assert met["jax_no_slower_than_gl"] is False and met["peak_rss"] is False
+    assert _targets_met(big, result(1.0, 2.5))["peak_rss"] is True
+    assert _targets_met(other, result(0.5, 9.0)) == {}
+    configs = [small, big]
+    results = [dict(result(1.7, 1.2), targets_met=_targets_met(small, result(1.7, 1.2)))]
+    results.append(dict(result(2.9, 4.99), targets_met=_targets_met(big, result(2.9, 4.99))))
+    table = format_table(configs, results, "header")
+    (rss,) = [line for line in table.splitlines() if line.startswith("peak RSS")]
+    assert "4.99 GiB MISS" in rss and "1.20 GiB MISS" not in rss and "1.20 GiB" in rss
