@@ -13,8 +13,10 @@ Along the segment, the half-open interval [0, L) gives every pixel to exactly on
 collinear neighbours: a straight strand drawn as 1 or 8 segments covers the same pixels
 with the same coverage (no double-covered joints, no gaps).
 
-Geometry only, no gradients flow through here: column set-up in NumPy float64, the
-per-pixel maths in one jitted XLA kernel in JAX's default float precision.
+Geometry only, no gradients flow through here: the segments' columns are counted in NumPy
+float64; the per-pixel maths runs in one jitted XLA kernel in JAX's default float
+precision, which gathers each column's segment data itself (a column carries only its
+segment's index and its pixel column).
 """
 
 from __future__ import annotations
@@ -137,8 +139,13 @@ def rasterize(
     # 2·reach·√2 around the line; an interval of length ℓ holds at most ⌈ℓ⌉ + 1 of them.
     rows = int(np.ceil(2 * float(reach.max(initial=0.0)) * np.sqrt(2))) + 1  # initial: no segments
 
-    # Per segment, what the kernel needs (float64 here; the kernel casts).
-    seg_data = np.stack(
+    # Per segment, what the kernel needs, in the kernel's precision (it computed in that
+    # precision before as well): each column then carries only its segment's index and its
+    # own pixel column k, and the kernel gathers the segment's row itself.
+    # Rows padded with zeros to a bucket of at least n + 1 (the kernel compiles per bucket,
+    # and padding columns read row n: length 0).
+    seg_data = np.zeros((_bucket(n + 1), 11), jnp.result_type(float))
+    seg_data[:n] = np.stack(
         [
             xy0[:, 0],
             xy0[:, 1],
@@ -148,30 +155,30 @@ def rasterize(
             widths[:, 0],
             z0,
             z1,
-            lo,
             x_major.astype(np.float64),
             reach,
             widths[:, 1],
         ],
         axis=1,
     )
-    # Columns are independent once they carry their segment's data, so they are cut into
-    # chunks of exactly _CHUNK (only the last is padded): the kernel compiles for one size.
+    # Columns are independent once they know their segment, so they are cut into chunks of
+    # exactly _CHUNK (only the last is padded): the kernel compiles for one size.
     seg_of_col = np.repeat(np.arange(n, dtype=np.int32), columns)
     first_col = np.cumsum(columns) - columns
     total = seg_of_col.size
     parts = []
     for c_lo in range(0, total, _CHUNK):
         seg = seg_of_col[c_lo : c_lo + _CHUNK]
-        data = seg_data[seg]
-        data[:, 8] += np.arange(c_lo, c_lo + seg.size) - first_col[seg]  # lo → this column
         size = _CHUNK if total > _CHUNK else _bucket(seg.size)
-        out = _candidates(
-            np.pad(data, ((0, size - seg.size), (0, 0))), rows, image_width, image_height, perspective
-        )
+        # k = lo + the column's place in its segment; exact integers in float32 (< 2^24).
+        k = np.zeros(size, np.int32)
+        k[: seg.size] = lo[seg] + (np.arange(c_lo, c_lo + seg.size) - first_col[seg])
+        padded = np.full(size, n, np.int32)  # padding columns read the zero row n
+        padded[: seg.size] = seg
+        out = _candidates(seg_data, padded, k, rows, image_width, image_height, perspective)
         pixel, cov, t, depth = (np.asarray(o)[: seg.size * rows] for o in out)
         keep = np.flatnonzero(cov > 0)
-        parts.append((pixel[keep], seg[keep // rows].astype(np.int32), cov[keep], t[keep], depth[keep]))
+        parts.append((pixel[keep], seg[keep // rows], cov[keep], t[keep], depth[keep]))
     if not parts:  # fires when no segment has a column (none, all zero-length or off-screen)
         empty_i, empty_f = np.zeros(0, np.int32), np.zeros(0, jnp.result_type(float))
         return Fragments(empty_i, empty_i, empty_f, empty_f, empty_f)
@@ -183,18 +190,20 @@ def _bucket(n: int) -> int:
     return max(4096, 1 << int(np.ceil(np.log2(max(n, 1)))))
 
 
-@functools.partial(jax.jit, static_argnums=(1, 2, 3, 4))
-def _candidates(columns, rows, image_width, image_height, perspective):
+@functools.partial(jax.jit, static_argnums=(3, 4, 5, 6))
+def _candidates(seg_data, seg, k, rows, image_width, image_height, perspective):
     """Candidate pixels `[columns · rows]`: (pixel, coverage, t, depth).
 
     Coverage 0 marks a candidate that is not drawn (outside the ribbon, the image, or
-    padding). A column is the pixel column k (row, for y-major segments) of one segment,
-    given as that segment's (x0, y0, dx, dy, L, w₀, z0, z1, k, x-major, reach, w₁); its
-    candidates are the `rows` pixels around the segment's line there.
+    padding). A column is the pixel column `k` (row, for y-major segments) of segment
+    `seg`, whose row of `seg_data` is (x0, y0, dx, dy, L, w₀, z0, z1, x-major, reach, w₁);
+    its candidates are the `rows` pixels around the segment's line there. Padding columns
+    read a zero row (length 0).
     """
     dtype = jnp.result_type(float)
-    c = columns.astype(dtype)
-    x0, y0, dx, dy, length, w0, za, zb, k, xm, reach, w1 = (c[:, i, None] for i in range(12))
+    c = seg_data[seg]
+    x0, y0, dx, dy, length, w0, za, zb, xm, reach, w1 = (c[:, i, None] for i in range(11))
+    k = k.astype(dtype)[:, None]
     xm = xm > 0
     da = jnp.where(xm, dx, dy)
     db = jnp.where(xm, dy, dx)

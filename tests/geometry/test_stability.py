@@ -541,15 +541,17 @@ def test_guard_rasteriser_zero_length_and_empty_input():
 
 @pytest.mark.parametrize("dtype", ["float64", "float32"])
 def test_guard_rasteriser_padding_columns(dtype):
-    """_raster._candidates: padding columns (all zeros: L = 0, depths 0) divide by the
-    guards' 1 instead of 0 — every output finite, coverage 0 — next to a real column."""
+    """_raster._candidates: padding columns (reading a zero row: L = 0, depths 0) divide
+    by the guards' 1 instead of 0 — every output finite, coverage 0 — next to a real column."""
     from hairjax._geometry._raster import _candidates
 
     with precision(dtype):
-        real = [2.2, 3.5, 5.7, 0.0, 5.7, 1.0, 2.0, 3.0, 2.0, 1.0, 1.0]  # x0 y0 dx dy L w z0 z1 k xm reach
-        columns = np.zeros((8, 11))
-        columns[0] = real
-        pixel, cov, t, depth = (np.asarray(o) for o in _candidates(columns, 4, 16, 16, True))
+        real = [2.2, 3.5, 5.7, 0.0, 5.7, 1.0, 2.0, 3.0, 1.0, 1.0, 1.0]  # x0 y0 dx dy L w0 z0 z1 xm reach w1
+        seg_data = np.zeros((2, 11))  # the real segment and the zero row padding columns read
+        seg_data[0] = real
+        seg = np.array([0, 1, 1, 1, 1, 1, 1, 1], np.int32)  # one real column, seven of padding
+        k = np.array([2, 0, 0, 0, 0, 0, 0, 0], np.int32)
+        pixel, cov, t, depth = (np.asarray(o) for o in _candidates(seg_data, seg, k, 4, 16, 16, True))
         assert np.all(np.isfinite(cov)) and np.all(np.isfinite(t)) and np.all(np.isfinite(depth))
         np.testing.assert_array_equal(cov[4:], 0.0)  # rows of the padding columns
         assert cov[:4].max() == 1.0  # pixel (2, 3): the line runs through its centre
