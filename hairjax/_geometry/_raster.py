@@ -161,6 +161,7 @@ def rasterize(
         ],
         axis=1,
     )
+    seg_data = jax.device_put(seg_data)  # once, not with every chunk's call
     # Columns are independent once they know their segment, so they are cut into chunks of
     # exactly _CHUNK (only the last is padded): the kernel compiles for one size.
     seg_of_col = np.repeat(np.arange(n, dtype=np.int32), columns)
