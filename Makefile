@@ -5,7 +5,7 @@ VENV    := .venv
 BIN     := $(VENV)/bin
 STAMP   := $(VENV)/.installed
 
-.PHONY: run test bench clean
+.PHONY: run test notebooks bench clean
 
 $(BIN)/python:
 	@$(PY) -c 'import sys; assert sys.version_info >= (3, 11), sys.version' 2>/dev/null \
@@ -45,6 +45,10 @@ test: $(STAMP)
 	$(BIN)/python -m ruff format --check hairjax tests experiments notebooks
 	$(BIN)/python -m mypy
 	$(BIN)/python -m pytest -q -n 2  # both cores (pytest-xdist): keeps make test under 10 minutes
+
+# Every notebook executed, the one `make test` leaves out included (about 3 minutes).
+notebooks: $(STAMP)
+	HAIRJAX_ALL_NOTEBOOKS=1 $(BIN)/python -m pytest -q -n 2 tests/test_notebooks.py
 
 bench: $(STAMP)
 	$(BIN)/hairjax bench

@@ -80,9 +80,18 @@ def test_notebook_stored_with_outputs(path):
     assert path.stat().st_size < MAX_NOTEBOOK_BYTES
 
 
+# Run by `make notebooks` (HAIRJAX_ALL_NOTEBOOKS=1), not by `make test`, to keep that under
+# 10 minutes on two cores: the error-against-time notebook (about 30 s) re-runs a sweep and
+# a stiff fit whose code tests/tools/test_sweep.py and tests/experiments/test_03_stiff_fits.py
+# already run. Its stored outputs are checked above either way.
+OUTSIDE_MAKE_TEST = {"04_error_vs_time.ipynb"}
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
 def test_notebook_runs(path, kernel_env):
+    if path.name in OUTSIDE_MAKE_TEST and os.environ.get("HAIRJAX_ALL_NOTEBOOKS") != "1":
+        pytest.skip("run by make notebooks (HAIRJAX_ALL_NOTEBOOKS=1)")
     nb = nbformat.read(path, as_version=4)
     client = nbclient.NotebookClient(
         nb, timeout=600, kernel_name="python3", resources={"metadata": {"path": str(path.parent)}}
