@@ -23,8 +23,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._geometry._host import to_device
 from .._geometry._setup import prepare
-from .._geometry._stage import composite_weights, geometry_stage
+from .._geometry._stage import composite_weights, geometry_stage, last_pixels
 from .._scene._scene import Scene
 from .._shading import AbstractShadingModel
 from .._shading._transforms import LOGIT
@@ -121,14 +122,14 @@ def _prepare(gains, scene: Scene, point: OpacityParams, names, target, sqrt_weig
         p = scene.strands.num_points
         omega_unit = unit[:p]
         occluder_omega_unit = unit[p:] if setup.occluder_pixel is not None else None
-    hw = scene.camera.width * scene.camera.height
     return OpacityTerms(
         terms,
-        jnp.asarray(setup.frag_strand, jnp.int32),
-        jnp.asarray(setup.frag_coverage, dtype),
+        # As the geometry stage passes them: shared with the set-up where it can (`_host`).
+        to_device(setup.frag_strand, jnp.int32),
+        to_device(setup.frag_coverage, dtype),
         jnp.asarray(setup.frag_first),
         jnp.asarray(setup.frag_last),
-        jnp.asarray(np.where(setup.frag_last, setup.frag_pixel, hw), jnp.int32),
+        jnp.asarray(last_pixels(setup)),
         jnp.asarray(setup.opaque, dtype),
         scene.strands.num_strands,
         omega_unit,

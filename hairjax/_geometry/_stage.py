@@ -22,7 +22,7 @@ from .._shading._streaks import streak_factors
 from ._host import to_device
 from ._setup import prepare
 
-__all__ = ["Geometry", "composite_weights", "geometry_stage"]
+__all__ = ["Geometry", "composite_weights", "geometry_stage", "last_pixels"]
 
 
 class Geometry(eqx.Module):
@@ -73,6 +73,12 @@ def composite_weights(alpha, frag_strand, frag_coverage, frag_first, frag_last, 
     return weights, frag_alpha, transmittance, alpha_channel
 
 
+def last_pixels(setup) -> np.ndarray:
+    """`composite_weights`' `last_pixel` for a set-up: each fragment's pixel where it is its
+    pixel's last, H·W (past the end) elsewhere; int32, as `frag_pixel`."""
+    return np.where(setup.frag_last, setup.frag_pixel, np.int32(setup.opaque.shape[0]))
+
+
 def geometry_stage(scene: Scene, alpha: Float[Array, " S"] | None = None, *, order=None) -> Geometry:
     """Compositing weights and Ω for `scene`, differentiable in the per-strand `alpha`.
 
@@ -95,15 +101,13 @@ def _geometry_stage(scene: Scene, alpha, order=None) -> Geometry:
     setup = prepare(scene, order=order)
     dtype = jnp.result_type(float)
     alpha = jnp.asarray(alpha, dtype=dtype)
-    hw = scene.camera.width * scene.camera.height
-    last_pixel = np.where(setup.frag_last, setup.frag_pixel, np.int32(hw))  # int32, as frag_pixel
     weights, frag_alpha, transmittance, alpha_channel = composite_weights(
         alpha,
         to_device(setup.frag_strand, jnp.int32),
         to_device(setup.frag_coverage, dtype),
         setup.frag_first,
         setup.frag_last,
-        last_pixel,
+        last_pixels(setup),
         jnp.asarray(setup.opaque, dtype),
     )
     omega = occluder_omega = None
