@@ -46,7 +46,7 @@ test: $(STAMP)
 	$(BIN)/python -m mypy
 	$(BIN)/python -m pytest -q -n 2  # both cores (pytest-xdist): keeps make test under 10 minutes
 
-# Every notebook executed; `make test` executes only 06 (about 3 minutes).
+# Every notebook executed; `make test` executes only 06 (about 1.5 minutes).
 notebooks: $(STAMP)
 	HAIRJAX_ALL_NOTEBOOKS=1 $(BIN)/python -m pytest -q -n 2 tests/test_notebooks.py
 
