@@ -51,6 +51,9 @@ def over_weights(
     return alpha * exclusive, inclusive
 
 
+COMPOSITE_CHUNK = 1 << 20  # fragments per step of `composite` (BENCHMARKS.md "Memory")
+
+
 def composite(
     geometry: Geometry, colors: Float[Array, "P C"], *, paired: bool = False
 ) -> Float[Array, "HW C"]:
@@ -63,21 +66,45 @@ def composite(
     into the per-fragment gathers and evaluates it twice per fragment instead of once per
     point (BENCHMARKS.md "Shading stage"). Colours that are already materialised (the
     fit's stacked gain images) gather directly: the extra table would only cost. The same
-    arithmetic either way."""
-    t = geometry.frag_t[:, None]
-    if paired:
-        # The last row's second half wraps to point 0 and is never read: a fragment's i0
-        # is a segment's first point, so i0 + 1 < P.
-        ends = jnp.concatenate([colors, jnp.roll(colors, -1, axis=0)], axis=1)[geometry.frag_i0]
-        c = colors.shape[1]
-        c0, c1 = ends[:, :c], ends[:, c:]
-    else:
-        c0, c1 = colors[geometry.frag_i0], colors[geometry.frag_i0 + 1]
-    frag_color = (1 - t) * c0 + t * c1
+    arithmetic either way.
+
+    The fragments are added in steps of COMPOSITE_CHUNK: XLA materialises a scatter's
+    `[fragments, C]` operand (and its gradient a `[fragments, 2C]` one), so one step over
+    all 55 M fragments of 100k strands at 1024² held 0.67 GiB of temporaries, and its
+    gradient 1.6 GiB. Each step is rematerialised in the gradient (`jax.checkpoint`), so
+    the gradient keeps no per-step residuals either."""
     hw = geometry.height * geometry.width
-    return jax.ops.segment_sum(
-        geometry.frag_weight[:, None] * frag_color,
-        geometry.frag_pixel,
-        num_segments=hw,
-        indices_are_sorted=True,
-    )
+    n = geometry.frag_i0.shape[0]
+    c = colors.shape[1]
+    # The last row's second half wraps to point 0 and is never read: a fragment's i0 is a
+    # segment's first point, so i0 + 1 < P.
+    table = jnp.concatenate([colors, jnp.roll(colors, -1, axis=0)], axis=1) if paired else colors
+
+    def add(image, lo, size, start):
+        """`image` plus fragments [lo, lo + size) — those from `start` on, when given."""
+        i0, t, weight, pixel = (
+            jax.lax.dynamic_slice_in_dim(x, lo, size)
+            for x in (geometry.frag_i0, geometry.frag_t, geometry.frag_weight, geometry.frag_pixel)
+        )
+        t = t[:, None]
+        if paired:
+            ends = table[i0]
+            c0, c1 = ends[:, :c], ends[:, c:]
+        else:
+            c0, c1 = table[i0], table[i0 + 1]
+        if start is not None:
+            # Fires in the last step only, which ends at the last fragment and so starts
+            # before `start`: the fragments the step before it added are not added twice.
+            weight = jnp.where(lo + jnp.arange(size) >= start, weight, 0.0)
+        return image.at[pixel].add(weight[:, None] * ((1 - t) * c0 + t * c1), indices_are_sorted=True)
+
+    image = jnp.zeros((hw, c), colors.dtype)
+    if n <= COMPOSITE_CHUNK:
+        return add(image, 0, n, None)
+
+    @jax.checkpoint
+    def step(k, image):
+        start = k * COMPOSITE_CHUNK
+        return add(image, jnp.minimum(start, n - COMPOSITE_CHUNK), COMPOSITE_CHUNK, start)
+
+    return jax.lax.fori_loop(0, -(-n // COMPOSITE_CHUNK), step, image)

@@ -60,3 +60,46 @@ def test_paired_composite_equals_the_two_gathers_by_hand():
     assert i0.max() == p - 2  # the case the wrap must not touch is exercised
     for paired in (False, True):
         np.testing.assert_allclose(composite(g, colors, paired=paired), by_hand, rtol=1e-12, atol=1e-14)
+
+
+def test_composite_in_steps_equals_one_step_with_its_derivatives(monkeypatch):
+    """The composite adds its fragments COMPOSITE_CHUNK at a time. With steps of 7 (so that
+    steps cut pixels apart and the last step overlaps the one before it), it equals the sum
+    written out by hand, and so do its reverse derivative in the colours and the weights and
+    its forward derivative (the fit's Jacobians take both). Tolerance: float64 rounding."""
+    import equinox as eqx
+
+    import hairjax as hj
+    from hairjax import _composite
+    from hairjax._composite import composite
+
+    scene = hj.Scene(
+        hj.furball(strands=30, points=5, seed=2),
+        camera=hj.Camera(eye=(0.0, 0.0, 3.0), target=(0.0, 0.0, 0.0), width=24, height=24),
+    )
+    g = hj.geometry_stage(scene)
+    n, p = g.frag_i0.shape[0], g.tangent.shape[0]
+    monkeypatch.setattr(_composite, "COMPOSITE_CHUNK", 7)
+    assert n % 7 != 0 and n > 14  # several steps, the last one overlapping
+    rng = np.random.default_rng(1)
+    colors = jnp.asarray(rng.random((p, 3)))
+    probe = jnp.asarray(rng.random((24 * 24, 3)))
+    i0, t, w, pixel = (np.asarray(x) for x in (g.frag_i0, g.frag_t, g.frag_weight, g.frag_pixel))
+    # The linear map by hand: A[pixel, point] with image = A @ colors.
+    a = np.zeros((24 * 24, p))
+    np.add.at(a, (pixel, i0), w * (1 - t))
+    np.add.at(a, (pixel, i0 + 1), w * t)
+    for paired in (False, True):
+        np.testing.assert_allclose(composite(g, colors, paired=paired), a @ colors, rtol=1e-12, atol=1e-14)
+        d_colors = jax.grad(lambda c: jnp.sum(composite(g, c, paired=paired) * probe))(colors)
+        np.testing.assert_allclose(d_colors, a.T @ probe, rtol=1e-12, atol=1e-14)
+        _, tangent = jax.jvp(lambda c: composite(g, c, paired=paired), (colors,), (probe[:p] * 0 + 1,))
+        np.testing.assert_allclose(tangent, a @ np.ones((p, 3)), rtol=1e-12, atol=1e-14)
+
+    # In the weights: d/dw_k of Σ probe·image = probe[pixel_k] · ((1 − t_k) c[i0] + t_k c[i0 + 1]).
+    def of_weights(weight):
+        return jnp.sum(composite(eqx.tree_at(lambda x: x.frag_weight, g, weight), colors) * probe)
+
+    c = np.asarray(colors)
+    by_hand = np.sum(np.asarray(probe)[pixel] * ((1 - t)[:, None] * c[i0] + t[:, None] * c[i0 + 1]), axis=1)
+    np.testing.assert_allclose(jax.grad(of_weights)(g.frag_weight), by_hand, rtol=1e-12, atol=1e-14)
