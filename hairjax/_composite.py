@@ -16,12 +16,16 @@ from typing import TYPE_CHECKING
 
 import jax
 import jax.numpy as jnp
-from jaxtyping import Array, Bool, Float
+from jaxtyping import Array, Bool, Float, Int
 
 if TYPE_CHECKING:
     from ._geometry._stage import Geometry
 
-__all__ = ["segmented_scan", "over_weights", "composite"]
+__all__ = ["segmented_scan", "over_weights", "pixel_weights", "composite", "COMPOSITE_CHUNK"]
+
+# Fragments per step of `composite` and run of `pixel_weights`: their temporaries are a
+# few tens of MB at any fragment count (BENCHMARKS.md "Memory").
+COMPOSITE_CHUNK = 1 << 20
 
 
 def segmented_scan(values: Float[Array, " n"], first: Bool[Array, " n"], op) -> Float[Array, " n"]:
@@ -46,12 +50,57 @@ def over_weights(
     **Returns:** `(weights, t_total)`; `t_total` is meaningful where `last` is set.
     A product scan, not exp(Σ log(1 − α)): α = 1 stays exact and its gradient finite.
     """
+    return _over_run(alpha, first, 1.0)
+
+
+def _over_run(alpha, first, carry):
+    """`over_weights` of a run of fragments whose leading ones (those before its first
+    `first`) continue a pixel whose fragments before the run let `carry` through."""
     inclusive = segmented_scan(1.0 - alpha, first, jnp.multiply)
-    exclusive = jnp.where(first, 1.0, jnp.roll(inclusive, 1))
-    return alpha * exclusive, inclusive
+    exclusive = jnp.where(first, 1.0, jnp.concatenate([jnp.ones(1, inclusive.dtype), inclusive[:-1]]))
+    # 1 from the run's first `first` on (always, when the run starts a pixel).
+    scale = jnp.where(jnp.cumsum(first) == 0, carry, 1.0)
+    return alpha * exclusive * scale, inclusive * scale
 
 
-COMPOSITE_CHUNK = 1 << 20  # fragments per step of `composite` (BENCHMARKS.md "Memory")
+def pixel_weights(
+    alpha: Float[Array, " f"], pixel: Int[Array, " f"], hw: int
+) -> tuple[Float[Array, " f"], Float[Array, " hw"]]:
+    """(weights w_k = α_k T_k `[F]`, each pixel's transmittance T `[HW]`) of fragments
+    sorted by `pixel`, front to back within a pixel (docs/model.md §6); T = 1 where no
+    fragment falls.
+
+    The product scan runs over COMPOSITE_CHUNK fragments at a time, each run carrying on
+    the transmittance of the pixel the run before it ended in: the scan's temporaries over
+    all 55 M fragments of 100k strands at 1024² were 0.93 GiB (BENCHMARKS.md "Memory").
+    Only a pixel cut by a run's end sees its product formed in another order (float
+    rounding)."""
+    n = alpha.shape[0]
+    weights = jnp.zeros_like(alpha)
+    transmittance = jnp.ones(hw, alpha.dtype)
+    if n == 0:
+        return weights, transmittance
+
+    def run(lo, size, carry, weights, transmittance):
+        a, p = (jax.lax.dynamic_slice_in_dim(x, lo, size) for x in (alpha, pixel))
+        # The pixels just before and after the run (−1 at either end of all fragments).
+        before = jnp.where(lo > 0, pixel[jnp.maximum(lo - 1, 0)], -1)
+        after = jnp.where(lo + size < n, pixel[jnp.minimum(lo + size, n - 1)], -1)
+        first = p != jnp.concatenate([before[None], p[:-1]])
+        last = p != jnp.concatenate([p[1:], after[None]])
+        w, inclusive = _over_run(a, first, carry)
+        weights = jax.lax.dynamic_update_slice_in_dim(weights, w, lo, 0)
+        # Each pixel's last fragment sets its T; the others point past the end, and drop.
+        transmittance = transmittance.at[jnp.where(last, p, hw)].set(inclusive, mode="drop")
+        return inclusive[-1], weights, transmittance
+
+    full, rest = divmod(n, COMPOSITE_CHUNK)
+    state = (jnp.ones((), alpha.dtype), weights, transmittance)
+    if full:
+        state = jax.lax.fori_loop(0, full, lambda k, s: run(k * COMPOSITE_CHUNK, COMPOSITE_CHUNK, *s), state)
+    if rest:
+        state = run(full * COMPOSITE_CHUNK, rest, *state)
+    return state[1], state[2]
 
 
 def composite(

@@ -103,3 +103,45 @@ def test_composite_in_steps_equals_one_step_with_its_derivatives(monkeypatch):
     c = np.asarray(colors)
     by_hand = np.sum(np.asarray(probe)[pixel] * ((1 - t)[:, None] * c[i0] + t[:, None] * c[i0 + 1]), axis=1)
     np.testing.assert_allclose(jax.grad(of_weights)(g.frag_weight), by_hand, rtol=1e-12, atol=1e-14)
+
+
+def test_pixel_weights_in_runs_equal_one_scan(monkeypatch):
+    """pixel_weights scans COMPOSITE_CHUNK fragments at a time, carrying a pixel's
+    transmittance from one run into the next. With short runs, over pixels holding 1 to 20
+    fragments (so that a pixel spans up to four runs) and opaque fragments among them, its
+    weights, transmittances and their derivatives in α equal over_weights' over all
+    fragments at once (runs of 6 here). Tolerance: float64 rounding of products formed in
+    another order."""
+    from hairjax import _composite
+    from hairjax._composite import pixel_weights
+
+    rng = np.random.default_rng(3)
+    counts = rng.integers(1, 21, size=12)
+    hw = 40
+    pixels = np.sort(rng.choice(hw, size=counts.size, replace=False))
+    pixel = jnp.asarray(np.repeat(pixels, counts), jnp.int32)
+    n = int(counts.sum())
+    alpha = jnp.asarray(np.where(rng.random(n) < 0.05, 1.0, rng.uniform(0.05, 0.6, n)))
+    first = np.ones(n, bool)
+    first[1:] = np.asarray(pixel)[1:] != np.asarray(pixel)[:-1]
+    last = np.ones(n, bool)
+    last[:-1] = first[1:]
+
+    def reference(a):
+        w, inclusive = over_weights(a, jnp.asarray(first), jnp.asarray(last))
+        return w, jnp.ones(hw, a.dtype).at[jnp.asarray(pixels)].set(inclusive[jnp.asarray(last)])
+
+    monkeypatch.setattr(_composite, "COMPOSITE_CHUNK", 6)
+    assert n % 6 != 0 and counts.max() > 12
+    probe_w, probe_t = jnp.asarray(rng.random(n)), jnp.asarray(rng.random(hw))
+
+    def loss(f):
+        return lambda a: jnp.sum(f(a)[0] * probe_w) + jnp.sum(f(a)[1] * probe_t)
+
+    ours = lambda a: pixel_weights(a, pixel, hw)  # noqa: E731
+    for got, want in zip(ours(alpha), reference(alpha)):
+        np.testing.assert_allclose(got, want, rtol=1e-13, atol=1e-15)
+    np.testing.assert_allclose(jax.grad(loss(ours))(alpha), jax.grad(loss(reference))(alpha), rtol=1e-12, atol=1e-14)
+    direction = jnp.asarray(rng.standard_normal(n))
+    for got, want in zip(jax.jvp(ours, (alpha,), (direction,))[1], jax.jvp(reference, (alpha,), (direction,))[1]):
+        np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-14)

@@ -25,7 +25,7 @@ import numpy as np
 
 from .._geometry._host import to_device
 from .._geometry._setup import prepare
-from .._geometry._stage import composite_weights, geometry_stage, last_pixels
+from .._geometry._stage import composite_weights, geometry_stage
 from .._scene._scene import Scene
 from .._shading import AbstractShadingModel
 from .._shading._transforms import LOGIT
@@ -59,11 +59,8 @@ class OpacityTerms(eqx.Module):
     Ω at α = 1 (`omega_unit`, the strand points' then the occluder's surface points')."""
 
     terms: TargetTerms
-    frag_strand: jax.Array
+    strand_of_point: jax.Array
     frag_coverage: jax.Array
-    frag_first: jax.Array
-    frag_last: jax.Array
-    last_pixel: jax.Array
     opaque: jax.Array
     n_strands: int = eqx.field(static=True)
     omega_unit: jax.Array | None = None
@@ -93,7 +90,7 @@ def at_alpha(d: OpacityTerms, alpha) -> TargetTerms:
     g = d.terms.geometry
     strand = jnp.full(d.n_strands, alpha, dtype=g.frag_t.dtype)
     weights, frag_alpha, transmittance, alpha_channel = composite_weights(
-        strand, d.frag_strand, d.frag_coverage, d.frag_first, d.frag_last, d.last_pixel, d.opaque
+        strand, d.strand_of_point, g.frag_i0, d.frag_coverage, g.frag_pixel, d.opaque
     )
     omega = None if d.omega_unit is None else alpha * d.omega_unit
     occluder_omega = None if d.occluder_omega_unit is None else alpha * d.occluder_omega_unit
@@ -125,11 +122,8 @@ def _prepare(gains, scene: Scene, point: OpacityParams, names, target, sqrt_weig
     return OpacityTerms(
         terms,
         # As the geometry stage passes them: shared with the set-up where it can (`_host`).
-        to_device(setup.frag_strand, jnp.int32),
+        jnp.asarray(setup.strand_of_point),
         to_device(setup.frag_coverage, dtype),
-        jnp.asarray(setup.frag_first),
-        jnp.asarray(setup.frag_last),
-        jnp.asarray(last_pixels(setup)),
         jnp.asarray(setup.opaque, dtype),
         scene.strands.num_strands,
         omega_unit,

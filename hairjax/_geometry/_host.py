@@ -6,14 +6,21 @@ bytes. The set-up's per-fragment arrays (tens of millions of entries at 100k str
 1024²) are written into aligned buffers, so that the geometry stage hands them to JAX
 without a second copy (BENCHMARKS.md, "Memory"). On another backend the transfer copies
 as before.
+
+The set-up's transients (the raster's per-chunk parts, the sort's permutation) are
+allocated and freed by the C heap, which keeps what is freed for reuse: after a render at
+100k strands / 1024², 1.5 GiB of the process's resident memory was free heap.
+`release_heap` hands it back to the system.
 """
 
 from __future__ import annotations
 
+import ctypes
+
 import jax
 import numpy as np
 
-__all__ = ["aligned_empty", "aligned_take", "to_device"]
+__all__ = ["aligned_empty", "aligned_take", "release_heap", "to_device"]
 
 ALIGNMENT = 64  # bytes: XLA's CPU buffer alignment
 
@@ -47,3 +54,21 @@ def to_device(x: np.ndarray, dtype) -> jax.Array:
         # through NumPy would change the JAX array too.
         x.flags.writeable = False
     return jax.device_put(x)
+
+
+def _malloc_trim():
+    """glibc's `malloc_trim`, or None where the C library has none."""
+    try:
+        return ctypes.CDLL(None).malloc_trim
+    except (OSError, AttributeError, TypeError):  # fires off glibc: macOS, musl, Windows
+        return None
+
+
+_MALLOC_TRIM = _malloc_trim()
+
+
+def release_heap() -> None:
+    """Return the C heap's free memory to the system (glibc's `malloc_trim(0)`, which also
+    releases free pages inside the heap); nothing where the C library has no such call."""
+    if _MALLOC_TRIM is not None:
+        _MALLOC_TRIM(0)

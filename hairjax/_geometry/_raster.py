@@ -29,6 +29,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._constants import PIXEL_HALF_EXTENT
+from ._host import release_heap
 
 __all__ = ["Fragments", "rasterize", "ribbon_coverage", "ribbon_widths"]
 
@@ -167,7 +168,13 @@ def rasterize(
     seg_of_col = np.repeat(np.arange(n, dtype=np.int32), columns)
     first_col = np.cumsum(columns) - columns
     total = seg_of_col.size
-    parts: list[list[np.ndarray | None]] = []
+    # The covered candidates are written straight into one array per field, sized for
+    # every candidate: pages never written are never resident, so the fields cost what they
+    # hold. (Per-chunk parts concatenated at the end had held each fragment twice and left
+    # 1.6 GiB of C heap behind at 100k strands / 1024², BENCHMARKS.md "Memory".)
+    dtype = jnp.result_type(float)
+    fields = [np.empty(total * rows, t) for t in (np.int32, np.int32, dtype, dtype, dtype)]
+    filled = 0
     for c_lo in range(0, total, _CHUNK):
         seg = seg_of_col[c_lo : c_lo + _CHUNK]
         size = _CHUNK if total > _CHUNK else _bucket(seg.size)
@@ -179,20 +186,14 @@ def rasterize(
         out = _candidates(seg_data, padded, k, rows, image_width, image_height, perspective)
         pixel, cov, t, depth = (np.asarray(o)[: seg.size * rows] for o in out)
         keep = np.flatnonzero(cov > 0)
-        parts.append([pixel[keep], seg[keep // rows], cov[keep], t[keep], depth[keep]])
-    if not parts:  # fires when no segment has a column (none, all zero-length or off-screen)
-        empty_i, empty_f = np.zeros(0, np.int32), np.zeros(0, jnp.result_type(float))
-        return Fragments(empty_i, empty_i, empty_f, empty_f, empty_f)
-    # One field at a time, each chunk's part released once copied: at most one field is
-    # held twice (55 M fragments at 100k strands / 1024²: 0.2 GB, not the 1.1 GB of all five).
-    fields = []
-    for i in range(5):
-        fields.append(np.concatenate([p[i] for p in parts]))
-        for p in parts:
-            p[i] = None
-    return Fragments(*fields)
-
-
+        end = filled + keep.size
+        for field, values in zip(fields, (pixel, None, cov, t, depth)):
+            if values is not None:
+                np.take(values, keep, out=field[filled:end])
+        fields[1][filled:end] = seg[keep // rows]
+        filled = end
+    release_heap()  # the chunks' temporaries
+    return Fragments(*(field[:filled] for field in fields))
 def _bucket(n: int) -> int:
     """Round a size up to a power of two (≥ 4096) so the kernel compiles rarely."""
     return max(4096, 1 << int(np.ceil(np.log2(max(n, 1)))))

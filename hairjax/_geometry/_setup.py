@@ -22,7 +22,7 @@ from .._errors import EmptyViewWarning
 from .._scene._scene import Scene
 from .._scene._strands import tangents, unit_rows
 from .._shading import PointInputs
-from ._host import aligned_take
+from ._host import aligned_take, release_heap
 from ._occluder import occluder_hits, occluder_light_view, occluder_visibility
 from ._ordering import segment_depth, stable_argsort_uint32
 from ._projection import View, camera_view
@@ -46,10 +46,8 @@ class GeometrySetup:
     frag_pixel: np.ndarray  # [F]
     frag_i0: np.ndarray  # [F] first point of the fragment's segment (the second is i0 + 1)
     frag_t: np.ndarray  # [F] screen-space position along the segment
-    frag_strand: np.ndarray  # [F]
     frag_coverage: np.ndarray  # [F]
-    frag_first: np.ndarray  # [F] first fragment of its pixel
-    frag_last: np.ndarray  # [F] last fragment of its pixel
+    strand_of_point: np.ndarray  # [P] int32: a fragment's strand is strand_of_point[frag_i0]
     backdrop: np.ndarray  # [H*W, 3] the background behind the hair (0 on the occluder)
     opaque: np.ndarray  # [H*W] the occluder covers the pixel centre
     shadow: Any  # the shadow method's plan (None without shadows); with an
@@ -62,6 +60,21 @@ class GeometrySetup:
     occluder_visibility: np.ndarray | None = None  # [Q] V there: 0 where it shadows itself
     occluder_color: np.ndarray | None = None  # [3] k
     light_visibility: np.ndarray | None = None  # [P] V: 0 where the occluder shadows a strand point
+
+    # Derived where they are read, not stored: three more arrays per fragment would be
+    # 0.31 GiB at 100k strands / 1024² (BENCHMARKS.md "Memory"). The geometry stage
+    # derives them in JAX (`composite_weights`).
+    @property
+    def frag_strand(self) -> np.ndarray:
+        """`[F]` int32: each fragment's strand."""
+        return self.strand_of_point[self.frag_i0]
+
+    @property
+    def frag_first(self) -> np.ndarray:
+        """`[F]` bool: the first fragment of its pixel."""
+        first = np.ones(self.frag_pixel.size, bool)
+        first[1:] = self.frag_pixel[1:] != self.frag_pixel[:-1]
+        return first
 
 
 def prepare(scene: Scene, *, order=None) -> GeometrySetup:
@@ -219,18 +232,26 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
         frags = frags.take(visible)
         lap("occluder")
 
-    # Only what compositing needs is permuted: pixel, segment, coverage, t (not depth),
-    # into aligned arrays that the geometry stage shares with JAX (`_host`).
-    sort = stable_argsort_uint32(frags.pixel)
-    pixel, frag_coverage, frag_t = (aligned_take(x, sort) for x in (frags.pixel, frags.coverage, frags.t))
-    seg = near_first[frags.segment[sort]]
-    del frags, sort
+    # Only what compositing needs is permuted: pixel, segment, coverage, t (not depth,
+    # released here), into aligned arrays that the geometry stage shares with JAX
+    # (`_host`); each input is released once permuted, and the C heap they leave is handed
+    # back to the system (`release_heap`).
+    pixel, segment, coverage, t = frags.pixel, frags.segment, frags.coverage, frags.t
+    del frags
+    sort = stable_argsort_uint32(pixel)
+    frag_pixel = aligned_take(pixel, sort)
+    del pixel
+    frag_coverage = aligned_take(coverage, sort)
+    del coverage
+    frag_t = aligned_take(t, sort)
+    del t
+    seg = near_first.astype(np.int32)[segment[sort]]
+    del segment, sort
+    frag_i0 = aligned_take(segments[:, 0], seg, np.int32)
     if segment_alpha is not None:  # §17's alpha texture scales the segment's opacity
         frag_coverage *= segment_alpha[seg]
-    first = np.ones(pixel.size, bool)
-    first[1:] = pixel[1:] != pixel[:-1]
-    last = np.ones(pixel.size, bool)
-    last[:-1] = first[1:]
+    del seg
+    release_heap()
     lap("sort fragments")
 
     shadow = None
@@ -254,6 +275,7 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
             occluder["light_visibility"] = occluder_visibility(light_view, depth_map, points)
             occluder["occluder_visibility"] = occluder_visibility(light_view, depth_map, surface)
             lap("occluder shadow")
+    release_heap()  # the shadow set-up's transients
 
     return GeometrySetup(
         view=view,
@@ -262,13 +284,11 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
         to_eye=unit_rows(view.origin - points),
         base_color=base_color,
         light_rgb=light_rgb,
-        frag_pixel=pixel,
-        frag_i0=aligned_take(segments[:, 0], seg, np.int32),
+        frag_pixel=frag_pixel,
+        frag_i0=frag_i0,
         frag_t=frag_t,
-        frag_strand=aligned_take(seg_strand, seg, np.int32),
         frag_coverage=frag_coverage,
-        frag_first=first,
-        frag_last=last,
+        strand_of_point=strands.strand_of_point.astype(np.int32),
         backdrop=backdrop,
         opaque=opaque,
         shadow=shadow,

@@ -15,14 +15,14 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from .._cache import cached
-from .._composite import over_weights
+from .._composite import pixel_weights
 from .._scene._scene import Scene
 from .._shading import AbstractShadingModel
 from .._shading._streaks import streak_factors
-from ._host import to_device
+from ._host import release_heap, to_device
 from ._setup import prepare
 
-__all__ = ["Geometry", "composite_weights", "geometry_stage", "last_pixels"]
+__all__ = ["Geometry", "composite_weights", "geometry_stage"]
 
 
 class Geometry(eqx.Module):
@@ -60,23 +60,16 @@ class Geometry(eqx.Module):
 
 
 @eqx.filter_jit
-def composite_weights(alpha, frag_strand, frag_coverage, frag_first, frag_last, last_pixel, opaque):
+def composite_weights(alpha, strand_of_point, frag_i0, frag_coverage, frag_pixel, opaque):
     """(weights `[F]`, fragment opacities `[F]`, transmittance `[HW]`, alpha channel `[HW]`)
-    of the set-up's fragments at the per-strand opacities `alpha` (docs/model.md §6);
-    `last_pixel`: each pixel's last fragment's pixel, past the end (H·W) for the others."""
-    frag_alpha = alpha[frag_strand] * frag_coverage
-    weights, inclusive = over_weights(frag_alpha, frag_first, frag_last)
-    # Pixels without fragments keep T = 1; each covered pixel's last fragment sets its T
-    # (`last_pixel` points every other fragment past the end, where it is dropped).
-    transmittance = jnp.ones(opaque.shape[0], weights.dtype).at[last_pixel].set(inclusive, mode="drop")
+    of the set-up's fragments (sorted by pixel, front to back within a pixel) at the
+    per-strand opacities `alpha` (docs/model.md §6). A fragment's strand
+    (`strand_of_point[frag_i0]`) and its pixel's first and last fragment are derived here
+    (`pixel_weights`), not stored with the fragments (BENCHMARKS.md "Memory")."""
+    frag_alpha = alpha[strand_of_point[frag_i0]] * frag_coverage
+    weights, transmittance = pixel_weights(frag_alpha, frag_pixel, opaque.shape[0])
     alpha_channel = 1.0 - transmittance * (1.0 - opaque)
     return weights, frag_alpha, transmittance, alpha_channel
-
-
-def last_pixels(setup) -> np.ndarray:
-    """`composite_weights`' `last_pixel` for a set-up: each fragment's pixel where it is its
-    pixel's last, H·W (past the end) elsewhere; int32, as `frag_pixel`."""
-    return np.where(setup.frag_last, setup.frag_pixel, np.int32(setup.opaque.shape[0]))
 
 
 def geometry_stage(scene: Scene, alpha: Float[Array, " S"] | None = None, *, order=None) -> Geometry:
@@ -103,13 +96,13 @@ def _geometry_stage(scene: Scene, alpha, order=None) -> Geometry:
     alpha = jnp.asarray(alpha, dtype=dtype)
     weights, frag_alpha, transmittance, alpha_channel = composite_weights(
         alpha,
-        to_device(setup.frag_strand, jnp.int32),
+        jnp.asarray(setup.strand_of_point),
+        to_device(setup.frag_i0, jnp.int32),
         to_device(setup.frag_coverage, dtype),
-        setup.frag_first,
-        setup.frag_last,
-        last_pixels(setup),
+        to_device(setup.frag_pixel, jnp.int32),
         jnp.asarray(setup.opaque, dtype),
     )
+    release_heap()  # what compositing's temporaries left in the C heap
     omega = occluder_omega = None
     if setup.shadow is not None:
         omega = scene.shadows.omega(setup.shadow, alpha)

@@ -42,9 +42,14 @@ def hair_centre(points: np.ndarray, offsets: np.ndarray) -> np.ndarray:
 
 def stable_argsort_uint32(keys: np.ndarray) -> np.ndarray:
     """Stable argsort of non-negative keys < 2^32: two passes of NumPy's 16-bit radix sort
-    (least significant half first), O(n) instead of timsort's O(n log n)."""
+    (least significant half first), O(n) instead of timsort's O(n log n).
+
+    The permutation is int32 when it fits (fewer than 2^31 keys): the set-up sorts 55 M
+    fragment pixels at 100k strands / 1024², where three int64 permutations held at once
+    were 1.3 GB (BENCHMARKS.md "Memory")."""
     keys = np.asarray(keys)
-    low = np.argsort((keys & 0xFFFF).astype(np.uint16), kind="stable")
+    index = np.int32 if keys.size < 2**31 else np.int64
+    low = np.argsort((keys & 0xFFFF).astype(np.uint16), kind="stable").astype(index)
     if keys.size == 0 or keys.max() < (1 << 16):
         return low
     high = np.argsort((keys[low] >> 16).astype(np.uint16), kind="stable")

@@ -175,7 +175,7 @@ def light_fragments(
     return LightFragments(
         frame=frame,
         frags=frags,
-        frag_strand=seg_strand[seg_ids[frags.segment]],
+        frag_strand=seg_strand.astype(np.int32)[seg_ids[frags.segment]],  # int32: the plan keeps it
         frag_coverage=coverage,
         tx=tx,
         ty=ty,
