@@ -40,7 +40,7 @@ __all__ = [
 ]
 
 # The per-fragment fields and what pads them: a padded fragment adds nothing to any pixel.
-_FRAGMENT_FILL = {"frag_pixel": None, "frag_i0": 0, "frag_t": 0.0, "frag_weight": 0.0, "frag_alpha": 0.0}
+_FRAGMENT_FILL = {"frag_pixel": None, "frag_i0": 0, "frag_t": 0.0, "frag_weight": 0.0}
 # The per-occluder-pixel fields (Q) and what pads them: a padded pixel is dropped.
 _OCCLUDER_FILL = {
     "occluder_pixel": None,

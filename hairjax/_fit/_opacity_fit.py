@@ -89,7 +89,7 @@ def at_alpha(d: OpacityTerms, alpha) -> TargetTerms:
     """The target's terms with the geometry recomputed at one opacity `alpha` per strand."""
     g = d.terms.geometry
     strand = jnp.full(d.n_strands, alpha, dtype=g.frag_t.dtype)
-    weights, frag_alpha, transmittance, alpha_channel = composite_weights(
+    weights, transmittance, alpha_channel = composite_weights(
         strand, d.strand_of_point, g.frag_i0, d.frag_coverage, g.frag_pixel, d.opaque
     )
     omega = None if d.omega_unit is None else alpha * d.omega_unit
@@ -97,7 +97,6 @@ def at_alpha(d: OpacityTerms, alpha) -> TargetTerms:
     g = dataclasses.replace(
         g,
         frag_weight=weights,
-        frag_alpha=frag_alpha,
         transmittance=transmittance,
         alpha_channel=alpha_channel,
         omega=omega,

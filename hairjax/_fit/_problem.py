@@ -72,21 +72,18 @@ def target_arrays(scene: Scene, target, mask, weight):
     return image[..., :3].reshape(-1, 3), np.sqrt(wt).reshape(-1, 1)
 
 
-def visible_fragments(geom):
+def visible_fragments(geom, frag_alpha):
     """The geometry without fragments behind transmittance < FIT_TRANSMITTANCE_CUTOFF
-    (their total weight per pixel is below the cutoff: see hairjax/_constants.py)."""
+    (their total weight per pixel is below the cutoff: see hairjax/_constants.py);
+    `frag_alpha`: the fragments' opacities (`scene_fragment_alpha`)."""
     weight = np.asarray(geom.frag_weight)
     # T_k = w_k / α_k; a fragment with w = 0 (behind an opaque one, or α·T underflowing)
     # carries nothing and is dropped as well.
-    alpha = np.asarray(geom.frag_alpha)
-    keep = np.flatnonzero(weight >= FIT_TRANSMITTANCE_CUTOFF * alpha)
+    keep = np.flatnonzero(weight >= FIT_TRANSMITTANCE_CUTOFF * np.asarray(frag_alpha))
     return eqx.tree_at(
-        lambda g: (g.frag_pixel, g.frag_i0, g.frag_t, g.frag_weight, g.frag_alpha),
+        lambda g: (g.frag_pixel, g.frag_i0, g.frag_t, g.frag_weight),
         geom,
-        tuple(
-            jnp.asarray(np.asarray(x)[keep])
-            for x in (geom.frag_pixel, geom.frag_i0, geom.frag_t, geom.frag_weight, geom.frag_alpha)
-        ),
+        tuple(jnp.asarray(np.asarray(x)[keep]) for x in (geom.frag_pixel, geom.frag_i0, geom.frag_t, geom.frag_weight)),
     )
 
 

@@ -32,7 +32,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._composite import composite
-from .._geometry._stage import geometry_stage
+from .._geometry._stage import geometry_stage, scene_fragment_alpha
 from .._shading import AbstractShadingModel, occluder_colors, transmittance
 from .._shading._light import LightParams, lit_to_light
 from .._shading._stage import shading_points
@@ -205,7 +205,7 @@ def prepare_terms(
     full = geometry_stage(scene)
     if light is not None and light.direction is not None:  # L of the light's direction
         full = eqx.tree_at(lambda g: g.to_light, full, lit_to_light(full, light))
-    geom = visible_fragments(full)
+    geom = visible_fragments(full, scene_fragment_alpha(scene))
     direction = light is not None and "light_direction" in names
     model: AbstractShadingModel = geom.shading
     searched = tuple(n for n in model.searched if n in names)

@@ -15,6 +15,7 @@ import warnings
 from typing import Any
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 
 from .._cache import cached
@@ -34,7 +35,7 @@ __all__ = ["GeometrySetup", "prepare", "visibility_order", "to_light", "warn_emp
 @dataclasses.dataclass(frozen=True)
 class GeometrySetup:
     """What the geometry stage needs that depends on neither opacity nor shading
-    parameters (NumPy arrays)."""
+    parameters (NumPy arrays; floats per point in JAX's default float precision)."""
 
     view: View
     tangent: np.ndarray  # [P, 3]
@@ -277,12 +278,14 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
             lap("occluder shadow")
     release_heap()  # the shadow set-up's transients
 
+    # The per-point inputs in the stage's float precision: it reads nothing else of them.
+    dtype = jnp.result_type(float)
     return GeometrySetup(
         view=view,
-        tangent=tangent,
-        to_light=to_light(light, points),
-        to_eye=unit_rows(view.origin - points),
-        base_color=base_color,
+        tangent=tangent.astype(dtype),
+        to_light=to_light(light, points).astype(dtype),
+        to_eye=unit_rows(view.origin - points).astype(dtype),
+        base_color=base_color.astype(dtype),
         light_rgb=light_rgb,
         frag_pixel=frag_pixel,
         frag_i0=frag_i0,

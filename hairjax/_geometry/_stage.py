@@ -22,7 +22,7 @@ from .._shading._streaks import streak_factors
 from ._host import release_heap, to_device
 from ._setup import prepare
 
-__all__ = ["Geometry", "composite_weights", "geometry_stage"]
+__all__ = ["Geometry", "composite_weights", "fragment_alpha", "geometry_stage", "scene_fragment_alpha"]
 
 
 class Geometry(eqx.Module):
@@ -48,7 +48,6 @@ class Geometry(eqx.Module):
     frag_i0: Array  # the segment's first point; its second is frag_i0 + 1
     frag_t: Float[Array, " F"]
     frag_weight: Float[Array, " F"]
-    frag_alpha: Float[Array, " F"]
     transmittance: Float[Array, " HW"]
     backdrop: Float[Array, "HW 3"]
     alpha_channel: Float[Array, " HW"]
@@ -59,17 +58,36 @@ class Geometry(eqx.Module):
     shading_inputs: Any = None
 
 
+def fragment_alpha(alpha, strand_of_point, frag_i0, frag_coverage):
+    """Each fragment's opacity: its strand's α times its coverage (docs/model.md §5, §6)."""
+    return alpha[strand_of_point[frag_i0]] * frag_coverage
+
+
 @eqx.filter_jit
 def composite_weights(alpha, strand_of_point, frag_i0, frag_coverage, frag_pixel, opaque):
-    """(weights `[F]`, fragment opacities `[F]`, transmittance `[HW]`, alpha channel `[HW]`)
-    of the set-up's fragments (sorted by pixel, front to back within a pixel) at the
-    per-strand opacities `alpha` (docs/model.md §6). A fragment's strand
-    (`strand_of_point[frag_i0]`) and its pixel's first and last fragment are derived here
-    (`pixel_weights`), not stored with the fragments (BENCHMARKS.md "Memory")."""
-    frag_alpha = alpha[strand_of_point[frag_i0]] * frag_coverage
+    """(weights `[F]`, transmittance `[HW]`, alpha channel `[HW]`) of the set-up's
+    fragments (sorted by pixel, front to back within a pixel) at the per-strand opacities
+    `alpha` (docs/model.md §6). A fragment's strand (`strand_of_point[frag_i0]`) and its
+    pixel's first and last fragment are derived here (`pixel_weights`), not stored with
+    the fragments (BENCHMARKS.md "Memory")."""
+    frag_alpha = fragment_alpha(alpha, strand_of_point, frag_i0, frag_coverage)
     weights, transmittance = pixel_weights(frag_alpha, frag_pixel, opaque.shape[0])
     alpha_channel = 1.0 - transmittance * (1.0 - opaque)
-    return weights, frag_alpha, transmittance, alpha_channel
+    return weights, transmittance, alpha_channel
+
+
+def scene_fragment_alpha(scene: Scene) -> Float[Array, " F"]:
+    """`fragment_alpha` of `scene`'s set-up at its strands' opacities: the geometry stage
+    keeps only the weights (BENCHMARKS.md "Memory"), a fit's cut of hidden fragments
+    needs α too."""
+    setup = prepare(scene)
+    dtype = jnp.result_type(float)
+    return jax.jit(fragment_alpha)(
+        jnp.asarray(scene.strands.alpha, dtype),
+        jnp.asarray(setup.strand_of_point),
+        to_device(setup.frag_i0, jnp.int32),
+        to_device(setup.frag_coverage, dtype),
+    )
 
 
 def geometry_stage(scene: Scene, alpha: Float[Array, " S"] | None = None, *, order=None) -> Geometry:
@@ -94,7 +112,7 @@ def _geometry_stage(scene: Scene, alpha, order=None) -> Geometry:
     setup = prepare(scene, order=order)
     dtype = jnp.result_type(float)
     alpha = jnp.asarray(alpha, dtype=dtype)
-    weights, frag_alpha, transmittance, alpha_channel = composite_weights(
+    weights, transmittance, alpha_channel = composite_weights(
         alpha,
         jnp.asarray(setup.strand_of_point),
         to_device(setup.frag_i0, jnp.int32),
@@ -130,7 +148,6 @@ def _geometry_stage(scene: Scene, alpha, order=None) -> Geometry:
         frag_i0=to_device(setup.frag_i0, jnp.int32),
         frag_t=to_device(setup.frag_t, dtype),
         frag_weight=weights,
-        frag_alpha=frag_alpha,
         transmittance=transmittance,
         backdrop=jnp.asarray(setup.backdrop, dtype),
         alpha_channel=alpha_channel,

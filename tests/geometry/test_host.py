@@ -1,11 +1,13 @@
 """The set-up's aligned fragment arrays are shared with JAX, not copied (hairjax/_geometry/_host.py)."""
 
+import sys
+
 import jax
 import numpy as np
 import pytest
 from helpers import small_furball_scene
 
-from hairjax._geometry._host import ALIGNMENT, aligned_empty, aligned_take, to_device
+from hairjax._geometry._host import _MALLOC_TRIM, ALIGNMENT, aligned_empty, aligned_take, release_heap, to_device
 from hairjax._geometry._setup import prepare
 from hairjax._geometry._stage import geometry_stage
 
@@ -48,3 +50,25 @@ def test_the_geometry_stage_shares_the_set_ups_fragments():
     assert setup.frag_pixel.size > 0
     assert geometry.frag_pixel.unsafe_buffer_pointer() == setup.frag_pixel.ctypes.data
     assert geometry.frag_i0.unsafe_buffer_pointer() == setup.frag_i0.ctypes.data
+
+
+def _resident_bytes() -> int:
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * 4096
+
+
+@pytest.mark.skipif(_MALLOC_TRIM is None or not sys.platform.startswith("linux"), reason="glibc only")
+def test_release_heap_returns_freed_heap_to_the_system():
+    """Blocks of 256 KiB come from the C heap once glibc has raised its mmap threshold
+    (the first freed mapping raises it). 200 of them are freed behind one that stays
+    allocated, so the heap cannot shrink from its top: their 50 MiB stay resident until
+    `release_heap`, which must return at least half of them."""
+    block = 256 * 1024
+    np.ones(2 * block, np.uint8)  # mapped, then freed: raises the threshold above `block`
+    held = [np.ones(block, np.uint8) for _ in range(200)]
+    pin = np.ones(block, np.uint8)
+    del held
+    before = _resident_bytes()
+    release_heap()
+    assert before - _resident_bytes() >= 100 * block
+    del pin
