@@ -192,7 +192,7 @@ def rasterize(
                 np.take(values, keep, out=field[filled:end])
         fields[1][filled:end] = seg[keep // rows]
         filled = end
-    release_heap()  # the chunks' temporaries
+    release_heap(total * rows * 20)  # the chunks' temporaries: 4 outputs, keep (int64)
     return Fragments(*(field[:filled] for field in fields))
 def _bucket(n: int) -> int:
     """Round a size up to a power of two (≥ 4096) so the kernel compiles rarely."""

@@ -251,8 +251,8 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
     frag_i0 = aligned_take(segments[:, 0], seg, np.int32)
     if segment_alpha is not None:  # §17's alpha texture scales the segment's opacity
         frag_coverage *= segment_alpha[seg]
+    release_heap(seg.size * 28)  # the raster's 4 fields, their permutation and its index
     del seg
-    release_heap()
     lap("sort fragments")
 
     shadow = None
@@ -276,7 +276,8 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
             occluder["light_visibility"] = occluder_visibility(light_view, depth_map, points)
             occluder["occluder_visibility"] = occluder_visibility(light_view, depth_map, surface)
             lap("occluder shadow")
-    release_heap()  # the shadow set-up's transients
+    if shadow is not None:  # the shadow set-up's transients, trimmed for a scene this large
+        release_heap(frag_pixel.size * 20)
 
     # The per-point inputs in the stage's float precision: it reads nothing else of them.
     dtype = jnp.result_type(float)

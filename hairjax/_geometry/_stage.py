@@ -120,7 +120,7 @@ def _geometry_stage(scene: Scene, alpha, order=None) -> Geometry:
         to_device(setup.frag_pixel, jnp.int32),
         jnp.asarray(setup.opaque, dtype),
     )
-    release_heap()  # what compositing's temporaries left in the C heap
+    release_heap(weights.size * 12)  # compositing's temporaries: α, the scan's runs
     omega = occluder_omega = None
     if setup.shadow is not None:
         omega = scene.shadows.omega(setup.shadow, alpha)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from helpers import small_furball_scene
 
-from hairjax._geometry._host import _MALLOC_TRIM, ALIGNMENT, aligned_empty, aligned_take, release_heap, to_device
+from hairjax._geometry._host import _MALLOC_TRIM, ALIGNMENT, RELEASE_MIN_BYTES, aligned_empty, aligned_take, release_heap, to_device
 from hairjax._geometry._setup import prepare
 from hairjax._geometry._stage import geometry_stage
 
@@ -62,13 +62,16 @@ def test_release_heap_returns_freed_heap_to_the_system():
     """Blocks of 256 KiB come from the C heap once glibc has raised its mmap threshold
     (the first freed mapping raises it). 200 of them are freed behind one that stays
     allocated, so the heap cannot shrink from its top: their 50 MiB stay resident until
-    `release_heap`, which must return at least half of them."""
+    `release_heap` is told of a large enough transient, and must then return at least half
+    of them."""
     block = 256 * 1024
     np.ones(2 * block, np.uint8)  # mapped, then freed: raises the threshold above `block`
     held = [np.ones(block, np.uint8) for _ in range(200)]
     pin = np.ones(block, np.uint8)
     del held
     before = _resident_bytes()
-    release_heap()
+    release_heap(0)  # below RELEASE_MIN_BYTES: kept
+    assert before - _resident_bytes() < 20 * block
+    release_heap(RELEASE_MIN_BYTES)
     assert before - _resident_bytes() >= 100 * block
     del pin
