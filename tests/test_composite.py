@@ -141,7 +141,11 @@ def test_pixel_weights_in_runs_equal_one_scan(monkeypatch):
     ours = lambda a: pixel_weights(a, pixel, hw)  # noqa: E731
     for got, want in zip(ours(alpha), reference(alpha)):
         np.testing.assert_allclose(got, want, rtol=1e-13, atol=1e-15)
-    np.testing.assert_allclose(jax.grad(loss(ours))(alpha), jax.grad(loss(reference))(alpha), rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(
+        jax.grad(loss(ours))(alpha), jax.grad(loss(reference))(alpha), rtol=1e-12, atol=1e-14
+    )
     direction = jnp.asarray(rng.standard_normal(n))
-    for got, want in zip(jax.jvp(ours, (alpha,), (direction,))[1], jax.jvp(reference, (alpha,), (direction,))[1]):
+    for got, want in zip(
+        jax.jvp(ours, (alpha,), (direction,))[1], jax.jvp(reference, (alpha,), (direction,))[1]
+    ):
         np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-14)

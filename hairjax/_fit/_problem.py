@@ -83,7 +83,10 @@ def visible_fragments(geom, frag_alpha):
     return eqx.tree_at(
         lambda g: (g.frag_pixel, g.frag_i0, g.frag_t, g.frag_weight),
         geom,
-        tuple(jnp.asarray(np.asarray(x)[keep]) for x in (geom.frag_pixel, geom.frag_i0, geom.frag_t, geom.frag_weight)),
+        tuple(
+            jnp.asarray(np.asarray(x)[keep])
+            for x in (geom.frag_pixel, geom.frag_i0, geom.frag_t, geom.frag_weight)
+        ),
     )
 
 

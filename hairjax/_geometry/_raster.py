@@ -194,6 +194,8 @@ def rasterize(
         filled = end
     release_heap(total * rows * 20)  # the chunks' temporaries: 4 outputs, keep (int64)
     return Fragments(*(field[:filled] for field in fields))
+
+
 def _bucket(n: int) -> int:
     """Round a size up to a power of two (≥ 4096) so the kernel compiles rarely."""
     return max(4096, 1 << int(np.ceil(np.log2(max(n, 1)))))

@@ -7,7 +7,15 @@ import numpy as np
 import pytest
 from helpers import small_furball_scene
 
-from hairjax._geometry._host import _MALLOC_TRIM, ALIGNMENT, RELEASE_MIN_BYTES, aligned_empty, aligned_take, release_heap, to_device
+from hairjax._geometry._host import (
+    _MALLOC_TRIM,
+    ALIGNMENT,
+    RELEASE_MIN_BYTES,
+    aligned_empty,
+    aligned_take,
+    release_heap,
+    to_device,
+)
 from hairjax._geometry._setup import prepare
 from hairjax._geometry._stage import geometry_stage
 
