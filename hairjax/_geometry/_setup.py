@@ -23,7 +23,7 @@ from .._errors import EmptyViewWarning
 from .._scene._scene import Scene
 from .._scene._strands import tangents, unit_rows
 from .._shading import PointInputs
-from ._host import aligned_take, release_heap
+from ._host import aligned_empty, aligned_take, release_heap
 from ._occluder import occluder_hits, occluder_light_view, occluder_visibility
 from ._ordering import segment_depth, stable_argsort_uint32
 from ._projection import View, camera_view
@@ -233,26 +233,30 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
         frags = frags.take(visible)
         lap("occluder")
 
-    # Only what compositing needs is permuted: pixel, segment, coverage, t (not depth,
-    # released here), into aligned arrays that the geometry stage shares with JAX
-    # (`_host`); each input is released once permuted, and the C heap they leave is handed
-    # back to the system (`release_heap`).
+    # Only what compositing needs is permuted: segment, coverage, t (not depth, released
+    # here), into aligned arrays that the geometry stage shares with JAX (`_host`); each
+    # input is released once permuted, and the C heap they leave is handed back to the
+    # system (`release_heap`). The sorted pixels are not gathered: they are each pixel's
+    # index repeated by its fragment count, written in one sequential pass (a random
+    # gather of 55 M entries took 0.9-1.5 s, the repeat 0.17 s).
     pixel, segment, coverage, t = frags.pixel, frags.segment, frags.coverage, frags.t
     del frags
+    n_frags = pixel.size
     sort = stable_argsort_uint32(pixel)
-    frag_pixel = aligned_take(pixel, sort)
+    frag_pixel = aligned_empty(n_frags, np.int32)
+    frag_pixel[:] = np.repeat(np.arange(hw, dtype=np.int32), np.bincount(pixel, minlength=hw))
     del pixel
     frag_coverage = aligned_take(coverage, sort)
     del coverage
     frag_t = aligned_take(t, sort)
     del t
-    seg = near_first.astype(np.int32)[segment[sort]]
+    # The fragments' raster segments, then in place their first points (a small table).
+    frag_i0 = aligned_take(segment, sort, np.int32)
     del segment, sort
-    frag_i0 = aligned_take(segments[:, 0], seg, np.int32)
     if segment_alpha is not None:  # §17's alpha texture scales the segment's opacity
-        frag_coverage *= segment_alpha[seg]
-    release_heap(seg.size * 28)  # the raster's 4 fields, their permutation and its index
-    del seg
+        frag_coverage *= segment_alpha[near_first][frag_i0]
+    np.take(segments[near_first, 0].astype(np.int32), frag_i0, out=frag_i0)
+    release_heap(n_frags * 28)  # the raster's 4 fields, their permutation and its index
     lap("sort fragments")
 
     shadow = None
