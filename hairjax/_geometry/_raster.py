@@ -77,17 +77,19 @@ class Fragments:
     `pixel` (int32): row-major pixel index y·W + x; `segment` (int32): index into the input
     arrays; floats are in JAX's default precision (float32, or float64 with x64 on);
     `coverage` ∈ (0, 1]; `t` ∈ [0, 1): screen-space position along the segment;
-    `depth`: interpolated depth (perspective-correct for perspective views).
+    `depth`: interpolated depth (perspective-correct for perspective views), or None when
+    the raster was asked for none.
     """
 
     pixel: np.ndarray
     segment: np.ndarray
     coverage: np.ndarray
     t: np.ndarray
-    depth: np.ndarray
+    depth: np.ndarray | None
 
     def take(self, index) -> Fragments:
-        return Fragments(*(getattr(self, f.name)[index] for f in dataclasses.fields(self)))
+        fields = (getattr(self, f.name) for f in dataclasses.fields(self))
+        return Fragments(*(None if x is None else x[index] for x in fields))
 
     @property
     def size(self) -> int:
@@ -103,13 +105,17 @@ def rasterize(
     image_width: int,
     image_height: int,
     perspective: bool,
+    *,
+    depth: bool = True,
 ) -> Fragments:
     """All (segment, pixel) pairs with positive coverage, segment after segment.
 
     **Arguments:** per segment `xy0`, `xy1` (`[E, 2]` pixel coordinates), depths `z0`, `z1`
     (`[E]`), ribbon `width` (`[E]` pixels, or `[E, 2]`: at each end, `ribbon_widths`); the
     raster size; whether depth is
-    interpolated perspective-correctly (1/z linear in screen space) or linearly.
+    interpolated perspective-correctly (1/z linear in screen space) or linearly; `depth`:
+    whether to interpolate it at all (the camera's fragments need it only for an
+    occluder's depth test: without, `Fragments.depth` is None and the kernel skips it).
 
     Columns along each segment's major axis are laid out here in NumPy; the per-pixel
     maths runs in one fused XLA kernel over `[columns, rows]` candidates, in JAX's
@@ -173,7 +179,9 @@ def rasterize(
     # hold. (Per-chunk parts concatenated at the end had held each fragment twice and left
     # 1.6 GiB of C heap behind at 100k strands / 1024², BENCHMARKS.md "Memory".)
     dtype = jnp.result_type(float)
-    fields = [np.empty(total * rows, t) for t in (np.int32, np.int32, dtype, dtype, dtype)]
+    fields = [
+        np.empty(total * rows, t) for t in (np.int32, np.int32, dtype, dtype, dtype)[: 5 if depth else 4]
+    ]
     filled = 0
     for c_lo in range(0, total, _CHUNK):
         seg = seg_of_col[c_lo : c_lo + _CHUNK]
@@ -183,17 +191,17 @@ def rasterize(
         k[: seg.size] = lo[seg] + (np.arange(c_lo, c_lo + seg.size) - first_col[seg])
         padded = np.full(size, n, np.int32)  # padding columns read the zero row n
         padded[: seg.size] = seg
-        out = _candidates(seg_data, padded, k, rows, image_width, image_height, perspective)
-        pixel, cov, t, depth = (np.asarray(o)[: seg.size * rows] for o in out)
+        out = _candidates(seg_data, padded, k, rows, image_width, image_height, perspective, depth)
+        pixel, cov, *rest = (np.asarray(o)[: seg.size * rows] for o in out)
         keep = np.flatnonzero(cov > 0)
         end = filled + keep.size
-        for field, values in zip(fields, (pixel, None, cov, t, depth)):
+        for field, values in zip(fields, (pixel, None, cov, *rest)):
             if values is not None:
                 np.take(values, keep, out=field[filled:end])
         fields[1][filled:end] = seg[keep // rows]
         filled = end
     release_heap(total * rows * 20)  # the chunks' temporaries: 4 outputs, keep (int64)
-    return Fragments(*(field[:filled] for field in fields))
+    return Fragments(*(field[:filled] for field in fields), *([] if depth else [None]))
 
 
 def _bucket(n: int) -> int:
@@ -201,9 +209,10 @@ def _bucket(n: int) -> int:
     return max(4096, 1 << int(np.ceil(np.log2(max(n, 1)))))
 
 
-@functools.partial(jax.jit, static_argnums=(3, 4, 5, 6))
-def _candidates(seg_data, seg, k, rows, image_width, image_height, perspective):
-    """Candidate pixels `[columns · rows]`: (pixel, coverage, t, depth).
+@functools.partial(jax.jit, static_argnums=(3, 4, 5, 6, 7))
+def _candidates(seg_data, seg, k, rows, image_width, image_height, perspective, with_depth):
+    """Candidate pixels `[columns · rows]`: (pixel, coverage, t, depth), depth only
+    `with_depth`.
 
     Coverage 0 marks a candidate that is not drawn (outside the ribbon, the image, or
     padding). A column is the pixel column `k` (row, for y-major segments) of segment
@@ -237,6 +246,9 @@ def _candidates(seg_data, seg, k, rows, image_width, image_height, perspective):
     # Padding columns have length 0 and fail s < L.
     valid = inside & (s >= 0) & (s < length)
     cov = jnp.where(valid, cov, 0.0)
+    pixel = py.astype(jnp.int32) * image_width + px.astype(jnp.int32)
+    if not with_depth:
+        return tuple(x.ravel() for x in (pixel, cov, t))
     if perspective:
         # Fires only on padding (depth 0); drawn segments lie beyond the near plane.
         inv = (1 - t) / jnp.where(za != 0, za, 1.0) + t / jnp.where(zb != 0, zb, 1.0)
@@ -247,5 +259,4 @@ def _candidates(seg_data, seg, k, rows, image_width, image_height, perspective):
     else:
         # z₀ + t(z₁ − z₀) is exactly z₀ for segments at constant depth.
         depth = za + t * (zb - za)
-    pixel = py.astype(jnp.int32) * image_width + px.astype(jnp.int32)
     return tuple(x.ravel() for x in (pixel, cov, t, depth))

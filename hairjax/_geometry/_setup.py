@@ -200,7 +200,18 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
         view.focal,
         view.perspective,
     )
-    frags = rasterize(xy[s0], xy[s1], depth[s0], depth[s1], widths, cam.width, cam.height, True)
+    # Depth only for an occluder's depth test (§9): nothing else reads the camera's.
+    frags = rasterize(
+        xy[s0],
+        xy[s1],
+        depth[s0],
+        depth[s1],
+        widths,
+        cam.width,
+        cam.height,
+        True,
+        depth=scene.occluder is not None,
+    )
     # Hair whose segments all have length 0 (or that has none: one-point strands) draws
     # nothing from any camera; that is not the camera's fault, so no warning then.
     if frags.pixel.size == 0 and np.any(points[segments[:, 0]] != points[segments[:, 1]]):
@@ -233,12 +244,12 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
         frags = frags.take(visible)
         lap("occluder")
 
-    # Only what compositing needs is permuted: segment, coverage, t (not depth, released
-    # here), into aligned arrays that the geometry stage shares with JAX (`_host`); each
-    # input is released once permuted, and the C heap they leave is handed back to the
-    # system (`release_heap`). The sorted pixels are not gathered: they are each pixel's
-    # index repeated by its fragment count, written in one sequential pass (a random
-    # gather of 55 M entries took 0.9-1.5 s, the repeat 0.17 s).
+    # Only what compositing needs is permuted: segment, coverage, t (not depth), into
+    # aligned arrays that the geometry stage shares with JAX (`_host`); each input is
+    # released once permuted, and the C heap they leave is handed back to the system
+    # (`release_heap`). The sorted pixels are not gathered: they are each pixel's index
+    # repeated by its fragment count, written in one sequential pass (a random gather of
+    # 55 M entries took 0.9-1.5 s, the repeat 0.17 s).
     pixel, segment, coverage, t = frags.pixel, frags.segment, frags.coverage, frags.t
     del frags
     n_frags = pixel.size

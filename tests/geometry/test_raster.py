@@ -198,3 +198,19 @@ def test_world_width_too_wide_for_the_light_view_is_a_clear_error():
     scene = _world_segment_scene(5.0, "world").replace(shadows=hj.Shadows("exact", resolution=16))
     with pytest.raises(ValueError, match="too wide for its border"):
         hj.render(scene)
+
+
+def test_a_raster_without_depth_has_the_same_fragments():
+    """`depth=False` (the camera's raster without an occluder) skips depth and only depth:
+    the same pixels, segments, coverage and t, in the same order, bit for bit."""
+    rng = np.random.default_rng(4)
+    a = rng.uniform(-10, 40, (300, 2))
+    b = a + rng.normal(0, 8, (300, 2))
+    z0, z1 = rng.uniform(1, 5, 300), rng.uniform(1, 5, 300)
+    w = rng.uniform(0.25, 8, (300, 2))
+    with_depth = rasterize(a, b, z0, z1, w, 30, 20, True)
+    without = rasterize(a, b, z0, z1, w, 30, 20, True, depth=False)
+    assert without.depth is None and with_depth.depth is not None and with_depth.size > 1000
+    for name in ("pixel", "segment", "coverage", "t"):
+        np.testing.assert_array_equal(getattr(without, name), getattr(with_depth, name))
+    assert without.take(np.arange(5)).depth is None

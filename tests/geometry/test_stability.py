@@ -551,7 +551,7 @@ def test_guard_rasteriser_padding_columns(dtype):
         seg_data[0] = real
         seg = np.array([0, 1, 1, 1, 1, 1, 1, 1], np.int32)  # one real column, seven of padding
         k = np.array([2, 0, 0, 0, 0, 0, 0, 0], np.int32)
-        pixel, cov, t, depth = (np.asarray(o) for o in _candidates(seg_data, seg, k, 4, 16, 16, True))
+        pixel, cov, t, depth = (np.asarray(o) for o in _candidates(seg_data, seg, k, 4, 16, 16, True, True))
         assert np.all(np.isfinite(cov)) and np.all(np.isfinite(t)) and np.all(np.isfinite(depth))
         np.testing.assert_array_equal(cov[4:], 0.0)  # rows of the padding columns
         assert cov[:4].max() == 1.0  # pixel (2, 3): the line runs through its centre
