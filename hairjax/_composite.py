@@ -76,7 +76,11 @@ def pixel_weights(
     Only a pixel cut by a run's end sees its product formed in another order (float
     rounding)."""
     n = alpha.shape[0]
-    weights = jnp.zeros_like(alpha)
+    # The runs overwrite every entry of the weights' buffer, which starts as α rather than
+    # zeros: a constant of F entries (not computed from an input) is evaluated eagerly
+    # under the geometry stage's `ensure_compile_time_eval`, embedded in the compiled
+    # program and kept alive by the compilation cache, one per fragment count.
+    weights = alpha
     transmittance = jnp.ones(hw, alpha.dtype)
     if n == 0:
         return weights, transmittance
