@@ -88,8 +88,15 @@ class Fragments:
     depth: np.ndarray | None
 
     def take(self, index) -> Fragments:
-        fields = (getattr(self, f.name) for f in dataclasses.fields(self))
-        return Fragments(*(None if x is None else x[index] for x in fields))
+        depth = None if self.depth is None else self.depth[index]
+        return Fragments(self.pixel[index], self.segment[index], self.coverage[index], self.t[index], depth)
+
+    @property
+    def depths(self) -> np.ndarray:
+        """`depth`, of a raster that interpolated it (ValueError otherwise)."""
+        if self.depth is None:
+            raise ValueError("this raster interpolated no depth (rasterize(..., depth=False))")
+        return self.depth
 
     @property
     def size(self) -> int:

@@ -240,7 +240,7 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
         )
         backdrop[opaque] = 0.0  # the shading stage adds the occluder's colour (§13)
         # kim-2003 §3: depth test on, hair does not write depth.
-        visible = np.flatnonzero(frags.depth < hit_depth[frags.pixel])
+        visible = np.flatnonzero(frags.depths < hit_depth[frags.pixel])
         frags = frags.take(visible)
         lap("occluder")
 

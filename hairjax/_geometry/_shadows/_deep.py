@@ -152,8 +152,8 @@ class DeepOpacityMaps(AbstractShadowMethod):
             width_units=width_units,
         )
         depth_range = self.depth_range(lf.frame)
-        first = first_depths(lf.frags.pixel, lf.frags.depth, resolution)
-        u = layer_coordinate(lf.frags.depth, first[lf.frags.pixel], layers, depth_range)
+        first = first_depths(lf.frags.pixel, lf.frags.depths, resolution)
+        u = layer_coordinate(lf.frags.depths, first[lf.frags.pixel], layers, depth_range)
         # The minimum fires for fragments at or beyond the last boundary (u ≥ K): slice K,
         # counted in the texel's total only. u ≥ 0: z₀ is the texel's nearest fragment.
         j = np.minimum(np.floor(u), layers).astype(np.int64)

@@ -80,7 +80,7 @@ class ExactShadows(AbstractShadowMethod):
             # The clip fires for depths outside [D₀, D_N]: unseen points (masked below), rounding.
             return texel + 0.5 * np.clip((z - zmin) / span, 0.0, 1.0)
 
-        frag_key = key(frags.pixel.astype(np.float64), frags.depth)
+        frag_key = key(frags.pixel.astype(np.float64), frags.depths)
         order = np.argsort(frag_key)
         frag_key = frag_key[order]
         first = np.ones(frags.size, np.bool_)

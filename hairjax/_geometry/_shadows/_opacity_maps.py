@@ -107,7 +107,7 @@ class OpacityMaps(AbstractShadowMethod):
         )
         # A fragment in [D_j, D_{j+1}) counts towards planes j + 1 … N (strictly nearer).
         # The clip fires only through rounding (a depth ulps below D₀ → slice 0); D_N gives N.
-        j = np.clip(np.floor(lf.frame.slice_coordinate(lf.frags.depth, maps)), 0, maps).astype(np.int64)
+        j = np.clip(np.floor(lf.frame.slice_coordinate(lf.frags.depths, maps)), 0, maps).astype(np.int64)
         plane, f = point_planes(lf.frame, maps)
         return OpacityMapSetup(
             view=lf.frame.view,
