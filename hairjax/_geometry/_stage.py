@@ -111,12 +111,15 @@ def _geometry_stage(scene: Scene, alpha, order=None) -> Geometry:
     setup = prepare(scene, order=order)
     dtype = jnp.result_type(float)
     alpha = jnp.asarray(alpha, dtype=dtype)
+    # Shared with the set-up's aligned arrays where the dtypes agree (`_host`); sent once,
+    # for compositing and the Geometry alike (a copy each on a GPU).
+    frag_pixel, frag_i0 = to_device(setup.frag_pixel, jnp.int32), to_device(setup.frag_i0, jnp.int32)
     weights, transmittance, alpha_channel = composite_weights(
         alpha,
         jnp.asarray(setup.strand_of_point),
-        to_device(setup.frag_i0, jnp.int32),
+        frag_i0,
         to_device(setup.frag_coverage, dtype),
-        to_device(setup.frag_pixel, jnp.int32),
+        frag_pixel,
         jnp.asarray(setup.opaque, dtype),
     )
     release_heap(weights.size * 12)  # compositing's temporaries: α, the scan's runs
@@ -142,9 +145,8 @@ def _geometry_stage(scene: Scene, alpha, order=None) -> Geometry:
         occluder_color=maybe(setup.occluder_color),
         occluder_omega=occluder_omega,
         occluder_visibility=maybe(setup.occluder_visibility),
-        # Shared with the set-up's aligned arrays where the dtypes agree (`_host`).
-        frag_pixel=to_device(setup.frag_pixel, jnp.int32),
-        frag_i0=to_device(setup.frag_i0, jnp.int32),
+        frag_pixel=frag_pixel,
+        frag_i0=frag_i0,
         frag_t=to_device(setup.frag_t, dtype),
         frag_weight=weights,
         transmittance=transmittance,
