@@ -20,7 +20,7 @@ import ctypes
 import jax
 import numpy as np
 
-__all__ = ["aligned_empty", "aligned_take", "release_heap", "to_device"]
+__all__ = ["aligned_empty", "release_heap", "to_device"]
 
 ALIGNMENT = 64  # bytes: XLA's CPU buffer alignment
 
@@ -31,16 +31,6 @@ def aligned_empty(n: int, dtype) -> np.ndarray:
     raw = np.empty(n * dtype.itemsize + ALIGNMENT, np.uint8)
     offset = -raw.ctypes.data % ALIGNMENT
     return raw[offset : offset + n * dtype.itemsize].view(dtype)
-
-
-def aligned_take(values: np.ndarray, index: np.ndarray, dtype=None) -> np.ndarray:
-    """`values[index]` (1-D), cast to `dtype` (default: `values`' own), in an aligned array."""
-    out = aligned_empty(index.shape[0], values.dtype if dtype is None else dtype)
-    if out.dtype == values.dtype:
-        np.take(values, index, out=out)
-    else:
-        out[...] = values[index]
-    return out
 
 
 def to_device(x: np.ndarray, dtype) -> jax.Array:

@@ -23,9 +23,9 @@ from .._errors import EmptyViewWarning
 from .._scene._scene import Scene
 from .._scene._strands import tangents, unit_rows
 from .._shading import PointInputs
-from ._host import aligned_empty, aligned_take, release_heap
+from ._host import release_heap
 from ._occluder import occluder_hits, occluder_light_view, occluder_visibility
-from ._ordering import segment_depth, stable_argsort_uint32
+from ._ordering import segment_depth
 from ._projection import View, camera_view
 from ._raster import rasterize, ribbon_widths
 
@@ -244,30 +244,22 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
         frags = frags.take(visible)
         lap("occluder")
 
-    # Only what compositing needs is permuted: segment, coverage, t (not depth), into
-    # aligned arrays that the geometry stage shares with JAX (`_host`); each input is
-    # released once permuted, and the C heap they leave is handed back to the system
-    # (`release_heap`). The sorted pixels are not gathered: they are each pixel's index
-    # repeated by its fragment count, written in one sequential pass (a random gather of
-    # 55 M entries took 0.9-1.5 s, the repeat 0.17 s).
-    pixel, segment, coverage, t = frags.pixel, frags.segment, frags.coverage, frags.t
+    # Only what compositing needs is grouped by pixel: segment, coverage, t (not depth),
+    # into aligned arrays that the geometry stage shares with JAX (`_host`), in one
+    # counting-sort pass (`group_by_pixel`); the raster's fields are released after, and
+    # the C heap they leave is handed back to the system (`release_heap`).
+    from ._group import group_by_pixel  # loads numba: not for the GL renderer's start-up
+
+    n_frags = frags.pixel.size
+    frag_pixel, (frag_i0, frag_coverage, frag_t) = group_by_pixel(
+        frags.pixel, hw, frags.segment.astype(np.int32, copy=False), frags.coverage, frags.t
+    )
     del frags
-    n_frags = pixel.size
-    sort = stable_argsort_uint32(pixel)
-    frag_pixel = aligned_empty(n_frags, np.int32)
-    frag_pixel[:] = np.repeat(np.arange(hw, dtype=np.int32), np.bincount(pixel, minlength=hw))
-    del pixel
-    frag_coverage = aligned_take(coverage, sort)
-    del coverage
-    frag_t = aligned_take(t, sort)
-    del t
-    # The fragments' raster segments, then in place their first points (a small table).
-    frag_i0 = aligned_take(segment, sort, np.int32)
-    del segment, sort
     if segment_alpha is not None:  # §17's alpha texture scales the segment's opacity
         frag_coverage *= segment_alpha[near_first][frag_i0]
+    # The fragments' raster segments, then in place their first points (a small table).
     np.take(segments[near_first, 0].astype(np.int32), frag_i0, out=frag_i0)
-    release_heap(n_frags * 28)  # the raster's 4 fields, their permutation and its index
+    release_heap(n_frags * 16)  # the raster's 4 fields
     lap("sort fragments")
 
     shadow = None

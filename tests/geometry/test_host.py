@@ -12,7 +12,6 @@ from hairjax._geometry._host import (
     ALIGNMENT,
     RELEASE_MIN_BYTES,
     aligned_empty,
-    aligned_take,
     release_heap,
     to_device,
 )
@@ -27,15 +26,6 @@ cpu_only = pytest.mark.skipif(jax.default_backend() != "cpu", reason="the CPU ba
 def test_aligned_empty_is_aligned(n, dtype):
     x = aligned_empty(n, dtype)
     assert x.shape == (n,) and x.dtype == dtype and x.ctypes.data % ALIGNMENT == 0
-
-
-def test_aligned_take_is_a_take():
-    values = np.arange(100, dtype=np.int64) * 3
-    index = np.array([5, 0, 99, 5])
-    np.testing.assert_array_equal(aligned_take(values, index), values[index])
-    got = aligned_take(values, index, np.int32)
-    assert got.dtype == np.int32 and got.ctypes.data % ALIGNMENT == 0
-    np.testing.assert_array_equal(got, values[index])
 
 
 @cpu_only

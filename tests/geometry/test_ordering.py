@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import hairjax as hj
-from hairjax._geometry._ordering import bin_index, draw_order, segment_depth, stable_argsort_uint32
+from hairjax._geometry._ordering import bin_index, draw_order, segment_depth
 
 
 def test_bin_formula_by_hand():
@@ -46,13 +46,6 @@ def test_draw_order_far_bins_first_index_within_bin():
     np.testing.assert_array_equal(draw_order(seg_depth, hj.Ordering("none")), [0, 1, 2, 3, 4])
     with pytest.raises(hj.SceneError, match="ordering.method must be one of .*got 'random'"):
         hj.Ordering("random")
-
-
-@given(st.lists(st.integers(0, 2**32 - 1), max_size=300))
-@settings(max_examples=100, deadline=None)
-def test_radix_argsort_is_a_stable_sort(keys):
-    keys = np.asarray(keys, dtype=np.int64)
-    np.testing.assert_array_equal(stable_argsort_uint32(keys), np.argsort(keys, kind="stable"))
 
 
 # --- the static inside-to-outside order (scheuermann-2004 slide 14, docs/model.md §4) ---

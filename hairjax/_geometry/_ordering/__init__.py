@@ -15,7 +15,6 @@ from ._bins import DepthBins as DepthBins
 from ._depth import bin_index as bin_index
 from ._depth import hair_centre as hair_centre
 from ._depth import segment_depth as segment_depth
-from ._depth import stable_argsort_uint32 as stable_argsort_uint32
 from ._exact import ExactOrder as ExactOrder
 from ._none import IndexOrder as IndexOrder
 from ._static import StaticOrder as StaticOrder

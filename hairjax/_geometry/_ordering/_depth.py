@@ -1,11 +1,11 @@
 """The depth keys and sorts the orderings share (kim-2003 §3; docs/model.md §4): a
-segment's depth, kim-2003's bin index, the roots' centre, and a stable radix argsort."""
+segment's depth, kim-2003's bin index and the roots' centre."""
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["bin_index", "hair_centre", "segment_depth", "stable_argsort_uint32"]
+__all__ = ["bin_index", "hair_centre", "segment_depth"]
 
 
 def segment_depth(depth: np.ndarray, segments: np.ndarray) -> np.ndarray:
@@ -38,19 +38,3 @@ def hair_centre(points: np.ndarray, offsets: np.ndarray) -> np.ndarray:
     the Scheuermann strand normal points away from, docs/model.md §17)."""
     roots = np.asarray(points, np.float64)[np.asarray(offsets)[:-1]]
     return 0.5 * (roots.min(axis=0) + roots.max(axis=0))
-
-
-def stable_argsort_uint32(keys: np.ndarray) -> np.ndarray:
-    """Stable argsort of non-negative keys < 2^32: two passes of NumPy's 16-bit radix sort
-    (least significant half first), O(n) instead of timsort's O(n log n).
-
-    The permutation is int32 when it fits (fewer than 2^31 keys): the set-up sorts 55 M
-    fragment pixels at 100k strands / 1024², where three int64 permutations held at once
-    were 1.3 GB (BENCHMARKS.md "Memory")."""
-    keys = np.asarray(keys)
-    index = np.int32 if keys.size < 2**31 else np.int64
-    low = np.argsort((keys & 0xFFFF).astype(np.uint16), kind="stable").astype(index)
-    if keys.size == 0 or keys.max() < (1 << 16):
-        return low
-    high = np.argsort((keys[low] >> 16).astype(np.uint16), kind="stable")
-    return low[high]
