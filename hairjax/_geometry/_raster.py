@@ -14,35 +14,37 @@ collinear neighbours: a straight strand drawn as 1 or 8 segments covers the same
 with the same coverage (no double-covered joints, no gaps).
 
 Geometry only, no gradients flow through here: the segments' columns are counted in NumPy
-float64; the per-pixel maths runs in one jitted XLA kernel in JAX's default float
-precision, which gathers each column's segment data itself (a column carries only its
-segment's index and its pixel column).
+float64; the per-pixel maths runs in JAX's default float precision (float32, or float64
+with x64 on) in one loop over the segments' columns and the candidate rows around the
+line in each, compiled by numba, which writes only the covered candidates. (An XLA kernel
+over every candidate followed by NumPy's compaction did the same work before, 2.5–4×
+slower: BENCHMARKS.md, "rasterize".) The loop contracts a·b + c into fused multiply-adds
+where LLVM finds them, as XLA's CPU kernel did, so its fragments equal that kernel's bit
+for bit.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import functools
+from typing import no_type_check
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
 from .._constants import PIXEL_HALF_EXTENT
-from ._host import release_heap
 
 __all__ = ["Fragments", "rasterize", "ribbon_coverage", "ribbon_widths"]
 
-_CHUNK = 1 << 20  # columns per kernel call: bounds peak memory to a few hundred MB
 
-
-def ribbon_coverage(d, width):
+def ribbon_coverage(d, width) -> np.ndarray:
     """Coverage of a unit box at distance `d` from the ribbon axis by a ribbon of `width`
-    (docs/model.md §5). The rasteriser's kernel calls this, so the tests check what renders."""
-    half = 0.5 * width
-    return jnp.clip(
-        jnp.minimum(d + PIXEL_HALF_EXTENT, half) - jnp.maximum(d - PIXEL_HALF_EXTENT, -half), 0.0, 1.0
-    )
+    (docs/model.md §5), elementwise, in JAX's default float precision. It runs the
+    rasteriser's own compiled function, so the tests check what renders."""
+    dtype = jnp.result_type(float)
+    d, width = np.broadcast_arrays(np.asarray(d, dtype), np.asarray(width, dtype))
+    coverage = _kernels(np.dtype(dtype).name)[0]
+    return np.array([coverage(a, b) for a, b in zip(d.ravel(), width.ravel())], dtype).reshape(d.shape)
 
 
 def ribbon_widths(
@@ -125,7 +127,7 @@ def rasterize(
     occluder's depth test: without, `Fragments.depth` is None and the kernel skips it).
 
     Columns along each segment's major axis are laid out here in NumPy; the per-pixel
-    maths runs in one fused XLA kernel over `[columns, rows]` candidates, in JAX's
+    maths runs in one compiled loop over their candidate rows (`_kernels`), in JAX's
     default float precision (float64 when x64 is enabled).
     """
     xy0 = np.asarray(xy0, np.float64)
@@ -153,13 +155,9 @@ def rasterize(
     # 2·reach·√2 around the line; an interval of length ℓ holds at most ⌈ℓ⌉ + 1 of them.
     rows = int(np.ceil(2 * float(reach.max(initial=0.0)) * np.sqrt(2))) + 1  # initial: no segments
 
-    # Per segment, what the kernel needs, in the kernel's precision (it computed in that
-    # precision before as well): each column then carries only its segment's index and its
-    # own pixel column k, and the kernel gathers the segment's row itself.
-    # Rows padded with zeros to a bucket of at least n + 1 (the kernel compiles per bucket,
-    # and padding columns read row n: length 0).
-    seg_data = np.zeros((_bucket(n + 1), 11), jnp.result_type(float))
-    seg_data[:n] = np.stack(
+    # Per segment, what the kernel needs, cast from float64 to the kernel's precision.
+    dtype = jnp.result_type(float)
+    seg_data = np.stack(
         [
             xy0[:, 0],
             xy0[:, 1],
@@ -174,96 +172,104 @@ def rasterize(
             widths[:, 1],
         ],
         axis=1,
-    )
-    seg_data = jax.device_put(seg_data)  # once, not with every chunk's call
-    # Columns are independent once they know their segment, so they are cut into chunks of
-    # exactly _CHUNK (only the last is padded): the kernel compiles for one size.
-    seg_of_col = np.repeat(np.arange(n, dtype=np.int32), columns)
-    first_col = np.cumsum(columns) - columns
-    total = seg_of_col.size
+    ).astype(dtype)
     # The covered candidates are written straight into one array per field, sized for
     # every candidate: pages never written are never resident, so the fields cost what they
-    # hold. (Per-chunk parts concatenated at the end had held each fragment twice and left
-    # 1.6 GiB of C heap behind at 100k strands / 1024², BENCHMARKS.md "Memory".)
-    dtype = jnp.result_type(float)
-    fields = [
-        np.empty(total * rows, t) for t in (np.int32, np.int32, dtype, dtype, dtype)[: 5 if depth else 4]
-    ]
-    filled = 0
-    for c_lo in range(0, total, _CHUNK):
-        seg = seg_of_col[c_lo : c_lo + _CHUNK]
-        size = _CHUNK if total > _CHUNK else _bucket(seg.size)
-        # k = lo + the column's place in its segment; exact integers in float32 (< 2^24).
-        k = np.zeros(size, np.int32)
-        k[: seg.size] = lo[seg] + (np.arange(c_lo, c_lo + seg.size) - first_col[seg])
-        padded = np.full(size, n, np.int32)  # padding columns read the zero row n
-        padded[: seg.size] = seg
-        out = _candidates(seg_data, padded, k, rows, image_width, image_height, perspective, depth)
-        pixel, cov, *rest = (np.asarray(o)[: seg.size * rows] for o in out)
-        keep = np.flatnonzero(cov > 0)
-        end = filled + keep.size
-        for field, values in zip(fields, (pixel, None, cov, *rest)):
-            if values is not None:
-                np.take(values, keep, out=field[filled:end])
-        fields[1][filled:end] = seg[keep // rows]
-        filled = end
-    release_heap(total * rows * 20)  # the chunks' temporaries: 4 outputs, keep (int64)
-    return Fragments(*(field[:filled] for field in fields), *([] if depth else [None]))
+    # hold (BENCHMARKS.md "Memory").
+    capacity = int(columns.sum()) * rows
+    pixel, segment = np.empty(capacity, np.int32), np.empty(capacity, np.int32)
+    coverage, t = np.empty(capacity, dtype), np.empty(capacity, dtype)
+    depths = np.empty(capacity if depth else 0, dtype)
+    filled = _kernels(np.dtype(dtype).name)[1](
+        seg_data,
+        lo.astype(np.int64),
+        columns,
+        rows,
+        image_width,
+        image_height,
+        bool(perspective),
+        depth,
+        pixel,
+        segment,
+        coverage,
+        t,
+        depths,
+    )
+    return Fragments(
+        pixel[:filled], segment[:filled], coverage[:filled], t[:filled], depths[:filled] if depth else None
+    )
 
 
-def _bucket(n: int) -> int:
-    """Round a size up to a power of two (≥ 4096) so the kernel compiles rarely."""
-    return max(4096, 1 << int(np.ceil(np.log2(max(n, 1)))))
+@functools.cache
+def _kernels(dtype_name: str):
+    """`(coverage, raster)` compiled by numba for floats of `dtype_name` (on first use;
+    cached on disk). Every constant has that type, so no operation widens to float64."""
+    import numba
 
+    F = np.float32 if dtype_name == "float32" else np.float64
+    zero, one, half_extent = F(0.0), F(1.0), F(PIXEL_HALF_EXTENT)
+    # error_model numpy: a division by 0 gives inf, as in XLA, without a check per division.
+    # contract: fused multiply-adds where LLVM finds them, as XLA's CPU kernels have.
+    # no_type_check: the tests' jaxtyping hook would otherwise wrap them before numba.
+    options = dict(cache=True, nogil=True, error_model="numpy", fastmath={"contract"})
 
-@functools.partial(jax.jit, static_argnums=(3, 4, 5, 6, 7))
-def _candidates(seg_data, seg, k, rows, image_width, image_height, perspective, with_depth):
-    """Candidate pixels `[columns · rows]`: (pixel, coverage, t, depth), depth only
-    `with_depth`.
+    @numba.njit(**options)
+    @no_type_check
+    def coverage(d, width):
+        half = F(0.5) * width
+        return min(max(min(d + half_extent, half) - max(d - half_extent, -half), zero), one)
 
-    Coverage 0 marks a candidate that is not drawn (outside the ribbon, the image, or
-    padding). A column is the pixel column `k` (row, for y-major segments) of segment
-    `seg`, whose row of `seg_data` is (x0, y0, dx, dy, L, w₀, z0, z1, x-major, reach, w₁);
-    its candidates are the `rows` pixels around the segment's line there. Padding columns
-    read a zero row (length 0).
-    """
-    dtype = jnp.result_type(float)
-    c = seg_data[seg]
-    x0, y0, dx, dy, length, w0, za, zb, xm, reach, w1 = (c[:, i, None] for i in range(11))
-    k = k.astype(dtype)[:, None]
-    xm = xm > 0
-    da = jnp.where(xm, dx, dy)
-    db = jnp.where(xm, dy, dx)
-    # Fires only on padding columns (length 0); a drawn segment has |da| ≥ L/√2 > 0.
-    da_safe = jnp.where(da != 0, da, 1.0)
-    b_line = jnp.where(xm, y0, x0) + (k + 0.5 - jnp.where(xm, x0, y0)) * (db / da_safe)
-    m = jnp.floor(b_line - reach * length / jnp.abs(da_safe) - 0.5) + 1 + jnp.arange(rows)[None, :]
-    px = jnp.where(xm, k, m)
-    py = jnp.where(xm, m, k)
-    # Fires only on padding (length 0): real segments have length > 0.
-    inv_len = 1.0 / jnp.where(length > 0, length, 1.0)
-    rx = px + 0.5 - x0
-    ry = py + 0.5 - y0
-    s = (rx * dx + ry * dy) * inv_len
-    dist = jnp.abs(rx * dy - ry * dx) * inv_len
-    t = s * inv_len
-    # w₀ + t(w₁ − w₀) is exactly w₀ for ribbons of constant width (pixel widths).
-    cov = ribbon_coverage(dist, w0 + t * (w1 - w0))
-    inside = (px >= 0) & (px < image_width) & (py >= 0) & (py < image_height)
-    # Padding columns have length 0 and fail s < L.
-    valid = inside & (s >= 0) & (s < length)
-    cov = jnp.where(valid, cov, 0.0)
-    pixel = py.astype(jnp.int32) * image_width + px.astype(jnp.int32)
-    if not with_depth:
-        return tuple(x.ravel() for x in (pixel, cov, t))
-    if perspective:
-        # Fires only on padding (depth 0); drawn segments lie beyond the near plane.
-        inv = (1 - t) / jnp.where(za != 0, za, 1.0) + t / jnp.where(zb != 0, zb, 1.0)
-        depth = 1.0 / jnp.where(inv != 0, inv, 1.0)
-        # Fires for segments at constant depth: keep z exactly (no self-shadowing by a
-        # rounding error in 1/(1/z)).
-        depth = jnp.where(za == zb, za, depth)
-    else:
-        # z₀ + t(z₁ − z₀) is exactly z₀ for segments at constant depth.
-        depth = za + t * (zb - za)
-    return tuple(x.ravel() for x in (pixel, cov, t, depth))
+    @numba.njit(**options)
+    @no_type_check
+    def raster(seg_data, lo, columns, rows, image_width, image_height, perspective, with_depth, *out):
+        out_pixel, out_segment, out_coverage, out_t, out_depth = out
+        filled = 0
+        for i in range(columns.size):
+            x0, y0, dx, dy, length, w0, za, zb, xm, reach, w1 = seg_data[i]
+            # A segment with columns has length > 0, so |da| ≥ L/√2 > 0: no guard divides.
+            x_major = xm > 0
+            da = dx if x_major else dy
+            inv_len = one / length
+            slope = (dy if x_major else dx) / da
+            offset = reach * length / abs(da)
+            a_origin = x0 if x_major else y0
+            b_origin = y0 if x_major else x0
+            for j in range(columns[i]):
+                # Column k = lo + j (exact in float32: < 2^24); its candidates are the rows
+                # pixel centres around the line there.
+                k = F(lo[i] + j)
+                b_line = b_origin + (k + half_extent - a_origin) * slope
+                first = np.floor(b_line - offset - half_extent) + one
+                for r in range(rows):
+                    m = first + F(r)
+                    px = k if x_major else m
+                    py = m if x_major else k
+                    rx = px + half_extent - x0
+                    ry = py + half_extent - y0
+                    s = (rx * dx + ry * dy) * inv_len
+                    inside = (px >= 0) & (px < image_width) & (py >= 0) & (py < image_height)
+                    if not (inside and s >= 0 and s < length):
+                        continue
+                    t = s * inv_len
+                    # w₀ + t(w₁ − w₀) is exactly w₀ for ribbons of constant width (pixel widths).
+                    cov = coverage(abs(rx * dy - ry * dx) * inv_len, w0 + t * (w1 - w0))
+                    if not cov > 0:
+                        continue
+                    out_pixel[filled] = np.int32(py) * image_width + np.int32(px)
+                    out_segment[filled] = i
+                    out_coverage[filled] = cov
+                    out_t[filled] = t
+                    if with_depth:
+                        if za == zb:
+                            # Fires for segments at constant depth: keep z exactly (no
+                            # self-shadowing by a rounding error in 1/(1/z)).
+                            out_depth[filled] = za
+                        elif perspective:
+                            # Drawn segments lie beyond the near plane: za, zb > 0.
+                            out_depth[filled] = one / ((one - t) / za + t / zb)
+                        else:
+                            out_depth[filled] = za + t * (zb - za)
+                    filled += 1
+        return filled
+
+    return coverage, raster

@@ -48,8 +48,7 @@ _projection._basis.
 | _projection: light_view, none in front          | no_point_in_front_of_a_point_light          |
 | _ordering: bin_index span fallback, minimum     | depth_bins_of_one_depth_and_…_subnormal_span|
 | _raster: rasterize zero-length columns, empty   | rasteriser_zero_length_and_empty_input      |
-| _raster: _candidates padding guards             | rasteriser_padding_columns                  |
-| _raster: _candidates za == zb                   | constant_depth_fragments_keep_z             |
+| _raster: the raster kernel's za == zb           | constant_depth_fragments_keep_z             |
 
 The modules are hairjax/_geometry's (test_occluder:: is tests/geometry/test_occluder.py).
 The GL side of these cases (the `gl` backend) reaches the GLSL guards listed in
@@ -540,26 +539,8 @@ def test_guard_rasteriser_zero_length_and_empty_input():
 
 
 @pytest.mark.parametrize("dtype", ["float64", "float32"])
-def test_guard_rasteriser_padding_columns(dtype):
-    """_raster._candidates: padding columns (reading a zero row: L = 0, depths 0) divide
-    by the guards' 1 instead of 0 — every output finite, coverage 0 — next to a real column."""
-    from hairjax._geometry._raster import _candidates
-
-    with precision(dtype):
-        real = [2.2, 3.5, 5.7, 0.0, 5.7, 1.0, 2.0, 3.0, 1.0, 1.0, 1.0]  # x0 y0 dx dy L w0 z0 z1 xm reach w1
-        seg_data = np.zeros((2, 11))  # the real segment and the zero row padding columns read
-        seg_data[0] = real
-        seg = np.array([0, 1, 1, 1, 1, 1, 1, 1], np.int32)  # one real column, seven of padding
-        k = np.array([2, 0, 0, 0, 0, 0, 0, 0], np.int32)
-        pixel, cov, t, depth = (np.asarray(o) for o in _candidates(seg_data, seg, k, 4, 16, 16, True, True))
-        assert np.all(np.isfinite(cov)) and np.all(np.isfinite(t)) and np.all(np.isfinite(depth))
-        np.testing.assert_array_equal(cov[4:], 0.0)  # rows of the padding columns
-        assert cov[:4].max() == 1.0  # pixel (2, 3): the line runs through its centre
-
-
-@pytest.mark.parametrize("dtype", ["float64", "float32"])
 def test_guard_constant_depth_fragments_keep_z(dtype):
-    """_raster._candidates's za == zb guard (and GLSL fragment_depth's): a segment at one
+    """The raster kernel's za == zb guard (_raster._kernels; and GLSL fragment_depth's): a segment at one
     depth gives every fragment exactly that depth, although the perspective formula
     1/((1 − t)/z + t/z) rounds away from z (checked here, the guard's reason)."""
     from hairjax._geometry._raster import rasterize
