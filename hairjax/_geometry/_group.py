@@ -21,9 +21,13 @@ from typing import no_type_check
 
 import numpy as np
 
-from ._host import aligned_empty
+from ._host import aligned_empty, host_threads, in_parallel
 
-__all__ = ["group_by_pixel"]
+__all__ = ["group_by_pixel", "PARALLEL_MIN"]
+
+# Below this many fragments one core groups them: a second thread's start-up and per-pixel
+# counts cost more than they save.
+PARALLEL_MIN = 1 << 20
 
 
 def group_by_pixel(
@@ -37,37 +41,53 @@ def group_by_pixel(
     `field[np.argsort(pixel, kind="stable")]`."""
     if not 1 <= len(fields) <= 3 or any(f.shape != pixel.shape for f in fields):
         raise ValueError(f"group_by_pixel takes one to three [F] fields, got {[f.shape for f in fields]}")
-    counts = np.bincount(pixel, minlength=n_pixels)  # raises for a negative pixel
-    if counts.size != n_pixels:  # a pixel ≥ n_pixels: the kernel checks no bounds
-        raise ValueError(f"pixel indices reach {counts.size - 1}, beyond the {n_pixels} pixels")
+    # The fragments in contiguous parts, one per core: each part's counts per pixel, so
+    # that each part scatters into its own slots of every pixel's run, at once.
+    parts = host_threads() if pixel.size >= PARALLEL_MIN else 1
+    bounds = np.linspace(0, pixel.size, parts + 1).astype(np.int64)
+    part_counts = [np.bincount(pixel[a:b], minlength=n_pixels) for a, b in zip(bounds[:-1], bounds[1:])]
+    if any(c.size != n_pixels for c in part_counts):  # a pixel ≥ n_pixels: the loop checks no bounds
+        raise ValueError(f"pixel indices reach {pixel.max()}, beyond the {n_pixels} pixels")
+    counts = np.sum(part_counts, axis=0) if len(part_counts) > 1 else part_counts[0]
+    # Where each part's first fragment of each pixel goes: after the pixels before it and
+    # after the parts before it.
+    start = np.zeros(n_pixels, np.int64)
+    np.cumsum(counts[:-1], out=start[1:])
     sorted_pixel = aligned_empty(pixel.size, np.int32)
     outs = tuple(aligned_empty(pixel.size, f.dtype) for f in fields)
-    # The kernel takes three fields; a missing one repeats the last (written twice, alike).
+    # The loop takes three fields; a missing one repeats the last (written twice, alike).
     ins3 = (fields + (fields[-1],) * 2)[:3]
     outs3 = (outs + (outs[-1],) * 2)[:3]
-    _group_kernel()(pixel, counts, sorted_pixel, *ins3, *outs3)
+    fill_runs, scatter = _group_kernels()
+    tasks = []
+    for (a, b), part in zip(zip(bounds[:-1], bounds[1:]), part_counts):
+        tasks.append(functools.partial(scatter, pixel[a:b], start.copy(), *(f[a:b] for f in ins3), *outs3))
+        start += part
+    in_parallel([*tasks, functools.partial(fill_runs, counts, sorted_pixel)])
     return sorted_pixel, outs
 
 
 @functools.cache
-def _group_kernel():
-    """The counting sort's two passes, compiled on first use (cached on disk by numba)."""
+def _group_kernels():
+    """The counting sort's loops, compiled on first use (cached on disk by numba):
+    `fill_runs` writes each pixel's index repeated by its count, `scatter` moves every
+    fragment of a part, in order, to its pixel's next free slot (`start`, advanced)."""
     import numba
 
-    # no_type_check: the tests' jaxtyping hook would otherwise wrap the loop before numba
-    # compiles it.
+    # no_type_check: the tests' jaxtyping hook would otherwise wrap the loops before numba
+    # compiles them.
     @numba.njit(cache=True, nogil=True)
     @no_type_check
-    def group(pixel, counts, sorted_pixel, a, b, c, out_a, out_b, out_c):
-        # Each pixel's run: its index repeated by its count, and where its run starts.
-        start = np.empty(counts.size, np.int64)
+    def fill_runs(counts, sorted_pixel):
         slot = 0
         for p in range(counts.size):
-            start[p] = slot
             for _ in range(counts[p]):
                 sorted_pixel[slot] = p
                 slot += 1
-        # Every fragment, in the given order, to its pixel's next free slot.
+
+    @numba.njit(cache=True, nogil=True)
+    @no_type_check
+    def scatter(pixel, start, a, b, c, out_a, out_b, out_c):
         for f in range(pixel.size):
             p = pixel[f]
             slot = start[p]
@@ -76,4 +96,4 @@ def _group_kernel():
             out_b[slot] = b[f]
             out_c[slot] = c[f]
 
-    return group
+    return fill_runs, scatter

@@ -15,12 +15,15 @@ allocated and freed by the C heap, which keeps what is freed for reuse: after a 
 
 from __future__ import annotations
 
+import concurrent.futures
 import ctypes
+import functools
+import os
 
 import jax
 import numpy as np
 
-__all__ = ["aligned_empty", "release_heap", "to_device"]
+__all__ = ["aligned_empty", "host_threads", "in_parallel", "release_heap", "to_device"]
 
 ALIGNMENT = 64  # bytes: XLA's CPU buffer alignment
 
@@ -70,3 +73,24 @@ def release_heap(freed: int) -> None:
     such call."""
     if _MALLOC_TRIM is not None and freed >= RELEASE_MIN_BYTES:
         _MALLOC_TRIM(0)
+
+
+def host_threads() -> int:
+    """The CPU cores this process may run on (its affinity mask, where the OS has one)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # fires off Linux: no affinity mask
+        return max(1, os.cpu_count() or 1)
+
+
+@functools.cache
+def _pool() -> concurrent.futures.ThreadPoolExecutor:
+    return concurrent.futures.ThreadPoolExecutor(host_threads(), thread_name_prefix="hairjax-set-up")
+
+
+def in_parallel(tasks: list) -> list:
+    """`[task() for task in tasks]`, the tasks run at once on the set-up's threads: for the
+    compiled loops (`nogil`), which so run on every core. A single task runs here."""
+    if len(tasks) == 1:
+        return [tasks[0]()]
+    return list(_pool().map(lambda task: task(), tasks))

@@ -5,6 +5,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from hairjax._geometry import _group
 from hairjax._geometry._group import group_by_pixel
 from hairjax._geometry._host import ALIGNMENT
 
@@ -41,6 +42,21 @@ def test_grouping_is_a_stable_sort(n_pixels, raw, n_fields, dtype):
     for field, got in zip(fields, grouped):
         assert got.dtype == field.dtype
         np.testing.assert_array_equal(got, field[order])
+
+
+@pytest.mark.parametrize("threads", [2, 3, 7])
+def test_parts_on_several_threads_give_the_same_grouping(monkeypatch, threads):
+    """Above PARALLEL_MIN fragments each core scatters its own part into its own slots of
+    every pixel's run; lowered here, so that small inputs take that path."""
+    monkeypatch.setattr(_group, "PARALLEL_MIN", 1)
+    monkeypatch.setattr(_group, "host_threads", lambda: threads)
+    rng = np.random.default_rng(threads)
+    pixel = rng.integers(0, 13, 500).astype(np.int32)  # runs that every part adds to
+    segment = np.arange(500, dtype=np.int32)
+    order = np.argsort(pixel, kind="stable")
+    sorted_pixel, (seg,) = group_by_pixel(pixel, 13, segment)
+    np.testing.assert_array_equal(sorted_pixel, pixel[order])
+    np.testing.assert_array_equal(seg, segment[order])
 
 
 def test_bad_input_is_refused_before_the_unchecked_kernel():

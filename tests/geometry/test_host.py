@@ -73,3 +73,17 @@ def test_release_heap_returns_freed_heap_to_the_system():
     release_heap(RELEASE_MIN_BYTES)
     assert before - _resident_bytes() >= 100 * block
     del pin
+
+
+def test_in_parallel_returns_results_in_task_order():
+    import functools
+    import threading
+
+    from hairjax._geometry._host import host_threads, in_parallel
+
+    assert host_threads() >= 1
+    tasks = [functools.partial(lambda i: (i * i, threading.get_ident()), i) for i in range(5)]
+    results = in_parallel(tasks)
+    assert [r[0] for r in results] == [0, 1, 4, 9, 16]
+    # A single task runs in the calling thread (no hand-off for the small scenes).
+    assert in_parallel(tasks[:1])[0][1] == threading.get_ident()
