@@ -15,6 +15,7 @@ from ._errors import EmptyViewWarning as EmptyViewWarning
 from ._errors import HairFormatError as HairFormatError
 from ._errors import MissingDependency as MissingDependency
 from ._errors import SceneError as SceneError
+from ._errors import SceneTooLarge as SceneTooLarge
 from ._explore import Explorer as Explorer
 from ._explore import explore as explore
 from ._fit import FitError as FitError

@@ -16,6 +16,12 @@ class SceneError(ValueError):
     """A scene (TOML file or Python values) is invalid; the message names the key."""
 
 
+class SceneTooLarge(SceneError, MemoryError):
+    """A render would need more memory than the machine has available; raised before the
+    render allocates it, and the message names the fragment count and the bytes. A
+    `MemoryError` too, and a `SceneError`: the scene asks for more than this machine has."""
+
+
 class MeshFormatError(ValueError):
     """A mesh file (``.obj``) is malformed; the message names the file and the line."""
 

@@ -23,7 +23,7 @@ import os
 import jax
 import numpy as np
 
-__all__ = ["aligned_empty", "host_threads", "in_parallel", "release_heap", "to_device"]
+__all__ = ["aligned_empty", "available_memory", "host_threads", "in_parallel", "release_heap", "to_device"]
 
 ALIGNMENT = 64  # bytes: XLA's CPU buffer alignment
 
@@ -94,3 +94,16 @@ def in_parallel(tasks: list) -> list:
     if len(tasks) == 1:
         return [tasks[0]()]
     return list(_pool().map(lambda task: task(), tasks))
+
+
+def available_memory() -> int | None:
+    """Bytes of memory available to a new allocation without swapping (Linux's
+    MemAvailable), or None where the system does not say."""
+    try:
+        with open("/proc/meminfo") as meminfo:
+            for line in meminfo:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):  # fires off Linux, or on an unexpected format
+        return None
+    return None

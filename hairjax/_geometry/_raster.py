@@ -33,8 +33,10 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._constants import PIXEL_HALF_EXTENT
+from .._errors import SceneTooLarge
+from ._host import available_memory
 
-__all__ = ["Fragments", "rasterize", "ribbon_coverage", "ribbon_widths"]
+__all__ = ["Fragments", "fragment_bytes", "rasterize", "ribbon_coverage", "ribbon_widths"]
 
 
 def ribbon_coverage(d, width) -> np.ndarray:
@@ -177,10 +179,8 @@ def rasterize(
     # every candidate: pages never written are never resident, so the fields cost what they
     # hold (BENCHMARKS.md "Memory").
     capacity = int(columns.sum()) * rows
-    pixel, segment = np.empty(capacity, np.int32), np.empty(capacity, np.int32)
-    coverage, t = np.empty(capacity, dtype), np.empty(capacity, dtype)
-    depths = np.empty(capacity if depth else 0, dtype)
-    filled = _kernels(np.dtype(dtype).name)[1](
+    raster = functools.partial(
+        _kernels(np.dtype(dtype).name)[1],
         seg_data,
         lo.astype(np.int64),
         columns,
@@ -189,15 +189,44 @@ def rasterize(
         image_height,
         bool(perspective),
         depth,
-        pixel,
-        segment,
-        coverage,
-        t,
-        depths,
     )
+    _check_memory(raster, capacity, np.dtype(dtype).itemsize, depth, image_width, image_height)
+    pixel, segment = np.empty(capacity, np.int32), np.empty(capacity, np.int32)
+    coverage, t = np.empty(capacity, dtype), np.empty(capacity, dtype)
+    depths = np.empty(capacity if depth else 0, dtype)
+    filled = raster(False, pixel, segment, coverage, t, depths)
     return Fragments(
         pixel[:filled], segment[:filled], coverage[:filled], t[:filled], depths[:filled] if depth else None
     )
+
+
+def fragment_bytes(float_size: int, depth: bool) -> int:
+    """Bytes the set-up holds at once per fragment: the raster's fields (pixel, segment,
+    coverage, t and depth if asked) and as many again grouped by pixel or planned for Ω."""
+    raster = 8 + (3 if depth else 2) * float_size
+    return raster + 8 + 2 * float_size
+
+
+def _check_memory(raster, capacity: int, float_size: int, depth: bool, width: int, height: int) -> None:
+    """The capacity policy (docs/model.md §5): the fields are sized for every candidate,
+    but only what is written becomes resident. When even the candidates' bound needs
+    more than the memory available, the covered candidates are counted first (a pass
+    that writes nothing), and a scene whose fragments need more is refused before
+    anything is allocated (`SceneTooLarge`)."""
+    per_fragment = fragment_bytes(float_size, depth)
+    available = available_memory()
+    if available is None or capacity * per_fragment <= available:
+        return
+    empty = np.empty(0, np.int32), np.empty(0, np.int32)
+    floats = tuple(np.empty(0, np.float32 if float_size == 4 else np.float64) for _ in range(3))
+    count = raster(True, *empty, *floats)
+    if count * per_fragment > available:
+        raise SceneTooLarge(
+            f"the {width}x{height} raster of this scene holds {count:,} fragments, which need "
+            f"{count * per_fragment / 2**30:.1f} GiB ({per_fragment} bytes each) in the geometry "
+            f"set-up alone; {available / 2**30:.1f} GiB of memory is available: render fewer "
+            "pixels (--size), fewer or thinner strands, or on a machine with more memory"
+        )
 
 
 @functools.cache
@@ -221,7 +250,10 @@ def _kernels(dtype_name: str):
 
     @numba.njit(**options)
     @no_type_check
-    def raster(seg_data, lo, columns, rows, image_width, image_height, perspective, with_depth, *out):
+    def raster(
+        seg_data, lo, columns, rows, image_width, image_height, perspective, with_depth, count_only, *out
+    ):
+        # The number of covered candidates; unless count_only, they are written to `out`.
         out_pixel, out_segment, out_coverage, out_t, out_depth = out
         filled = 0
         for i in range(columns.size):
@@ -254,6 +286,9 @@ def _kernels(dtype_name: str):
                     # w₀ + t(w₁ − w₀) is exactly w₀ for ribbons of constant width (pixel widths).
                     cov = coverage(abs(rx * dy - ry * dx) * inv_len, w0 + t * (w1 - w0))
                     if not cov > 0:
+                        continue
+                    if count_only:
+                        filled += 1
                         continue
                     out_pixel[filled] = np.int32(py) * image_width + np.int32(px)
                     out_segment[filled] = i

@@ -59,3 +59,16 @@ def test_a_warning_is_one_line(monkeypatch, capsys):
     monkeypatch.setattr("hairjax.cli._render.run", warns)
     assert main(["render"]) == 0
     assert capsys.readouterr().err.strip().splitlines() == ["hairjax: warning: the hair covers no pixel"]
+
+
+def test_a_scene_beyond_memory_is_one_line_before_any_output(monkeypatch, tmp_path, capsys):
+    from hairjax._geometry import _raster
+
+    monkeypatch.setattr(_raster, "available_memory", lambda: 1000)  # bytes: nothing fits
+    out = tmp_path / "x.exr"
+    assert main(["render", "--size", "64", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in err
+    assert lines[0].startswith("hairjax: error: the 64x64 raster of this scene holds ") and "GiB" in lines[0]
+    assert not out.exists()

@@ -214,3 +214,65 @@ def test_a_raster_without_depth_has_the_same_fragments():
     for name in ("pixel", "segment", "coverage", "t"):
         np.testing.assert_array_equal(getattr(without, name), getattr(with_depth, name))
     assert without.take(np.arange(5)).depth is None
+
+
+# --- the capacity policy (docs/model.md §5): count first when the bound does not fit ---
+
+
+def _segments():
+    """Three ribbons across a 32 × 32 raster, two pixels wide: a few hundred fragments
+    among a few times as many candidates."""
+    xy0 = np.array([[1.0, 2.0], [3.5, 30.0], [16.0, 1.0]])
+    xy1 = np.array([[30.0, 9.0], [28.0, 4.5], [17.0, 31.0]])
+    return xy0, xy1, np.ones(3), np.ones(3), np.full(3, 2.0), 32, 32, False
+
+
+@pytest.fixture
+def raster_calls(monkeypatch):
+    """The count_only flag of every call of the raster loop."""
+    from hairjax._geometry import _raster
+
+    calls = []
+    coverage, loop = _raster._kernels("float32")
+
+    def spy(*args):
+        calls.append(args[8])  # count_only
+        return loop(*args)
+
+    monkeypatch.setattr(_raster, "_kernels", lambda name: (coverage, spy))
+    return calls
+
+
+def test_a_bound_beyond_memory_counts_first_and_renders_the_same(monkeypatch, raster_calls):
+    from hairjax._geometry import _raster
+
+    plain = rasterize(*_segments())
+    assert raster_calls == [False]  # memory for every candidate: no count
+    per_fragment = _raster.fragment_bytes(plain.coverage.itemsize, True)
+    # Exactly enough for the fragments, not for the candidates' bound.
+    monkeypatch.setattr(_raster, "available_memory", lambda: plain.size * per_fragment)
+    counted = rasterize(*_segments())
+    assert raster_calls == [False, True, False]
+    for name in ("pixel", "segment", "coverage", "t", "depth"):
+        np.testing.assert_array_equal(getattr(counted, name), getattr(plain, name))
+
+
+def test_fragments_beyond_memory_are_refused_before_the_fields_exist(monkeypatch, raster_calls):
+    import hairjax as hj
+    from hairjax._geometry import _raster
+
+    plain = rasterize(*_segments())
+    per_fragment = _raster.fragment_bytes(plain.coverage.itemsize, True)
+    monkeypatch.setattr(_raster, "available_memory", lambda: plain.size * per_fragment - 1)
+    with pytest.raises(hj.SceneTooLarge, match=f"32x32 raster of this scene holds {plain.size:,} fragments"):
+        rasterize(*_segments())
+    assert raster_calls == [False, True]  # counted, never written
+    assert issubclass(hj.SceneTooLarge, MemoryError) and issubclass(hj.SceneTooLarge, hj.SceneError)
+
+
+def test_fragment_bytes_by_hand():
+    from hairjax._geometry._raster import fragment_bytes
+
+    # Raster: pixel, segment (int32), coverage, t, depth; grouped: pixel, first point, coverage, t.
+    assert fragment_bytes(4, True) == 4 + 4 + 3 * 4 + 4 + 4 + 2 * 4 == 36
+    assert fragment_bytes(4, False) == 32 and fragment_bytes(8, False) == 48
