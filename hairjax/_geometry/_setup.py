@@ -23,7 +23,7 @@ from .._errors import EmptyViewWarning
 from .._scene._scene import Scene
 from .._scene._strands import tangents, unit_rows
 from .._shading import PointInputs
-from ._host import release_heap
+from ._host import release_heap, release_shared
 from ._occluder import occluder_hits, occluder_light_view, occluder_visibility
 from ._ordering import segment_depth
 from ._projection import View, camera_view
@@ -165,6 +165,7 @@ def to_light(light, points: np.ndarray) -> np.ndarray:
 
 
 def _prepare(scene: Scene, order=None) -> GeometrySetup:
+    release_shared()  # a forgotten scene's fragments, before this one's are allocated
     timings = {}
     clock = time.perf_counter()
 

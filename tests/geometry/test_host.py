@@ -87,3 +87,29 @@ def test_in_parallel_returns_results_in_task_order():
     assert [r[0] for r in results] == [0, 1, 4, 9, 16]
     # A single task runs in the calling thread (no hand-off for the small scenes).
     assert in_parallel(tasks[:1])[0][1] == threading.get_ident()
+
+
+@cpu_only
+def test_release_shared_lets_xla_drop_a_forgotten_scenes_fragments():
+    import gc
+    import weakref
+
+    from hairjax._cache import forget
+    from hairjax._geometry._host import release_shared
+
+    scene = small_furball_scene()
+    geometry_stage(scene)  # shares the set-up's fragment arrays with JAX
+    base = prepare(scene).frag_pixel
+    while base.base is not None:
+        base = base.base
+    buffer = weakref.ref(base)
+    del base
+    enabled = gc.isenabled()
+    gc.disable()  # no collection by chance: only release_shared's
+    try:
+        forget(scene)
+        release_shared()
+        assert buffer() is None
+    finally:
+        if enabled:
+            gc.enable()
