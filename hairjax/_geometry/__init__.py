@@ -1,5 +1,6 @@
 """The geometry stage (docs/model.md §2–§7, §13; docs/architecture.md): projection, the
 visibility orderings (`_ordering/`, one module each), the ribbons' fragments, the shadow
-methods (`_shadows/`, one module each), the occluder's tests, the NumPy set-up
-(`_setup.py`) and the JAX stage (`_stage.py`). Geometry, camera and light only: no shading
-parameter enters here."""
+methods (`_shadows/`, one module each), the occluder's tests, the host set-up
+(`_setup.py`: NumPy, and two loops compiled by numba in `_raster.py` and `_group.py`) and
+the JAX stage (`_stage.py`). Geometry, camera and light only: no shading parameter enters
+here."""
