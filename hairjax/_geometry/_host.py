@@ -61,11 +61,12 @@ def to_device(x: np.ndarray, dtype) -> jax.Array:
 def release_shared() -> None:
     """Let XLA drop the NumPy arrays it shared with arrays that are gone (`to_device`).
 
-    XLA hands those references back to Python only when the garbage collector runs (jax
-    issue 14882: its callback on `gc.callbacks`), and the set-up's loops create almost no
-    Python objects, so none runs while they allocate: a previous render's fragment arrays
-    (0.66 GB at 100k strands / 1024²) stayed resident through the next set-up. A collection
-    of the youngest generation runs the callback, in well under a millisecond."""
+    XLA hands those references back to Python only when the garbage collector runs
+    (JAX's `_xla_gc_callback` on `gc.callbacks`, in `jax/_src/lib/__init__.py`), and the
+    set-up's loops create almost no Python objects, so none runs while they allocate: a
+    previous render's fragment arrays (0.66 GB at 100k strands / 1024²) stayed resident
+    through the next set-up. A collection of the youngest generation runs the callback, in
+    well under a millisecond."""
     gc.collect(0)
 
 
