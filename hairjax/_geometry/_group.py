@@ -21,7 +21,7 @@ from typing import no_type_check
 
 import numpy as np
 
-from ._host import aligned_empty, host_threads, in_parallel
+from ._host import aligned_empty, compile_loop, host_threads, in_parallel
 
 __all__ = ["group_by_pixel", "PARALLEL_MIN"]
 
@@ -69,14 +69,13 @@ def group_by_pixel(
 
 @functools.cache
 def _group_kernels():
-    """The counting sort's loops, compiled on first use (cached on disk by numba):
+    """The counting sort's loops, compiled on first use (cached on disk, `compile_loop`):
     `fill_runs` writes each pixel's index repeated by its count, `scatter` moves every
     fragment of a part, in order, to its pixel's next free slot (`start`, advanced)."""
-    import numba
 
     # no_type_check: the tests' jaxtyping hook would otherwise wrap the loops before numba
     # compiles them.
-    @numba.njit(cache=True, nogil=True)
+    @compile_loop()
     @no_type_check
     def fill_runs(counts, sorted_pixel):
         slot = 0
@@ -85,7 +84,7 @@ def _group_kernels():
                 sorted_pixel[slot] = p
                 slot += 1
 
-    @numba.njit(cache=True, nogil=True)
+    @compile_loop()
     @no_type_check
     def scatter(pixel, start, a, b, c, out_a, out_b, out_c):
         for f in range(pixel.size):

@@ -27,6 +27,7 @@ import numpy as np
 __all__ = [
     "aligned_empty",
     "available_memory",
+    "compile_loop",
     "host_threads",
     "in_parallel",
     "release_heap",
@@ -128,3 +129,21 @@ def available_memory() -> int | None:
     except (OSError, ValueError, IndexError):  # fires off Linux, or on an unexpected format
         return None
     return None
+
+
+def compile_loop(**options):
+    """A decorator: `numba.njit(nogil=True, **options)`, the machine code cached on disk
+    (beside the package, or in the user's cache folder when the package's is read-only),
+    or compiled afresh in each process where neither folder is writable (numba then
+    refuses to cache at all). numba is imported on first use: the GL renderer and the
+    command line's start-up do not load it."""
+
+    def compile(fn):
+        import numba
+
+        try:
+            return numba.njit(cache=True, nogil=True, **options)(fn)
+        except RuntimeError:  # fires where no cache folder is writable ("no locator available")
+            return numba.njit(nogil=True, **options)(fn)
+
+    return compile

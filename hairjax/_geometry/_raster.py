@@ -34,7 +34,7 @@ import numpy as np
 
 from .._constants import PIXEL_HALF_EXTENT
 from .._errors import SceneTooLarge
-from ._host import available_memory
+from ._host import available_memory, compile_loop
 
 __all__ = ["Fragments", "fragment_bytes", "rasterize", "ribbon_coverage", "ribbon_widths"]
 
@@ -232,23 +232,22 @@ def _check_memory(raster, capacity: int, float_size: int, depth: bool, width: in
 @functools.cache
 def _kernels(dtype_name: str):
     """`(coverage, raster)` compiled by numba for floats of `dtype_name` (on first use;
-    cached on disk). Every constant has that type, so no operation widens to float64."""
-    import numba
-
+    cached on disk, `compile_loop`). Every constant has that type, so no operation widens
+    to float64."""
     F = np.float32 if dtype_name == "float32" else np.float64
     zero, one, half_extent = F(0.0), F(1.0), F(PIXEL_HALF_EXTENT)
     # error_model numpy: a division by 0 gives inf, as in XLA, without a check per division.
     # contract: fused multiply-adds where LLVM finds them, as XLA's CPU kernels have.
     # no_type_check: the tests' jaxtyping hook would otherwise wrap them before numba.
-    options = dict(cache=True, nogil=True, error_model="numpy", fastmath={"contract"})
+    loop = compile_loop(error_model="numpy", fastmath={"contract"})
 
-    @numba.njit(**options)
+    @loop
     @no_type_check
     def coverage(d, width):
         half = F(0.5) * width
         return min(max(min(d + half_extent, half) - max(d - half_extent, -half), zero), one)
 
-    @numba.njit(**options)
+    @loop
     @no_type_check
     def raster(
         seg_data, lo, columns, rows, image_width, image_height, perspective, with_depth, count_only, *out

@@ -113,3 +113,34 @@ def test_release_shared_lets_xla_drop_a_forgotten_scenes_fragments():
     finally:
         if enabled:
             gc.enable()
+
+
+def test_compiled_loops_work_where_no_cache_folder_is_writable(monkeypatch):
+    """numba refuses `cache=True` when neither the package's folder nor the user's cache
+    folder is writable (a read-only install and home); `compile_loop` then compiles
+    without caching, and the raster runs the same."""
+    from typing import no_type_check
+
+    from numba.core import caching
+
+    from hairjax._geometry import _raster
+    from hairjax._geometry._host import compile_loop
+
+    p = np.array([[1.0, 2.0], [3.5, 12.0]])
+    before = _raster.rasterize(p[:1], p[1:], np.ones(1), np.ones(1), np.full(1, 2.0), 16, 16, False)
+    monkeypatch.setattr(caching.CacheImpl, "_locator_classes", [])  # no folder can hold a cache
+
+    @compile_loop()
+    @no_type_check
+    def add(a, b):
+        return a + b
+
+    assert add(2, 3) == 5
+    _raster._kernels.cache_clear()  # the raster's loops compiled afresh, under the same condition
+    try:
+        after = _raster.rasterize(p[:1], p[1:], np.ones(1), np.ones(1), np.full(1, 2.0), 16, 16, False)
+    finally:
+        _raster._kernels.cache_clear()
+    assert after.size > 10
+    for name in ("pixel", "segment", "coverage", "t", "depth"):
+        np.testing.assert_array_equal(getattr(after, name), getattr(before, name))
