@@ -17,13 +17,14 @@ line's start-up do not load it.
 from __future__ import annotations
 
 import functools
+from collections.abc import Sequence
 from typing import no_type_check
 
 import numpy as np
 
 from ._host import aligned_empty, compile_loop, host_threads, in_parallel
 
-__all__ = ["group_by_pixel", "PARALLEL_MIN"]
+__all__ = ["group_by_pixel", "group_parts", "PARALLEL_MIN"]
 
 # Below this many fragments one core groups them: a second thread's start-up and per-pixel
 # counts cost more than they save.
@@ -38,31 +39,51 @@ def group_by_pixel(
     Returns `(sorted_pixel, grouped)`: the pixels ascending (`[F]` int32, each pixel's
     index repeated by its fragment count) and each of `fields` (1-D, `[F]`, one to three
     of them) permuted alike, in arrays aligned for the CPU device (`_host`). Equals
-    `field[np.argsort(pixel, kind="stable")]`."""
-    if not 1 <= len(fields) <= 3 or any(f.shape != pixel.shape for f in fields):
+    `field[np.argsort(pixel, kind="stable")]`. From PARALLEL_MIN fragments on, contiguous
+    parts of them are scattered on every core at once (`group_parts`)."""
+    if any(f.shape != pixel.shape for f in fields):
         raise ValueError(f"group_by_pixel takes one to three [F] fields, got {[f.shape for f in fields]}")
-    # The fragments in contiguous parts, one per core: each part's counts per pixel, so
-    # that each part scatters into its own slots of every pixel's run, at once.
     parts = host_threads() if pixel.size >= PARALLEL_MIN else 1
     bounds = np.linspace(0, pixel.size, parts + 1).astype(np.int64)
-    part_counts = [np.bincount(pixel[a:b], minlength=n_pixels) for a, b in zip(bounds[:-1], bounds[1:])]
+    return group_parts(
+        [(pixel[a:b], *(f[a:b] for f in fields)) for a, b in zip(bounds[:-1], bounds[1:])], n_pixels
+    )
+
+
+def group_parts(
+    parts: Sequence[Sequence[np.ndarray]], n_pixels: int
+) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
+    """`group_by_pixel` of fragments given in consecutive parts, each `(pixel, *fields)`
+    with one to three fields (alike in number and dtype across the parts): grouped as
+    their concatenation would be, each part scattered on its own thread. Each part counts
+    its fragments per pixel, so it owns its own slots in every pixel's run and no lock is
+    needed (the raster's pieces, `rasterize_parts`, are read where they are)."""
+    n_fields = len(parts[0]) - 1
+    if not 1 <= n_fields <= 3 or any(
+        len(part) != n_fields + 1 or any(f.shape != part[0].shape for f in part) for part in parts
+    ):
+        raise ValueError("group_by_pixel takes one to three [F] fields")
+    part_counts = [np.bincount(part[0], minlength=n_pixels) for part in parts]
     if any(c.size != n_pixels for c in part_counts):  # a pixel ≥ n_pixels: the loop checks no bounds
-        raise ValueError(f"pixel indices reach {pixel.max()}, beyond the {n_pixels} pixels")
+        beyond = max(int(part[0].max()) for part in parts if part[0].size)
+        raise ValueError(f"pixel indices reach {beyond}, beyond the {n_pixels} pixels")
     counts = np.sum(part_counts, axis=0) if len(part_counts) > 1 else part_counts[0]
     # Where each part's first fragment of each pixel goes: after the pixels before it and
     # after the parts before it.
     start = np.zeros(n_pixels, np.int64)
     np.cumsum(counts[:-1], out=start[1:])
-    sorted_pixel = aligned_empty(pixel.size, np.int32)
-    outs = tuple(aligned_empty(pixel.size, f.dtype) for f in fields)
+    total = sum(part[0].size for part in parts)
+    sorted_pixel = aligned_empty(total, np.int32)
+    outs = tuple(aligned_empty(total, f.dtype) for f in parts[0][1:])
     # The loop takes three fields; a missing one repeats the last (written twice, alike).
-    ins3 = (fields + (fields[-1],) * 2)[:3]
     outs3 = (outs + (outs[-1],) * 2)[:3]
     fill_runs, scatter = _group_kernels()
     tasks = []
-    for (a, b), part in zip(zip(bounds[:-1], bounds[1:]), part_counts):
-        tasks.append(functools.partial(scatter, pixel[a:b], start.copy(), *(f[a:b] for f in ins3), *outs3))
-        start += part
+    for part, own in zip(parts, part_counts):
+        fields = tuple(part[1:])
+        ins3 = (fields + (fields[-1],) * 2)[:3]
+        tasks.append(functools.partial(scatter, part[0], start.copy(), *ins3, *outs3))
+        start += own
     in_parallel([*tasks, functools.partial(fill_runs, counts, sorted_pixel)])
     return sorted_pixel, outs
 

@@ -32,6 +32,7 @@ __all__ = [
     "in_parallel",
     "release_heap",
     "release_shared",
+    "split_evenly",
     "to_device",
 ]
 
@@ -116,6 +117,17 @@ def in_parallel(tasks: list) -> list:
     if len(tasks) == 1:
         return [tasks[0]()]
     return list(_pool().map(lambda task: task(), tasks))
+
+
+def split_evenly(weights: np.ndarray, parts: int) -> list[int]:
+    """Bounds `[0, b₁, …, n]` of at most `parts` contiguous runs of `weights` (`[n]`,
+    non-negative) with about equal sums; fewer runs where there are fewer items, and one
+    (empty) run `[0, 0]` for no items."""
+    cum = np.cumsum(weights)
+    if cum.size == 0:
+        return [0, 0]
+    inner = np.searchsorted(cum, cum[-1] * np.arange(1, parts) / parts, side="left") + 1
+    return sorted({0, cum.size, *(min(int(b), cum.size) for b in inner)})
 
 
 def available_memory() -> int | None:

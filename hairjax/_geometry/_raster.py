@@ -34,9 +34,20 @@ import numpy as np
 
 from .._constants import PIXEL_HALF_EXTENT
 from .._errors import SceneTooLarge
-from ._host import available_memory, compile_loop
+from ._host import available_memory, compile_loop, host_threads, in_parallel, split_evenly
 
-__all__ = ["Fragments", "fragment_bytes", "rasterize", "ribbon_coverage", "ribbon_widths"]
+__all__ = [
+    "Fragments",
+    "fragment_bytes",
+    "rasterize",
+    "rasterize_parts",
+    "ribbon_coverage",
+    "ribbon_widths",
+    "PARALLEL_MIN",
+]
+
+# Below this many candidates one thread rasterises: more cost more than they save.
+PARALLEL_MIN = 1 << 20
 
 
 def ribbon_coverage(d, width) -> np.ndarray:
@@ -132,6 +143,32 @@ def rasterize(
     maths runs in one compiled loop over their candidate rows (`_kernels`), in JAX's
     default float precision (float64 when x64 is enabled).
     """
+    args = (xy0, xy1, z0, z1, width, image_width, image_height, perspective)
+    return rasterize_parts(*args, depth=depth, parts=1)[0]
+
+
+def rasterize_parts(
+    xy0: np.ndarray,
+    xy1: np.ndarray,
+    z0: np.ndarray,
+    z1: np.ndarray,
+    width: np.ndarray,
+    image_width: int,
+    image_height: int,
+    perspective: bool,
+    *,
+    depth: bool = True,
+    parts: int | None = None,
+) -> list[Fragments]:
+    """`rasterize`'s fragments in `parts` pieces, rasterised at once on as many threads:
+    each piece holds the fragments of a contiguous run of segments (about equal in
+    candidates), so the pieces in order are `rasterize`'s fragments. Default: one per core
+    (`host_threads`) from PARALLEL_MIN candidates on, else one.
+
+    Each piece is written into its own share of fields sized for every candidate, and
+    stays there: moving the pieces together had left a third region resident and made the
+    camera raster at 100k strands / 1024² slower on two cores than on one (BENCHMARKS.md,
+    "rasterize"); `group_parts` reads the pieces as they are."""
     xy0 = np.asarray(xy0, np.float64)
     xy1 = np.asarray(xy1, np.float64)
     n = xy0.shape[0]
@@ -190,14 +227,26 @@ def rasterize(
         bool(perspective),
         depth,
     )
-    _check_memory(raster, capacity, np.dtype(dtype).itemsize, depth, image_width, image_height)
+    _check_memory(raster, n, capacity, np.dtype(dtype).itemsize, depth, image_width, image_height)
     pixel, segment = np.empty(capacity, np.int32), np.empty(capacity, np.int32)
     coverage, t = np.empty(capacity, dtype), np.empty(capacity, dtype)
     depths = np.empty(capacity if depth else 0, dtype)
-    filled = raster(False, pixel, segment, coverage, t, depths)
-    return Fragments(
-        pixel[:filled], segment[:filled], coverage[:filled], t[:filled], depths[:filled] if depth else None
+    if parts is None:
+        parts = host_threads() if capacity >= PARALLEL_MIN else 1
+    bounds = split_evenly(columns, parts)
+    starts = [int(columns[:a].sum()) * rows for a in bounds]  # each piece's share begins
+    fields = (pixel, segment, coverage, t, depths)
+    shares = [[f[begin:end] if f.size else f for f in fields] for begin, end in zip(starts[:-1], starts[1:])]
+    filled = in_parallel(
+        [
+            functools.partial(raster, a, b, False, *share)
+            for a, b, share in zip(bounds[:-1], bounds[1:], shares)
+        ]
     )
+    return [
+        Fragments(share[0][:k], share[1][:k], share[2][:k], share[3][:k], share[4][:k] if depth else None)
+        for share, k in zip(shares, filled)
+    ]
 
 
 def fragment_bytes(float_size: int, depth: bool) -> int:
@@ -207,7 +256,9 @@ def fragment_bytes(float_size: int, depth: bool) -> int:
     return raster + 8 + 2 * float_size
 
 
-def _check_memory(raster, capacity: int, float_size: int, depth: bool, width: int, height: int) -> None:
+def _check_memory(
+    raster, n_segments: int, capacity: int, float_size: int, depth: bool, width: int, height: int
+) -> None:
     """The capacity policy (docs/model.md §5): the fields are sized for every candidate,
     but only what is written becomes resident. When even the candidates' bound needs
     more than the memory available, the covered candidates are counted first (a pass
@@ -219,7 +270,7 @@ def _check_memory(raster, capacity: int, float_size: int, depth: bool, width: in
         return
     empty = np.empty(0, np.int32), np.empty(0, np.int32)
     floats = tuple(np.empty(0, np.float32 if float_size == 4 else np.float64) for _ in range(3))
-    count = raster(True, *empty, *floats)
+    count = raster(0, n_segments, True, *empty, *floats)
     if count * per_fragment > available:
         raise SceneTooLarge(
             f"the {width}x{height} raster of this scene holds {count:,} fragments, which need "
@@ -250,12 +301,24 @@ def _kernels(dtype_name: str):
     @loop
     @no_type_check
     def raster(
-        seg_data, lo, columns, rows, image_width, image_height, perspective, with_depth, count_only, *out
+        seg_data,
+        lo,
+        columns,
+        rows,
+        image_width,
+        image_height,
+        perspective,
+        with_depth,
+        first,
+        last,
+        count_only,
+        *out,
     ):
-        # The number of covered candidates; unless count_only, they are written to `out`.
+        # The number of covered candidates of segments first … last − 1; unless count_only,
+        # they are written to `out` from its start.
         out_pixel, out_segment, out_coverage, out_t, out_depth = out
         filled = 0
-        for i in range(columns.size):
+        for i in range(first, last):
             x0, y0, dx, dy, length, w0, za, zb, xm, reach, w1 = seg_data[i]
             # A segment with columns has length > 0, so |da| ≥ L/√2 > 0: no guard divides.
             x_major = xm > 0

@@ -23,11 +23,12 @@ from .._errors import EmptyViewWarning
 from .._scene._scene import Scene
 from .._scene._strands import tangents, unit_rows
 from .._shading import PointInputs
+from ._group import group_parts
 from ._host import release_heap, release_shared
 from ._occluder import occluder_hits, occluder_light_view, occluder_visibility
 from ._ordering import segment_depth
 from ._projection import View, camera_view
-from ._raster import rasterize, ribbon_widths
+from ._raster import rasterize_parts, ribbon_widths
 
 __all__ = ["GeometrySetup", "prepare", "visibility_order", "to_light", "warn_empty_view"]
 
@@ -201,8 +202,9 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
         view.focal,
         view.perspective,
     )
-    # Depth only for an occluder's depth test (§9): nothing else reads the camera's.
-    frags = rasterize(
+    # Depth only for an occluder's depth test (§9): nothing else reads the camera's. The
+    # fragments come in pieces, one per core, which the grouping below reads as they are.
+    pieces = rasterize_parts(
         xy[s0],
         xy[s1],
         depth[s0],
@@ -213,9 +215,10 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
         True,
         depth=scene.occluder is not None,
     )
+    n_frags = sum(piece.size for piece in pieces)
     # Hair whose segments all have length 0 (or that has none: one-point strands) draws
     # nothing from any camera; that is not the camera's fault, so no warning then.
-    if frags.pixel.size == 0 and np.any(points[segments[:, 0]] != points[segments[:, 1]]):
+    if n_frags == 0 and np.any(points[segments[:, 0]] != points[segments[:, 1]]):
         warn_empty_view(scene)
     lap("rasterize")
 
@@ -241,21 +244,17 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
         )
         backdrop[opaque] = 0.0  # the shading stage adds the occluder's colour (§13)
         # kim-2003 §3: depth test on, hair does not write depth.
-        visible = np.flatnonzero(frags.depths < hit_depth[frags.pixel])
-        frags = frags.take(visible)
+        pieces = [piece.take(np.flatnonzero(piece.depths < hit_depth[piece.pixel])) for piece in pieces]
         lap("occluder")
 
     # Only what compositing needs is grouped by pixel: segment, coverage, t (not depth),
     # into aligned arrays that the geometry stage shares with JAX (`_host`), in one
-    # counting-sort pass (`group_by_pixel`); the raster's fields are released after, and
-    # the C heap they leave is handed back to the system (`release_heap`).
-    from ._group import group_by_pixel  # loads numba: not for the GL renderer's start-up
-
-    n_frags = frags.pixel.size
-    frag_pixel, (frag_i0, frag_coverage, frag_t) = group_by_pixel(
-        frags.pixel, hw, frags.segment.astype(np.int32, copy=False), frags.coverage, frags.t
+    # counting-sort pass (`group_parts`); the raster's fields are released after, and the
+    # C heap they leave is handed back to the system (`release_heap`).
+    frag_pixel, (frag_i0, frag_coverage, frag_t) = group_parts(
+        [(piece.pixel, piece.segment, piece.coverage, piece.t) for piece in pieces], hw
     )
-    del frags
+    del pieces
     if segment_alpha is not None:  # §17's alpha texture scales the segment's opacity
         frag_coverage *= segment_alpha[near_first][frag_i0]
     # The fragments' raster segments, then in place their first points (a small table).

@@ -144,3 +144,14 @@ def test_compiled_loops_work_where_no_cache_folder_is_writable(monkeypatch):
     assert after.size > 10
     for name in ("pixel", "segment", "coverage", "t", "depth"):
         np.testing.assert_array_equal(getattr(after, name), getattr(before, name))
+
+
+def test_split_evenly_by_hand():
+    from hairjax._geometry._host import split_evenly
+
+    # Sums 1, 1, 1, 1, 4: halves at a cumulative 4 → [0, 4) and [4, 5).
+    assert split_evenly(np.array([1, 1, 1, 1, 4]), 2) == [0, 4, 5]
+    assert split_evenly(np.array([2, 2, 2, 2]), 4) == [0, 1, 2, 3, 4]
+    assert split_evenly(np.array([5, 0, 0]), 3) == [0, 1, 3]  # empty runs merge away
+    assert split_evenly(np.array([3, 3]), 1) == [0, 2]
+    assert split_evenly(np.array([], np.int64), 2) == [0, 0]

@@ -236,7 +236,7 @@ def raster_calls(monkeypatch):
     coverage, loop = _raster._kernels("float32")
 
     def spy(*args):
-        calls.append(args[8])  # count_only
+        calls.append(args[10])  # count_only
         return loop(*args)
 
     monkeypatch.setattr(_raster, "_kernels", lambda name: (coverage, spy))
@@ -276,3 +276,30 @@ def test_fragment_bytes_by_hand():
     # Raster: pixel, segment (int32), coverage, t, depth; grouped: pixel, first point, coverage, t.
     assert fragment_bytes(4, True) == 4 + 4 + 3 * 4 + 4 + 4 + 2 * 4 == 36
     assert fragment_bytes(4, False) == 32 and fragment_bytes(8, False) == 48
+
+
+@pytest.mark.parametrize("parts", [1, 2, 3, 8])
+def test_pieces_in_order_are_the_raster(parts):
+    """rasterize_parts: each piece holds a run of segments (about equal in candidates),
+    rasterised on its own thread; in order they are rasterize's fragments."""
+    from hairjax._geometry._raster import rasterize_parts
+
+    whole = rasterize(*_segments())
+    pieces = rasterize_parts(*_segments(), parts=parts)
+    assert (len(pieces) == 1) == (parts == 1) and len(pieces) <= min(parts, 3)
+    for name in ("pixel", "segment", "coverage", "t", "depth"):
+        joined = np.concatenate([getattr(piece, name) for piece in pieces])
+        np.testing.assert_array_equal(joined, getattr(whole, name))
+
+
+def test_pieces_grouped_where_they_are_equal_the_whole_grouped():
+    from hairjax._geometry._group import group_by_pixel, group_parts
+    from hairjax._geometry._raster import rasterize_parts
+
+    whole = rasterize(*_segments())
+    pieces = rasterize_parts(*_segments(), parts=3)
+    expected = group_by_pixel(whole.pixel, 32 * 32, whole.segment, whole.coverage)
+    got = group_parts([(p.pixel, p.segment, p.coverage) for p in pieces], 32 * 32)
+    np.testing.assert_array_equal(got[0], expected[0])
+    for g, e in zip(got[1], expected[1]):
+        np.testing.assert_array_equal(g, e)
