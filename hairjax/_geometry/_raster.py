@@ -215,7 +215,9 @@ def rasterize_parts(
     # The covered candidates are written straight into one array per field, sized for
     # every candidate: pages never written are never resident, so the fields cost what they
     # hold (BENCHMARKS.md "Memory").
-    capacity = int(columns.sum()) * rows
+    # Each segment's first candidate in the fields; the last entry is their capacity.
+    seg_start = np.concatenate([[0], np.cumsum(columns)]) * rows
+    capacity = int(seg_start[-1])
     raster = functools.partial(
         _kernels(np.dtype(dtype).name)[1],
         seg_data,
@@ -227,14 +229,14 @@ def rasterize_parts(
         bool(perspective),
         depth,
     )
-    _check_memory(raster, n, capacity, np.dtype(dtype).itemsize, depth, image_width, image_height)
+    _check_memory(raster, n, capacity, np.dtype(dtype), depth, image_width, image_height)
     pixel, segment = np.empty(capacity, np.int32), np.empty(capacity, np.int32)
     coverage, t = np.empty(capacity, dtype), np.empty(capacity, dtype)
     depths = np.empty(capacity if depth else 0, dtype)
     if parts is None:
         parts = host_threads() if capacity >= PARALLEL_MIN else 1
     bounds = split_evenly(columns, parts)
-    starts = [int(columns[:a].sum()) * rows for a in bounds]  # each piece's share begins
+    starts = [int(seg_start[a]) for a in bounds]  # where each piece's share begins
     fields = (pixel, segment, coverage, t, depths)
     shares = [[f[begin:end] if f.size else f for f in fields] for begin, end in zip(starts[:-1], starts[1:])]
     filled = in_parallel(
@@ -257,20 +259,19 @@ def fragment_bytes(float_size: int, depth: bool) -> int:
 
 
 def _check_memory(
-    raster, n_segments: int, capacity: int, float_size: int, depth: bool, width: int, height: int
+    raster, n_segments: int, capacity: int, dtype: np.dtype, depth: bool, width: int, height: int
 ) -> None:
     """The capacity policy (docs/model.md §5): the fields are sized for every candidate,
     but only what is written becomes resident. When even the candidates' bound needs
     more than the memory available, the covered candidates are counted first (a pass
     that writes nothing), and a scene whose fragments need more is refused before
     anything is allocated (`SceneTooLarge`)."""
-    per_fragment = fragment_bytes(float_size, depth)
+    per_fragment = fragment_bytes(dtype.itemsize, depth)
     available = available_memory()
     if available is None or capacity * per_fragment <= available:
         return
-    empty = np.empty(0, np.int32), np.empty(0, np.int32)
-    floats = tuple(np.empty(0, np.float32 if float_size == 4 else np.float64) for _ in range(3))
-    count = raster(0, n_segments, True, *empty, *floats)
+    ints, floats = np.empty(0, np.int32), np.empty(0, dtype)  # not written when counting
+    count = raster(0, n_segments, True, ints, ints, floats, floats, floats)
     if count * per_fragment > available:
         raise SceneTooLarge(
             f"the {width}x{height} raster of this scene holds {count:,} fragments, which need "
@@ -333,9 +334,9 @@ def _kernels(dtype_name: str):
                 # pixel centres around the line there.
                 k = F(lo[i] + j)
                 b_line = b_origin + (k + half_extent - a_origin) * slope
-                first = np.floor(b_line - offset - half_extent) + one
+                row0 = np.floor(b_line - offset - half_extent) + one
                 for r in range(rows):
-                    m = first + F(r)
+                    m = row0 + F(r)
                     px = k if x_major else m
                     py = m if x_major else k
                     rx = px + half_extent - x0
