@@ -61,11 +61,38 @@ def test_parts_on_several_threads_give_the_same_grouping(monkeypatch, threads):
 
 def test_bad_input_is_refused_before_the_unchecked_kernel():
     field = np.zeros(3, np.float32)
-    with pytest.raises(ValueError, match="beyond the 4 pixels"):
+    with pytest.raises(ValueError, match="pixel index 4 is outside the 4 pixels"):
         group_by_pixel(np.array([0, 4, 1], np.int32), 4, field)
-    with pytest.raises(ValueError):  # NumPy's bincount: a negative pixel
+    with pytest.raises(ValueError, match="pixel index -1 is outside"):
         group_by_pixel(np.array([0, -1, 1], np.int32), 4, field)
     with pytest.raises(ValueError, match="one to three"):
         group_by_pixel(np.array([0, 1], np.int32), 4, field)
     with pytest.raises(ValueError, match="one to three"):
         group_by_pixel(np.array([0, 1, 2], np.int32), 4, *[field] * 4)
+
+
+@pytest.mark.parametrize("band", [1, 2, 5, 64])
+@pytest.mark.parametrize("threads", [1, 2, 3])
+def test_bands_of_any_size_give_the_same_grouping(monkeypatch, band, threads):
+    """The move to bands, then by pixel within each band: lowered here so that small inputs
+    span many bands, with a pixel holding more fragments than a band and pixels holding
+    none, on one core and on several."""
+    monkeypatch.setattr(_group, "BAND_FRAGMENTS", band)
+    monkeypatch.setattr(_group, "PARALLEL_MIN", 1)
+    monkeypatch.setattr(_group, "host_threads", lambda: threads)
+    rng = np.random.default_rng(band * 10 + threads)
+    pixel = np.concatenate([rng.integers(0, 40, 300), np.full(20, 7)]).astype(np.int32)
+    rng.shuffle(pixel)
+    pixel[pixel == 23] = 24  # pixel 23 holds none
+    segment = np.arange(pixel.size, dtype=np.int32)
+    t = rng.random(pixel.size).astype(np.float32)
+    order = np.argsort(pixel, kind="stable")
+    sorted_pixel, (seg, got_t) = group_by_pixel(pixel, 45, segment, t)  # pixels 40–44 none
+    np.testing.assert_array_equal(sorted_pixel, pixel[order])
+    np.testing.assert_array_equal(seg, segment[order])
+    np.testing.assert_array_equal(got_t, t[order])
+
+
+def test_no_fragments():
+    sorted_pixel, (seg,) = group_by_pixel(np.zeros(0, np.int32), 4, np.zeros(0, np.int32))
+    assert sorted_pixel.shape == seg.shape == (0,)
