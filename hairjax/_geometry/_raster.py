@@ -90,7 +90,8 @@ class Fragments:
     """Pixels covered by segments, grouped by segment in input order.
 
     `pixel` (int32): row-major pixel index y·W + x; `segment` (int32): index into the input
-    arrays; floats are in JAX's default precision (float32, or float64 with x64 on);
+    arrays, or that segment's entry of the raster's `labels` when it was given; floats are
+    in JAX's default precision (float32, or float64 with x64 on);
     `coverage` ∈ (0, 1]; `t` ∈ [0, 1): screen-space position along the segment;
     `depth`: interpolated depth (perspective-correct for perspective views), or None when
     the raster was asked for none.
@@ -129,6 +130,7 @@ def rasterize(
     perspective: bool,
     *,
     depth: bool = True,
+    labels: np.ndarray | None = None,
 ) -> Fragments:
     """All (segment, pixel) pairs with positive coverage, segment after segment.
 
@@ -137,14 +139,17 @@ def rasterize(
     raster size; whether depth is
     interpolated perspective-correctly (1/z linear in screen space) or linearly; `depth`:
     whether to interpolate it at all (the camera's fragments need it only for an
-    occluder's depth test: without, `Fragments.depth` is None and the kernel skips it).
+    occluder's depth test: without, `Fragments.depth` is None and the kernel skips it);
+    `labels` (`[E]` int32, optional): what `Fragments.segment` holds for each segment
+    instead of its index (the camera's fragments name their segment's first point: a
+    pass over all fragments saved).
 
     Columns along each segment's major axis are laid out here in NumPy; the per-pixel
     maths runs in one compiled loop over their candidate rows (`_kernels`), in JAX's
     default float precision (float64 when x64 is enabled).
     """
     args = (xy0, xy1, z0, z1, width, image_width, image_height, perspective)
-    return rasterize_parts(*args, depth=depth, parts=1)[0]
+    return rasterize_parts(*args, depth=depth, labels=labels, parts=1)[0]
 
 
 def rasterize_parts(
@@ -158,6 +163,7 @@ def rasterize_parts(
     perspective: bool,
     *,
     depth: bool = True,
+    labels: np.ndarray | None = None,
     parts: int | None = None,
 ) -> list[Fragments]:
     """`rasterize`'s fragments in `parts` pieces, rasterised at once on as many threads:
@@ -218,9 +224,13 @@ def rasterize_parts(
     # Each segment's first candidate in the fields; the last entry is their capacity.
     seg_start = np.concatenate([[0], np.cumsum(columns)]) * rows
     capacity = int(seg_start[-1])
+    labels = np.arange(n, dtype=np.int32) if labels is None else np.asarray(labels, np.int32)
+    if labels.shape != (n,):
+        raise ValueError(f"labels must hold one entry per segment ({n}), got shape {labels.shape}")
     raster = functools.partial(
         _kernels(np.dtype(dtype).name)[1],
         seg_data,
+        labels,
         lo.astype(np.int64),
         columns,
         rows,
@@ -303,6 +313,7 @@ def _kernels(dtype_name: str):
     @no_type_check
     def raster(
         seg_data,
+        labels,
         lo,
         columns,
         rows,
@@ -354,7 +365,7 @@ def _kernels(dtype_name: str):
                         filled += 1
                         continue
                     out_pixel[filled] = np.int32(py) * image_width + np.int32(px)
-                    out_segment[filled] = i
+                    out_segment[filled] = labels[i]
                     out_coverage[filled] = cov
                     out_t[filled] = t
                     if with_depth:

@@ -203,7 +203,8 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
         view.perspective,
     )
     # Depth only for an occluder's depth test (§9): nothing else reads the camera's. The
-    # fragments come in pieces, one per core, which the grouping below reads as they are.
+    # fragments come in pieces, one per core, which the grouping below reads as they are;
+    # each names its segment's first point (the segment is that point and the next).
     pieces = rasterize_parts(
         xy[s0],
         xy[s1],
@@ -214,6 +215,7 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
         cam.height,
         True,
         depth=scene.occluder is not None,
+        labels=s0.astype(np.int32),
     )
     n_frags = sum(piece.size for piece in pieces)
     # Hair whose segments all have length 0 (or that has none: one-point strands) draws
@@ -256,9 +258,9 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
     )
     del pieces
     if segment_alpha is not None:  # §17's alpha texture scales the segment's opacity
-        frag_coverage *= segment_alpha[near_first][frag_i0]
-    # The fragments' raster segments, then in place their first points (a small table).
-    np.take(segments[near_first, 0].astype(np.int32), frag_i0, out=frag_i0)
+        at_first_point = np.zeros(points.shape[0], segment_alpha.dtype)
+        at_first_point[segments[:, 0]] = segment_alpha
+        frag_coverage *= at_first_point[frag_i0]
     release_heap(n_frags * 16)  # the raster's 4 fields
     lap("sort fragments")
 

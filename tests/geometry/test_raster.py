@@ -236,7 +236,7 @@ def raster_calls(monkeypatch):
     coverage, loop = _raster._kernels("float32")
 
     def spy(*args):
-        calls.append(args[10])  # count_only
+        calls.append(args[11])  # count_only
         return loop(*args)
 
     monkeypatch.setattr(_raster, "_kernels", lambda name: (coverage, spy))
@@ -303,3 +303,15 @@ def test_pieces_grouped_where_they_are_equal_the_whole_grouped():
     np.testing.assert_array_equal(got[0], expected[0])
     for g, e in zip(got[1], expected[1]):
         np.testing.assert_array_equal(g, e)
+
+
+def test_labels_name_the_segments():
+    """`labels`: what each fragment's `segment` holds instead of its segment's index."""
+    plain = rasterize(*_segments())
+    labels = np.array([70, 50, 60], np.int32)
+    labelled = rasterize(*_segments(), labels=labels)
+    np.testing.assert_array_equal(labelled.segment, labels[plain.segment])
+    for name in ("pixel", "coverage", "t", "depth"):
+        np.testing.assert_array_equal(getattr(labelled, name), getattr(plain, name))
+    with pytest.raises(ValueError, match="one entry per segment"):
+        rasterize(*_segments(), labels=labels[:2])
