@@ -33,12 +33,11 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._constants import PIXEL_HALF_EXTENT
-from .._errors import SceneTooLarge
-from ._host import available_memory, compile_loop, host_threads, in_parallel, split_evenly
+from ._capacity import check_memory
+from ._host import compile_loop, host_threads, in_parallel, split_evenly
 
 __all__ = [
     "Fragments",
-    "fragment_bytes",
     "rasterize",
     "rasterize_parts",
     "ribbon_coverage",
@@ -146,10 +145,45 @@ def rasterize(
 
     Columns along each segment's major axis are laid out here in NumPy; the per-pixel
     maths runs in one compiled loop over their candidate rows (`_kernels`), in JAX's
-    default float precision (float64 when x64 is enabled).
+    default float precision (float64 when x64 is enabled), in pieces on every core
+    (`rasterize_parts`) that are then moved together in place (`_joined`).
     """
     args = (xy0, xy1, z0, z1, width, image_width, image_height, perspective)
-    return rasterize_parts(*args, depth=depth, labels=labels, parts=1)[0]
+    pieces = rasterize_parts(*args, depth=depth, labels=labels)
+    return pieces[0] if len(pieces) == 1 else _joined(pieces)
+
+
+def _joined(pieces: list[Fragments]) -> Fragments:
+    """`rasterize_parts`' pieces (views of the same fields, in order) moved together in
+    place: each piece after the first is shifted down to follow the one before, so no
+    second set of fields is allocated. The pages a shifted piece leaves stay with the
+    fields until they are freed."""
+    shift = _shift_kernel()
+    names = ("pixel", "segment", "coverage", "t") + (("depth",) if pieces[0].depth is not None else ())
+    # The fields that the first piece starts (rasterize_parts writes it from their start).
+    bases = {name: getattr(pieces[0], name).base for name in names}
+    end = pieces[0].size
+    for piece in pieces[1:]:
+        for name in names:
+            field, base = getattr(piece, name), bases[name]
+            shift(base, (field.ctypes.data - base.ctypes.data) // base.itemsize, end, piece.size)
+        end += piece.size
+    joined = {name: bases[name][:end] for name in names}
+    return Fragments(**joined) if "depth" in joined else Fragments(**joined, depth=None)
+
+
+@functools.cache
+def _shift_kernel():
+    """A loop that moves `x[src : src + n]` to `x[dst : dst + n]`, dst ≤ src, front to
+    back (safe where they overlap; NumPy would copy through a temporary)."""
+
+    @compile_loop()
+    @no_type_check
+    def shift(x, src, dst, n):
+        for k in range(n):
+            x[dst + k] = x[src + k]
+
+    return shift
 
 
 def rasterize_parts(
@@ -172,9 +206,10 @@ def rasterize_parts(
     (`host_threads`) from PARALLEL_MIN candidates on, else one.
 
     Each piece is written into its own share of fields sized for every candidate, and
-    stays there: moving the pieces together had left a third region resident and made the
-    camera raster at 100k strands / 1024² slower on two cores than on one (BENCHMARKS.md,
-    "rasterize"); `group_parts` reads the pieces as they are."""
+    stays there: `group_parts` reads the camera's pieces as they are. (Copying them
+    together into new fields had left a third region resident and made the camera raster
+    at 100k strands / 1024² slower on two cores than on one, BENCHMARKS.md "rasterize";
+    `rasterize` shifts them together in place instead.)"""
     xy0 = np.asarray(xy0, np.float64)
     xy1 = np.asarray(xy1, np.float64)
     n = xy0.shape[0]
@@ -239,7 +274,7 @@ def rasterize_parts(
         bool(perspective),
         depth,
     )
-    _check_memory(raster, n, capacity, np.dtype(dtype), depth, image_width, image_height)
+    check_memory(raster, n, capacity, np.dtype(dtype), depth, image_width, image_height)
     pixel, segment = np.empty(capacity, np.int32), np.empty(capacity, np.int32)
     coverage, t = np.empty(capacity, dtype), np.empty(capacity, dtype)
     depths = np.empty(capacity if depth else 0, dtype)
@@ -259,36 +294,6 @@ def rasterize_parts(
         Fragments(share[0][:k], share[1][:k], share[2][:k], share[3][:k], share[4][:k] if depth else None)
         for share, k in zip(shares, filled)
     ]
-
-
-def fragment_bytes(float_size: int, depth: bool) -> int:
-    """Bytes the set-up holds at once per fragment: the raster's fields (pixel, segment,
-    coverage, t and depth if asked) and as many again grouped by pixel or planned for Ω."""
-    raster = 8 + (3 if depth else 2) * float_size
-    return raster + 8 + 2 * float_size
-
-
-def _check_memory(
-    raster, n_segments: int, capacity: int, dtype: np.dtype, depth: bool, width: int, height: int
-) -> None:
-    """The capacity policy (docs/model.md §5): the fields are sized for every candidate,
-    but only what is written becomes resident. When even the candidates' bound needs
-    more than the memory available, the covered candidates are counted first (a pass
-    that writes nothing), and a scene whose fragments need more is refused before
-    anything is allocated (`SceneTooLarge`)."""
-    per_fragment = fragment_bytes(dtype.itemsize, depth)
-    available = available_memory()
-    if available is None or capacity * per_fragment <= available:
-        return
-    ints, floats = np.empty(0, np.int32), np.empty(0, dtype)  # not written when counting
-    count = raster(0, n_segments, True, ints, ints, floats, floats, floats)
-    if count * per_fragment > available:
-        raise SceneTooLarge(
-            f"the {width}x{height} raster of this scene holds {count:,} fragments, which need "
-            f"{count * per_fragment / 2**30:.1f} GiB ({per_fragment} bytes each) in the geometry "
-            f"set-up alone; {available / 2**30:.1f} GiB of memory is available: render fewer "
-            "pixels (--size), fewer or thinner strands, or on a machine with more memory"
-        )
 
 
 @functools.cache

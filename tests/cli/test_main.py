@@ -62,9 +62,9 @@ def test_a_warning_is_one_line(monkeypatch, capsys):
 
 
 def test_a_scene_beyond_memory_is_one_line_before_any_output(monkeypatch, tmp_path, capsys):
-    from hairjax._geometry import _raster
+    from hairjax._geometry import _capacity
 
-    monkeypatch.setattr(_raster, "available_memory", lambda: 1000)  # bytes: nothing fits
+    monkeypatch.setattr(_capacity, "available_memory", lambda: 1000)  # bytes: nothing fits
     out = tmp_path / "x.exr"
     assert main(["render", "--size", "64", "-o", str(out)]) == 2
     err = capsys.readouterr().err

@@ -244,13 +244,13 @@ def raster_calls(monkeypatch):
 
 
 def test_a_bound_beyond_memory_counts_first_and_renders_the_same(monkeypatch, raster_calls):
-    from hairjax._geometry import _raster
+    from hairjax._geometry import _capacity
 
     plain = rasterize(*_segments())
     assert raster_calls == [False]  # memory for every candidate: no count
-    per_fragment = _raster.fragment_bytes(plain.coverage.itemsize, True)
+    per_fragment = _capacity.fragment_bytes(plain.coverage.itemsize, True)
     # Exactly enough for the fragments, not for the candidates' bound.
-    monkeypatch.setattr(_raster, "available_memory", lambda: plain.size * per_fragment)
+    monkeypatch.setattr(_capacity, "available_memory", lambda: plain.size * per_fragment)
     counted = rasterize(*_segments())
     assert raster_calls == [False, True, False]
     for name in ("pixel", "segment", "coverage", "t", "depth"):
@@ -259,11 +259,11 @@ def test_a_bound_beyond_memory_counts_first_and_renders_the_same(monkeypatch, ra
 
 def test_fragments_beyond_memory_are_refused_before_the_fields_exist(monkeypatch, raster_calls):
     import hairjax as hj
-    from hairjax._geometry import _raster
+    from hairjax._geometry import _capacity
 
     plain = rasterize(*_segments())
-    per_fragment = _raster.fragment_bytes(plain.coverage.itemsize, True)
-    monkeypatch.setattr(_raster, "available_memory", lambda: plain.size * per_fragment - 1)
+    per_fragment = _capacity.fragment_bytes(plain.coverage.itemsize, True)
+    monkeypatch.setattr(_capacity, "available_memory", lambda: plain.size * per_fragment - 1)
     with pytest.raises(hj.SceneTooLarge, match=f"32x32 raster of this scene holds {plain.size:,} fragments"):
         rasterize(*_segments())
     assert raster_calls == [False, True]  # counted, never written
@@ -271,7 +271,7 @@ def test_fragments_beyond_memory_are_refused_before_the_fields_exist(monkeypatch
 
 
 def test_fragment_bytes_by_hand():
-    from hairjax._geometry._raster import fragment_bytes
+    from hairjax._geometry._capacity import fragment_bytes
 
     # Raster: pixel, segment (int32), coverage, t, depth; grouped: pixel, first point, coverage, t.
     assert fragment_bytes(4, True) == 4 + 4 + 3 * 4 + 4 + 4 + 2 * 4 == 36
@@ -315,3 +315,20 @@ def test_labels_name_the_segments():
         np.testing.assert_array_equal(getattr(labelled, name), getattr(plain, name))
     with pytest.raises(ValueError, match="one entry per segment"):
         rasterize(*_segments(), labels=labels[:2])
+
+
+@pytest.mark.parametrize("threads", [2, 3])
+@pytest.mark.parametrize("depth", [True, False])
+def test_the_raster_on_several_cores_moves_its_pieces_together(monkeypatch, threads, depth):
+    """rasterize from PARALLEL_MIN candidates on: pieces on every core, each shifted down
+    in place to follow the one before; lowered here so that three segments take it."""
+    from hairjax._geometry import _raster
+
+    one_piece = _raster.rasterize_parts(*_segments(), depth=depth, parts=1)[0]
+    monkeypatch.setattr(_raster, "PARALLEL_MIN", 1)
+    monkeypatch.setattr(_raster, "host_threads", lambda: threads)
+    assert len(_raster.rasterize_parts(*_segments(), depth=depth)) > 1  # the path taken
+    joined = rasterize(*_segments(), depth=depth)
+    for name in ("pixel", "segment", "coverage", "t") + (("depth",) if depth else ()):
+        np.testing.assert_array_equal(getattr(joined, name), getattr(one_piece, name))
+    assert joined.depth is None if not depth else joined.depth.size == one_piece.size

@@ -170,12 +170,13 @@ def light_fragments(
     ty = np.floor(np.clip(xy[:, 1], -1, resolution)).astype(np.int64)
     inside = seen & (tx >= 0) & (tx < resolution) & (ty >= 0) & (ty < resolution)
     coverage = frags.coverage
+    # Per drawn segment first (small tables), then one gather per fragment.
     if segment_alpha is not None:
-        coverage = coverage * segment_alpha[seg_ids[frags.segment]]
+        coverage = coverage * segment_alpha[seg_ids][frags.segment]
     return LightFragments(
         frame=frame,
         frags=frags,
-        frag_strand=seg_strand.astype(np.int32)[seg_ids[frags.segment]],  # int32: the plan keeps it
+        frag_strand=seg_strand[seg_ids].astype(np.int32)[frags.segment],  # int32: the plan keeps it
         frag_coverage=coverage,
         tx=tx,
         ty=ty,
