@@ -87,8 +87,31 @@ def _measure(cfg: dict, repeats: int, progress) -> dict:
         return out
     out.update(_measure_jax(scene, repeats, progress))
     if out.get("gl", {}).get("status") == "ok":
-        out["jax_over_gl"] = out["stages"]["full_render"]["median_s"] / out["gl"]["full_render"]["median_s"]
+        out["paired"] = _measure_pairs(scene, repeats, progress)
+        out["jax_over_gl"] = out["paired"]["median_ratio"]
     return out
+
+
+def _measure_pairs(scene, repeats: int, progress) -> dict:
+    """`repeats` pairs of full renders back to back, GL then JAX, and the median of each
+    pair's ratio JAX / GL: the two blocks of runs above lie tens of seconds apart at 100k
+    strands, and this machine's speed moves by tens of percent within a minute, so a
+    ratio of the blocks' medians mixes the renderers with the machine's moods."""
+    from .._render import render_profiled
+    from ..gl import render_gl
+
+    gl_s, jax_s = [], []
+    for i in range(repeats):
+        progress(f"pair {i + 1}/{repeats}: GL, then JAX")
+        t0 = time.perf_counter()
+        result = render_gl(scene)
+        gl_s.append(time.perf_counter() - t0)
+        del result
+        image, timings = render_profiled(scene)
+        jax_s.append(timings["total"])
+        del image
+    ratios = [j / g for j, g in zip(jax_s, gl_s)]
+    return {"gl_s": gl_s, "jax_s": jax_s, "ratios": ratios, "median_ratio": _median(ratios)}
 
 
 def _measure_jax(scene, repeats: int, progress) -> dict:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import math
+import statistics
 
 import pytest
 
@@ -72,7 +73,12 @@ def test_bench_quick_both_backends(tmp_path, capsys):
     for key in GL_PASSES:
         assert _positive_finite(gl["passes"][key]["median_s"]), key
     assert gl["image_finite"]
-    assert _positive_finite(config["jax_over_gl"])
+    # The ratio is the median of back-to-back pairs' ratios, as recorded.
+    paired = config["paired"]
+    assert len(paired["gl_s"]) == len(paired["jax_s"]) == len(paired["ratios"]) == 2
+    for j, g, r in zip(paired["jax_s"], paired["gl_s"], paired["ratios"]):
+        assert _positive_finite(j) and _positive_finite(g) and r == pytest.approx(j / g, rel=1e-12)
+    assert config["jax_over_gl"] == pytest.approx(statistics.median(paired["ratios"]), rel=1e-12)
     # The JAX figures are still all there.
     assert set(STAGES) <= set(config["stages"])
 
