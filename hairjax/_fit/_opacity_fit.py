@@ -89,7 +89,7 @@ def at_alpha(d: OpacityTerms, alpha) -> TargetTerms:
     """The target's terms with the geometry recomputed at one opacity `alpha` per strand."""
     g = d.terms.geometry
     strand = jnp.full(d.n_strands, alpha, dtype=g.frag_t.dtype)
-    weights, transmittance, alpha_channel = composite_weights(
+    weights, transmittance, alpha_channel, _ = composite_weights(
         strand, d.strand_of_point, g.frag_i0, d.frag_coverage, g.frag_pixel, d.opaque
     )
     omega = None if d.omega_unit is None else alpha * d.omega_unit
@@ -108,8 +108,10 @@ def at_alpha(d: OpacityTerms, alpha) -> TargetTerms:
 def _prepare(gains, scene: Scene, point: OpacityParams, names, target, sqrt_weight) -> OpacityTerms:
     shading_names = tuple(n for n in names if n != ALPHA)
     terms = prepare_terms(gains, scene, point.shading, shading_names, target, sqrt_weight)
-    # Every gain's image moves with α: none is fixed, none is composited once.
-    terms = dataclasses.replace(terms, geometry=geometry_stage(scene), fixed={}, bases={}, varying=gains)
+    # Every gain's image moves with α: none is fixed, none is composited once. Which
+    # fragments α hides moves with it too: every fragment is kept.
+    every = geometry_stage(scene, cutoff=0.0)
+    terms = dataclasses.replace(terms, geometry=every, fixed={}, bases={}, varying=gains)
     setup = prepare(scene)
     dtype = jnp.result_type(float)
     omega_unit = occluder_omega_unit = None

@@ -1,5 +1,5 @@
 """The problem a fit solves (docs/fitting.md, "The problem"): the targets and their
-weights, the fragments a fit keeps, and `Problem`, everything a step needs besides the
+weights, and `Problem`, everything a step needs besides the
 solver's z, with the weighted residuals at z."""
 
 from __future__ import annotations
@@ -9,7 +9,6 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._constants import FIT_TRANSMITTANCE_CUTOFF
 from .._scene._scene import Scene
 from ._lit import LIGHT_NAMES
 from ._model import FitModel
@@ -20,7 +19,6 @@ from ._varpro import project
 __all__ = [
     "check_names",
     "target_arrays",
-    "visible_fragments",
     "Problem",
     "residuals_at",
     "point",
@@ -70,24 +68,6 @@ def target_arrays(scene: Scene, target, mask, weight):
     if not np.all(np.isfinite(wt)) or np.any(wt < 0):
         raise FitError("weights must be finite and non-negative")
     return image[..., :3].reshape(-1, 3), np.sqrt(wt).reshape(-1, 1)
-
-
-def visible_fragments(geom, frag_alpha):
-    """The geometry without fragments behind transmittance < FIT_TRANSMITTANCE_CUTOFF
-    (their total weight per pixel is below the cutoff: see hairjax/_constants.py);
-    `frag_alpha`: the fragments' opacities (`scene_fragment_alpha`)."""
-    weight = np.asarray(geom.frag_weight)
-    # T_k = w_k / α_k; a fragment with w = 0 (behind an opaque one, or α·T underflowing)
-    # carries nothing and is dropped as well.
-    keep = np.flatnonzero(weight >= FIT_TRANSMITTANCE_CUTOFF * np.asarray(frag_alpha))
-    return eqx.tree_at(
-        lambda g: (g.frag_pixel, g.frag_i0, g.frag_t, g.frag_weight),
-        geom,
-        tuple(
-            jnp.asarray(np.asarray(x)[keep])
-            for x in (geom.frag_pixel, geom.frag_i0, geom.frag_t, geom.frag_weight)
-        ),
-    )
 
 
 class Problem(eqx.Module):

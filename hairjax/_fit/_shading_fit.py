@@ -32,13 +32,13 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._composite import composite
-from .._geometry._stage import geometry_stage, scene_fragment_alpha
+from .._constants import FIT_TRANSMITTANCE_CUTOFF
+from .._geometry._stage import geometry_stage
 from .._shading import AbstractShadingModel, occluder_colors, transmittance
 from .._shading._light import LightParams, lit_to_light
 from .._shading._stage import shading_points
 from ._dependence import dependence
 from ._model import FitModel, Plateau
-from ._problem import visible_fragments
 from ._space import SOFTPLUS, with_values
 
 __all__ = [
@@ -61,7 +61,7 @@ SHININESS_SCAN = tuple(float(p) for p in np.geomspace(0.5, 1e4, 25))
 class TargetTerms(eqx.Module):
     """Per target, everything a step needs that no fitted parameter reaches (`prepare_terms`).
 
-    `geometry`: the geometry stage with the visible fragments only (`visible_fragments`);
+    `geometry`: the geometry stage without the fragments hidden at FIT_TRANSMITTANCE_CUTOFF;
     `ambient_scale`, `light`: what the ambient and the lit terms are multiplied by besides
     τ (the streak factor, §16; and the light's colour); `fixed`: the gain images no fitted
     parameter reaches, at the start's values; `bases`: the per-point terms (A_g or L_g) of
@@ -197,15 +197,16 @@ def image_of(model_gains, terms: TargetTerms, params, images, light: LightParams
 def prepare_terms(
     gains: tuple[str, ...], scene, params, names, target, sqrt_weight, light: LightParams | None = None
 ) -> TargetTerms:
-    """One target's terms: the geometry stage, its visible fragments, and the images of the
-    gains no fitted parameter reaches, at `params` — composited with every fragment, as
+    """One target's terms: the geometry stage without the fragments hidden at
+    FIT_TRANSMITTANCE_CUTOFF (`_geometry/_hidden`), and the images of the gains no fitted
+    parameter reaches, at `params` — composited with every fragment the renderer draws, as
     the rest of the fixed image; `target` `[HW, 3]` and `sqrt_weight` `[HW, 1]` as
     `target_arrays` gives them. `light`: the light's start (or held) direction and colour;
     the lit images are then a white light's (the caller multiplies them by the colour)."""
-    full = geometry_stage(scene)
+    full, geom = geometry_stage(scene), geometry_stage(scene, cutoff=FIT_TRANSMITTANCE_CUTOFF)
     if light is not None and light.direction is not None:  # L of the light's direction
-        full = eqx.tree_at(lambda g: g.to_light, full, lit_to_light(full, light))
-    geom = visible_fragments(full, scene_fragment_alpha(scene))
+        to_light = lit_to_light(full, light)
+        full, geom = (eqx.tree_at(lambda g: g.to_light, g, to_light) for g in (full, geom))
     direction = light is not None and "light_direction" in names
     model: AbstractShadingModel = geom.shading
     searched = tuple(n for n in model.searched if n in names)

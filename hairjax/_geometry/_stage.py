@@ -18,10 +18,11 @@ from .._composite import pixel_weights
 from .._scene._scene import Scene
 from .._shading import AbstractShadingModel
 from .._shading._streaks import streak_factors
+from ._hidden import drawn_cutoff, keep_visible
 from ._host import release_heap, to_device
 from ._setup import prepare
 
-__all__ = ["Geometry", "composite_weights", "fragment_alpha", "geometry_stage", "scene_fragment_alpha"]
+__all__ = ["Geometry", "composite_weights", "fragment_alpha", "geometry_stage"]
 
 
 class Geometry(eqx.Module):
@@ -63,65 +64,69 @@ def fragment_alpha(alpha, strand_of_point, frag_i0, frag_coverage):
 
 
 @eqx.filter_jit
-def composite_weights(alpha, strand_of_point, frag_i0, frag_coverage, frag_pixel, opaque):
-    """(weights `[F]`, transmittance `[HW]`, alpha channel `[HW]`) of the set-up's
-    fragments (sorted by pixel, front to back within a pixel) at the per-strand opacities
-    `alpha` (docs/model.md §6). A fragment's strand (`strand_of_point[frag_i0]`) and its
-    pixel's first and last fragment are derived here (`pixel_weights`), not stored with
-    the fragments (BENCHMARKS.md "Memory")."""
+def composite_weights(alpha, strand_of_point, frag_i0, frag_coverage, frag_pixel, opaque, cutoff=0.0):
+    """(weights `[F]`, transmittance `[HW]`, alpha channel `[HW]`, visible `[F]`) of the
+    set-up's fragments (sorted by pixel, front to back within a pixel) at the per-strand
+    opacities `alpha` (docs/model.md §6). `visible` marks the fragments seen through a
+    transmittance of at least `cutoff` (`_hidden`): all of them at 0. A fragment's strand
+    (`strand_of_point[frag_i0]`) and its pixel's first and last fragment are derived here
+    (`pixel_weights`), not stored with the fragments (BENCHMARKS.md "Memory")."""
     frag_alpha = fragment_alpha(alpha, strand_of_point, frag_i0, frag_coverage)
     weights, transmittance = pixel_weights(frag_alpha, frag_pixel, opaque.shape[0])
     alpha_channel = 1.0 - transmittance * (1.0 - opaque)
-    return weights, transmittance, alpha_channel
+    # w = α·T, so T ≥ c is w ≥ c·α; a fragment with α = 0 counts as seen (it adds 0).
+    return weights, transmittance, alpha_channel, weights >= cutoff * frag_alpha
 
 
-def scene_fragment_alpha(scene: Scene) -> Float[Array, " F"]:
-    """`fragment_alpha` of `scene`'s set-up at its strands' opacities: the geometry stage
-    keeps only the weights (BENCHMARKS.md "Memory"), a fit's cut of hidden fragments
-    needs α too."""
-    setup = prepare(scene)
-    dtype = jnp.result_type(float)
-    return jax.jit(fragment_alpha)(
-        jnp.asarray(scene.strands.alpha, dtype),
-        jnp.asarray(setup.strand_of_point),
-        to_device(setup.frag_i0, jnp.int32),
-        to_device(setup.frag_coverage, dtype),
-    )
-
-
-def geometry_stage(scene: Scene, alpha: Float[Array, " S"] | None = None, *, order=None) -> Geometry:
+def geometry_stage(
+    scene: Scene, alpha: Float[Array, " S"] | None = None, *, order=None, cutoff: float | None = None
+) -> Geometry:
     """Compositing weights and Ω for `scene`, differentiable in the per-strand `alpha`.
 
     **Arguments:** `scene`; `alpha` (`[S]`, default the scene's strand opacities) — may be
     a traced JAX array, e.g. under `jax.grad`. With the default, the result is computed
-    once per scene (eagerly, even under a trace) and cached (`_cache`). `order`: a draw
-    order to use instead of the scene's (`visibility_order`); then nothing is cached.
+    once per scene and cutoff (eagerly, even under a trace) and cached (`_cache`).
+    `order`: a draw order to use instead of the scene's (`visibility_order`); then nothing
+    is cached. `cutoff`: fragments seen through a transmittance below it are left out
+    (`_hidden`, docs/model.md §6); by default `drawn_cutoff` of the working precision,
+    where all they would add is below a colour's rounding; 0 keeps every fragment. With
+    `alpha` given every fragment is kept: which are hidden depends on α.
     """
     if alpha is None:
+        cut = drawn_cutoff(jnp.result_type(float)) if cutoff is None else float(cutoff)
 
         def compute():
             with jax.ensure_compile_time_eval():
-                return _geometry_stage(scene, scene.strands.alpha, order)
+                return _geometry_stage(scene, scene.strands.alpha, order, cut)
 
-        return compute() if order is not None else cached(scene, "geometry", compute)
-    return _geometry_stage(scene, alpha, order)
+        return compute() if order is not None else cached(scene, f"geometry, cutoff {cut!r}", compute)
+    if cutoff is not None:
+        raise ValueError("geometry_stage keeps every fragment when given `alpha`: it takes no `cutoff` then")
+    return _geometry_stage(scene, alpha, order, 0.0)
 
 
-def _geometry_stage(scene: Scene, alpha, order=None) -> Geometry:
+def _geometry_stage(scene: Scene, alpha, order, cutoff: float) -> Geometry:
+    """The geometry stage, the fragments hidden at `cutoff` left out (none at 0; a
+    positive cutoff needs a concrete `alpha`)."""
     setup = prepare(scene, order=order)
     dtype = jnp.result_type(float)
     alpha = jnp.asarray(alpha, dtype=dtype)
     # Shared with the set-up's aligned arrays where the dtypes agree (`_host`); sent once,
     # for compositing and the Geometry alike (a copy each on a GPU).
     frag_pixel, frag_i0 = to_device(setup.frag_pixel, jnp.int32), to_device(setup.frag_i0, jnp.int32)
-    weights, transmittance, alpha_channel = composite_weights(
+    weights, transmittance, alpha_channel, visible = composite_weights(
         alpha,
         jnp.asarray(setup.strand_of_point),
         frag_i0,
         to_device(setup.frag_coverage, dtype),
         frag_pixel,
         jnp.asarray(setup.opaque, dtype),
+        cutoff,
     )
+    fragments: tuple[jax.Array, ...] = (frag_pixel, frag_i0, to_device(setup.frag_t, dtype), weights)
+    if cutoff > 0 and not bool(jnp.all(visible)):
+        fragments = keep_visible(visible, *fragments)
+    del visible
     release_heap(weights.size * 12)  # compositing's temporaries: α, the scan's runs
     omega = occluder_omega = None
     if setup.shadow is not None:
@@ -132,6 +137,7 @@ def _geometry_stage(scene: Scene, alpha, order=None) -> Geometry:
             omega, occluder_omega = omega[:p], omega[p:]
     maybe = lambda x, t=dtype: None if x is None else jnp.asarray(x, t)  # noqa: E731
     extra = setup.shading_inputs.extra
+    frag_pixel, frag_i0, frag_t, frag_weight = fragments
     return Geometry(
         tangent=jnp.asarray(setup.tangent, dtype),
         to_light=jnp.asarray(setup.to_light, dtype),
@@ -147,8 +153,8 @@ def _geometry_stage(scene: Scene, alpha, order=None) -> Geometry:
         occluder_visibility=maybe(setup.occluder_visibility),
         frag_pixel=frag_pixel,
         frag_i0=frag_i0,
-        frag_t=to_device(setup.frag_t, dtype),
-        frag_weight=weights,
+        frag_t=frag_t,
+        frag_weight=frag_weight,
         transmittance=transmittance,
         backdrop=jnp.asarray(setup.backdrop, dtype),
         alpha_channel=alpha_channel,

@@ -44,7 +44,7 @@ def test_the_geometry_stage_shares_the_set_ups_fragments():
     """frag_pixel and frag_i0 (int32 in both) are the set-up's own buffers: the geometry
     stage adds no copy of them (BENCHMARKS.md, "Memory")."""
     scene = small_furball_scene(strands=100, size=32)
-    setup, geometry = prepare(scene), geometry_stage(scene)
+    setup, geometry = prepare(scene), geometry_stage(scene, cutoff=0.0)
     assert setup.frag_pixel.size > 0
     assert geometry.frag_pixel.unsafe_buffer_pointer() == setup.frag_pixel.ctypes.data
     assert geometry.frag_i0.unsafe_buffer_pointer() == setup.frag_i0.ctypes.data
