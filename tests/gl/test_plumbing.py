@@ -48,6 +48,23 @@ def test_missing_egl_names_the_packages(monkeypatch):
         _context.get_context.__wrapped__()
 
 
+def test_the_context_asks_egl_for_the_version_it_needs(monkeypatch):
+    """NVIDIA's EGL gives the 3.3 core context moderngl asks for by default (seen on an
+    H200 with driver 580): the version needed must be asked for, not only checked."""
+    import moderngl
+
+    asked = {}
+
+    def record(**kwargs):
+        asked.update(kwargs)
+        raise RuntimeError("stop here")
+
+    monkeypatch.setattr(moderngl, "create_context", record)
+    with pytest.raises(GLUnavailable, match="4.5"):
+        _context.get_context.__wrapped__()
+    assert asked.get("require", 0) >= _context.MIN_GL_VERSION
+
+
 def test_cli_reports_missing_gl_and_jax_still_works(monkeypatch, tmp_path, capsys):
     import hairjax.gl
 
