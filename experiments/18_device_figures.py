@@ -565,21 +565,29 @@ def main(argv=None) -> int:
 
     section("machine", info)
 
+    def case(part: str, key: str, start: dict, measure) -> None:
+        """One case of a section: skipped past the budget; an error recorded, not raised."""
+        if time.perf_counter() - START_TIME > args.budget_s:
+            results[part][key] = {"error": "skipped: budget"}
+            return
+        try:
+            results[part][key] = start
+            measure(results[part][key])
+        except Exception as err:
+            traceback.print_exc()
+            results[part][key] = {"error": error_text(err)}
+            results["errors"].append(f"{part} {key}: {error_text(err)}")
+        save()
+
     def bench() -> None:
         results["bench"] = {}
         for strands, size in sizes["bench"]:
-            key = f"{strands // 1000}k @ {size}x{size}"
-            if time.perf_counter() - START_TIME > args.budget_s:
-                results["bench"][key] = {"error": "skipped: budget"}
-                continue
-            try:
-                results["bench"][key] = {}
-                bench_case(results["bench"][key], strands, size, sizes, args.repeats, save)
-            except Exception as err:
-                traceback.print_exc()
-                results["bench"][key] = {"error": error_text(err)}
-                results["errors"].append(f"bench {key}: {error_text(err)}")
-            save()
+            case(
+                "bench",
+                f"{strands // 1000}k @ {size}x{size}",
+                {},
+                lambda out, n=strands, s=size: bench_case(out, n, s, sizes, args.repeats, save),
+            )
 
     section("bench", bench)
 
@@ -602,17 +610,12 @@ def main(argv=None) -> int:
             "bear": [args.data / "bear.tfx"],
         }
         for name, paths in assets.items():
-            if time.perf_counter() - START_TIME > args.budget_s:
-                results["tressfx"][name] = {"error": "skipped: budget"}
-                continue
-            try:
-                results["tressfx"][name] = {"width": width, "height": height}
-                tfx_case(results["tressfx"][name], name, paths, width, height, args.repeats, save)
-            except Exception as err:
-                traceback.print_exc()
-                results["tressfx"][name] = {"error": error_text(err)}
-                results["errors"].append(f"tressfx {name}: {error_text(err)}")
-            save()
+            case(
+                "tressfx",
+                name,
+                {"width": width, "height": height},
+                lambda out, n=name, p=paths: tfx_case(out, n, p, width, height, args.repeats, save),
+            )
 
     section("tressfx", tressfx)
 

@@ -52,12 +52,17 @@ def _kept_mask(everything, kept) -> np.ndarray:
     return np.isin(all_keys, key(kept))
 
 
+def _stages(cutoff):
+    """The dense scene, its geometry stage with every fragment and at `cutoff` (None: the
+    default), and the cutoff in effect."""
+    scene = _dense_scene()
+    everything, kept = geometry_stage(scene, cutoff=0.0), geometry_stage(scene, cutoff=cutoff)
+    return scene, everything, kept, drawn_cutoff(WORKING) if cutoff is None else cutoff
+
+
 @pytest.mark.parametrize("cutoff", [None, 1e-3])
 def test_the_kept_fragments_are_those_seen_through_the_cutoff(cutoff):
-    scene = _dense_scene()
-    everything = geometry_stage(scene, cutoff=0.0)
-    kept = geometry_stage(scene, cutoff=cutoff)
-    c = drawn_cutoff(WORKING) if cutoff is None else cutoff
+    scene, everything, kept, c = _stages(cutoff)
     t = _front_transmittance(scene)
     # The composite's T_k is a product of up to `longest` factors, each rounding by half an
     # epsilon of the working precision: fragments that near the cutoff may fall either way.
@@ -76,10 +81,7 @@ def test_the_kept_fragments_are_those_seen_through_the_cutoff(cutoff):
 
 @pytest.mark.parametrize("cutoff", [None, 1e-3])
 def test_the_image_moves_by_less_than_the_cutoff_times_the_brightest_colour(cutoff):
-    scene = _dense_scene()
-    everything = geometry_stage(scene, cutoff=0.0)
-    kept = geometry_stage(scene, cutoff=cutoff)
-    c = drawn_cutoff(WORKING) if cutoff is None else cutoff
+    scene, everything, kept, c = _stages(cutoff)
     full, cut = (np.asarray(shading_stage(g, scene.params)) for g in (everything, kept))
     brightest = np.asarray(point_colors(everything, scene.params)).max(axis=0)  # fragments interpolate these
     # Bound (module docstring of _hidden): the left-out weights sum to at most c per pixel;
