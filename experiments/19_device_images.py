@@ -54,12 +54,20 @@ def main(argv=None) -> int:
     default, cpu = jax.devices()[0], jax.devices("cpu")[0]
     print(f"default device {default} against {cpu}", flush=True)
     rows, worst = {}, 0.0
+
+    def save() -> None:  # after every scene: a run stopped early keeps what it measured
+        if args.json is not None:
+            args.json.parent.mkdir(parents=True, exist_ok=True)
+            data = {"default_device": str(default), "tolerance": TOLERANCE, "scenes": rows, "worst": worst}
+            args.json.write_text(json.dumps(data, indent=1))
+
     for path in SCENES:
         try:
             on_default, on_cpu = jax_image(path, default), jax_image(path, cpu)
         except (OSError, hj.SceneError) as err:  # a hair file not on this machine
             rows[path.stem] = {"skipped": str(err)}
             print(f"{path.stem:20s} skipped: {err}", flush=True)
+            save()
             continue
         gl = gl_image(path)
         device_diff = float(np.abs(on_default - on_cpu).max())
@@ -68,12 +76,10 @@ def main(argv=None) -> int:
         rows[path.stem] = {"device_vs_cpu": device_diff, "gl_vs_device": gl_diff}
         gl_text = "GL unavailable" if gl_diff is None else f"GL vs JAX {gl_diff:.3g}"
         print(f"{path.stem:20s} {default.platform} vs cpu {device_diff:.3g}   {gl_text}", flush=True)
+        save()
     ok = worst <= TOLERANCE
     print(f"largest device difference {worst:.3g} ({'within' if ok else 'OVER'} {TOLERANCE:g})")
-    if args.json is not None:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        data = {"default_device": str(default), "tolerance": TOLERANCE, "scenes": rows, "worst": worst}
-        args.json.write_text(json.dumps(data, indent=1))
+    save()
     return 0 if ok else 1
 
 
