@@ -76,6 +76,11 @@ QUICK = dict(bench=[(2_000, 128), (4_000, 192)], maps=8, map_resolution=64, fit=
 START_TIME = time.perf_counter()
 
 
+def count(strands: int) -> str:
+    """A strand count as the bench names it: 20k, or 300 below a thousand's multiple."""
+    return f"{strands // 1000}k" if strands % 1000 == 0 else str(strands)
+
+
 def progress(msg: str) -> None:
     print(f"[{time.perf_counter() - START_TIME:7.1f}s] {msg}", flush=True)
 
@@ -291,7 +296,7 @@ def jax_and_gl(out: dict, scene, repeats: int, label: str, save, shading: bool) 
 
 
 def bench_case(out: dict, strands: int, size: int, sizes: dict, repeats: int, save) -> None:
-    label = f"{strands // 1000}k @ {size}²"
+    label = f"{count(strands)} @ {size}²"
     scene = bench_scene(
         dict(strands=strands, size=size, maps=sizes["maps"], map_resolution=sizes["map_resolution"])
     )
@@ -306,7 +311,7 @@ def fit_case(strands: int, size: int, repeats: int) -> dict:
         strands=hj.furball(strands, 16, alpha=0.5),
         camera=dataclasses.replace(scene.camera, width=size, height=size),
     )
-    label = f"fit {strands // 1000}k @ {size}²"
+    label = f"fit {count(strands)} @ {size}²"
     progress(f"{label}: target render")
     target = np.asarray(hj.render(scene, TRUE))
 
@@ -474,7 +479,7 @@ def table(results: dict) -> str:
                 f"cold {fit['cold']['time_s']:.2f} s"
             )
             add(
-                f"warm fit {fit['strands'] // 1000}k @ {fit['size']}² (after geometry)",
+                f"warm fit {count(fit['strands'])} @ {fit['size']}² (after geometry)",
                 fit["time_s"]["median_s"],
                 None,
                 note,
@@ -584,7 +589,7 @@ def main(argv=None) -> int:
         for strands, size in sizes["bench"]:
             case(
                 "bench",
-                f"{strands // 1000}k @ {size}x{size}",
+                f"{count(strands)} @ {size}x{size}",
                 {},
                 lambda out, n=strands, s=size: bench_case(out, n, s, sizes, args.repeats, save),
             )

@@ -49,6 +49,7 @@ def gl_image(path: Path) -> np.ndarray | None:
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("scenes", nargs="*", type=Path, help="scene files (default: every example scene)")
     p.add_argument("--json", type=Path, help="also write the differences as JSON")
     args = p.parse_args(argv)
     default, cpu = jax.devices()[0], jax.devices("cpu")[0]
@@ -61,7 +62,7 @@ def main(argv=None) -> int:
             data = {"default_device": str(default), "tolerance": TOLERANCE, "scenes": rows, "worst": worst}
             args.json.write_text(json.dumps(data, indent=1))
 
-    for path in SCENES:
+    for path in args.scenes or SCENES:
         try:
             on_default, on_cpu = jax_image(path, default), jax_image(path, cpu)
         except (OSError, hj.SceneError) as err:  # a hair file not on this machine

@@ -1,0 +1,25 @@
+"""experiments/18_device_figures.py runs end to end (BENCHMARKS.md "GPU: one NVIDIA H200")."""
+
+from __future__ import annotations
+
+import json
+
+from helpers import load_experiment
+
+
+def test_device_figures_run(tmp_path, capsys):
+    out = tmp_path / "figures.json"
+    argv = ["--quick", "--bench", "300x32", "--skip", "fit,tressfx", "--repeats", "1", "--json", str(out)]
+    assert load_experiment("18_device_figures").main(argv) == 0
+    data = json.loads(out.read_text())
+    assert data["status"] == "done" and data["errors"] == []
+    case = data["bench"]["300 @ 32x32"]
+    assert case["strands"] == 300 and case["jax"]["image_finite"]
+    stages = case["jax"]["stages"]
+    assert {"geometry set-up (NumPy)", "geometry opacity (JAX)", "shading"} <= set(stages)
+    # The full render is its stages, each timed after the one before ended.
+    parts = ("geometry set-up (NumPy)", "geometry opacity (JAX)", "shading")
+    assert sum(stages[k]["median_s"] for k in parts) <= 1.5 * case["jax"]["full_render"]["median_s"]
+    assert case["shading"]["median_s"] > 0 and case["jax"]["fragments"] > 0
+    assert "fit" not in data and "tressfx" not in data  # skipped sections leave no entry
+    assert "300 @ 32x32" in capsys.readouterr().out

@@ -1,0 +1,23 @@
+"""experiments/19_device_images.py runs end to end (BENCHMARKS.md "GPU: one NVIDIA H200")."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import jax
+from helpers import load_experiment
+
+SCENE = Path(__file__).resolve().parents[2] / "experiments" / "scenes" / "grazing.toml"
+
+
+def test_device_images_run(tmp_path):
+    out = tmp_path / "images.json"
+    assert load_experiment("19_device_images").main([str(SCENE), "--json", str(out)]) == 0
+    data = json.loads(out.read_text())
+    row = data["scenes"]["grazing"]
+    if jax.default_backend() == "cpu":  # both images from the one CPU: the same program
+        assert row["device_vs_cpu"] == 0.0
+    assert data["worst"] <= data["tolerance"] == 1e-5
+    # GL against JAX: within the scene's band where GL runs (docs/model.md §11), else None.
+    assert row["gl_vs_device"] is None or 0.0 <= row["gl_vs_device"] < 0.1
