@@ -121,7 +121,7 @@ def _geometry_stage(scene: Scene, alpha, order, cutoff: float) -> Geometry:
         to_device(setup.frag_coverage, dtype),
         frag_pixel,
         jnp.asarray(setup.opaque, dtype),
-        cutoff,
+        jnp.asarray(cutoff, dtype),  # an array, not a static float: one compilation for every cutoff
     )
     fragments: tuple[jax.Array, ...] = (frag_pixel, frag_i0, to_device(setup.frag_t, dtype), weights)
     if cutoff > 0 and not bool(jnp.all(visible)):
