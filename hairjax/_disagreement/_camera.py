@@ -73,9 +73,9 @@ def _camera_risk(scene) -> dict:
     )
     frags, near_end = end_band(xy[s0], xy[s1], depth[s0], depth[s1], width, cam.width, cam.height, True)
     sort = np.argsort(frags.pixel, kind="stable")  # front to back within a pixel
-    pixel = frags.pixel[sort]
+    pixel = np.asarray(frags.pixel)[sort]  # a host raster
     seg = frags.segment[sort]
-    alpha = segment_opacity(scene)[near_first[seg]] * frags.coverage[sort]
+    alpha = segment_opacity(scene)[near_first[seg]] * np.asarray(frags.coverage)[sort]
     weights = over_weights_numpy(alpha, pixel)
     near_end = near_end[sort]
     always = np.zeros(hw, bool)

@@ -47,9 +47,12 @@ def aligned_empty(n: int, dtype) -> np.ndarray:
     return raw[offset : offset + n * dtype.itemsize].view(dtype)
 
 
-def to_device(x: np.ndarray, dtype) -> jax.Array:
+def to_device(x: np.ndarray | jax.Array, dtype) -> jax.Array:
     """`x` as a JAX array of `dtype`: shared, not copied, when `x` is aligned and of that
-    dtype on the CPU backend (`aligned_empty`); `x` is then made read-only."""
+    dtype on the CPU backend (`aligned_empty`); `x` is then made read-only. A JAX array
+    (the set-up's on a device, `_device_raster`) stays where it is."""
+    if isinstance(x, jax.Array):
+        return x.astype(dtype)
     x = np.asarray(x)
     if x.dtype != np.dtype(dtype):
         x = x.astype(dtype)

@@ -29,21 +29,29 @@ import dataclasses
 import functools
 from typing import no_type_check
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
 from .._constants import PIXEL_HALF_EXTENT
 from ._capacity import check_memory
 from ._host import compile_loop, host_threads, in_parallel, split_evenly
+from ._raster_plan import RasterPlan, raster_plan, ribbon_widths
 
 __all__ = [
+    "Arrays",
     "Fragments",
     "rasterize",
     "rasterize_parts",
     "ribbon_coverage",
     "ribbon_widths",
+    "raster_plan",
+    "RasterPlan",
     "PARALLEL_MIN",
 ]
+
+# NumPy on the host (the compiled loops'), JAX arrays on a device (`_device_raster`).
+Arrays = np.ndarray | jax.Array
 
 # Below this many candidates one thread rasterises: more cost more than they save.
 PARALLEL_MIN = 1 << 20
@@ -59,31 +67,6 @@ def ribbon_coverage(d, width) -> np.ndarray:
     return np.array([coverage(a, b) for a, b in zip(d.ravel(), width.ravel())], dtype).reshape(d.shape)
 
 
-def ribbon_widths(
-    width: np.ndarray, units: str, depth0: np.ndarray, depth1: np.ndarray, focal: float, perspective: bool
-) -> np.ndarray:
-    """Each segment's ribbon width in the view's pixels at its two ends (`[E, 2]`,
-    docs/model.md §5).
-
-    **Arguments:** `width` per segment (`[E]`) in `units`; the ends' depths (`[E]`); the
-    view's `focal` (pixels per unit of lateral offset / depth, or per world unit for an
-    orthographic view) and whether it is a perspective view. `"pixels"`: `width` at both
-    ends; `"world"`: w·f/D at depth D in perspective, w·f orthographic.
-    """
-    width = np.asarray(width, np.float64)
-    if units == "pixels":
-        return np.stack([width, width], axis=1)
-    if units != "world":
-        raise ValueError(f"width units must be 'pixels' or 'world', got {units!r}")
-    if not perspective:
-        return np.stack([width * focal, width * focal], axis=1)
-    # Drawn segments lie beyond the near plane (D > 0); the caller culls the others.
-    return np.stack(
-        [width * focal / np.asarray(depth0, np.float64), width * focal / np.asarray(depth1, np.float64)],
-        axis=1,
-    )
-
-
 @dataclasses.dataclass(frozen=True)
 class Fragments:
     """Pixels covered by segments, grouped by segment in input order.
@@ -96,18 +79,18 @@ class Fragments:
     the raster was asked for none.
     """
 
-    pixel: np.ndarray
-    segment: np.ndarray
-    coverage: np.ndarray
-    t: np.ndarray
-    depth: np.ndarray | None
+    pixel: Arrays
+    segment: Arrays
+    coverage: Arrays
+    t: Arrays
+    depth: Arrays | None
 
     def take(self, index) -> Fragments:
         depth = None if self.depth is None else self.depth[index]
         return Fragments(self.pixel[index], self.segment[index], self.coverage[index], self.t[index], depth)
 
     @property
-    def depths(self) -> np.ndarray:
+    def depths(self) -> Arrays:
         """`depth`, of a raster that interpolated it (ValueError otherwise)."""
         if self.depth is None:
             raise ValueError("this raster interpolated no depth (rasterize(..., depth=False))")
@@ -210,49 +193,9 @@ def rasterize_parts(
     together into new fields had left a third region resident and made the camera raster
     at 100k strands / 1024² slower on two cores than on one, BENCHMARKS.md "rasterize";
     `rasterize` shifts them together in place instead.)"""
-    xy0 = np.asarray(xy0, np.float64)
-    xy1 = np.asarray(xy1, np.float64)
-    n = xy0.shape[0]
-    width = np.asarray(width, np.float64)
-    widths = np.broadcast_to(width if width.ndim == 2 else width[..., None], (n, 2))
-    width = widths.max(axis=1)  # the wider end bounds the footprint
-    z0 = np.broadcast_to(np.asarray(z0, np.float64), (n,))
-    z1 = np.broadcast_to(np.asarray(z1, np.float64), (n,))
-    delta = xy1 - xy0
-    length = np.hypot(delta[:, 0], delta[:, 1])
-    x_major = np.abs(delta[:, 0]) >= np.abs(delta[:, 1])
-    reach = 0.5 * width + PIXEL_HALF_EXTENT  # footprint half-extent across the ribbon
-    a0 = np.where(x_major, xy0[:, 0], xy0[:, 1])
-    a1 = np.where(x_major, xy1[:, 0], xy1[:, 1])
-    size_a = np.where(x_major, image_width, image_height)
-    # Pixel centres k + ½ strictly inside (min a − reach, max a + reach) along the major
-    # axis, clipped to the image (the clip also bounds work for off-screen segments).
-    lo = np.clip(np.floor(np.minimum(a0, a1) - reach - 0.5) + 1, 0, size_a)
-    hi = np.clip(np.ceil(np.maximum(a0, a1) + reach - 0.5) - 1, -1, size_a - 1)
-    # Zero-length segments (repeated points) cover nothing: a ribbon of length 0.
-    columns = np.where(length > 0, np.maximum(hi - lo + 1, 0), 0).astype(np.int64)
-    # Rows per column: pixel centres in an open interval of length 2·reach/|u_major| ≤
-    # 2·reach·√2 around the line; an interval of length ℓ holds at most ⌈ℓ⌉ + 1 of them.
-    rows = int(np.ceil(2 * float(reach.max(initial=0.0)) * np.sqrt(2))) + 1  # initial: no segments
-
-    # Per segment, what the kernel needs, cast from float64 to the kernel's precision.
-    dtype = jnp.result_type(float)
-    seg_data = np.stack(
-        [
-            xy0[:, 0],
-            xy0[:, 1],
-            delta[:, 0],
-            delta[:, 1],
-            length,
-            widths[:, 0],
-            z0,
-            z1,
-            x_major.astype(np.float64),
-            reach,
-            widths[:, 1],
-        ],
-        axis=1,
-    ).astype(dtype)
+    plan = raster_plan(xy0, xy1, z0, z1, width, image_width, image_height)
+    seg_data, lo, columns, rows = plan.seg_data, plan.lo, plan.columns, plan.rows
+    n, dtype = columns.shape[0], seg_data.dtype
     # The covered candidates are written straight into one array per field, sized for
     # every candidate: pages never written are never resident, so the fields cost what they
     # hold (BENCHMARKS.md "Memory").
@@ -266,7 +209,7 @@ def rasterize_parts(
         _kernels(np.dtype(dtype).name)[1],
         seg_data,
         labels,
-        lo.astype(np.int64),
+        lo,
         columns,
         rows,
         image_width,

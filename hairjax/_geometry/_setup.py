@@ -23,12 +23,14 @@ from .._errors import EmptyViewWarning
 from .._scene._scene import Scene
 from .._scene._strands import tangents, unit_rows
 from .._shading import PointInputs
+from ._device_raster import device_candidates, group_on_device, setup_on_device
 from ._group import group_parts
 from ._host import release_heap, release_shared
 from ._occluder import occluder_hits, occluder_light_view, occluder_visibility
 from ._ordering import segment_depth
 from ._projection import View, camera_view
-from ._raster import rasterize_parts, ribbon_widths
+from ._raster import Arrays, rasterize_parts, ribbon_widths
+from ._raster_plan import raster_plan
 
 __all__ = ["GeometrySetup", "prepare", "visibility_order", "to_light", "warn_empty_view"]
 
@@ -45,10 +47,11 @@ class GeometrySetup:
     base_color: np.ndarray  # [P, 3] per-point colour (ones when the hair has none)
     light_rgb: np.ndarray  # [3]
     # Camera fragments, sorted by pixel, front to back within a pixel:
-    frag_pixel: np.ndarray  # [F]
-    frag_i0: np.ndarray  # [F] first point of the fragment's segment (the second is i0 + 1)
-    frag_t: np.ndarray  # [F] screen-space position along the segment
-    frag_coverage: np.ndarray  # [F]
+    # (NumPy from the host's loops, JAX arrays from a device's: `_device_raster`)
+    frag_pixel: Arrays  # [F]
+    frag_i0: Arrays  # [F] first point of the fragment's segment (the second is i0 + 1)
+    frag_t: Arrays  # [F] screen-space position along the segment
+    frag_coverage: Arrays  # [F]
     strand_of_point: np.ndarray  # [P] int32: a fragment's strand is strand_of_point[frag_i0]
     backdrop: np.ndarray  # [H*W, 3] the background behind the hair (0 on the occluder)
     opaque: np.ndarray  # [H*W] the occluder covers the pixel centre
@@ -167,13 +170,13 @@ def to_light(light, points: np.ndarray) -> np.ndarray:
 
 def _prepare(scene: Scene, order=None) -> GeometrySetup:
     release_shared()  # a forgotten scene's fragments, before this one's are allocated
-    timings = {}
+    timings: dict[str, float] = {}
     clock = time.perf_counter()
 
     def lap(name):
         nonlocal clock
         now = time.perf_counter()
-        timings[name] = now - clock
+        timings[name] = timings.get(name, 0.0) + now - clock  # a stage may run in parts
         clock = now
 
     strands, cam = scene.strands, scene.camera
@@ -202,34 +205,13 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
         view.focal,
         view.perspective,
     )
-    # Depth only for an occluder's depth test (§9): nothing else reads the camera's. The
-    # fragments come in pieces, one per core, which the grouping below reads as they are;
-    # each names its segment's first point (the segment is that point and the next).
-    pieces = rasterize_parts(
-        xy[s0],
-        xy[s1],
-        depth[s0],
-        depth[s1],
-        widths,
-        cam.width,
-        cam.height,
-        True,
-        depth=scene.occluder is not None,
-        labels=s0.astype(np.int32),
-    )
-    n_frags = sum(piece.size for piece in pieces)
-    # Hair whose segments all have length 0 (or that has none: one-point strands) draws
-    # nothing from any camera; that is not the camera's fault, so no warning then.
-    if n_frags == 0 and np.any(points[segments[:, 0]] != points[segments[:, 1]]):
-        warn_empty_view(scene)
-    lap("rasterize")
-
     hw = cam.width * cam.height
     light = scene.light
     light_rgb = np.asarray(light.color, dtype=np.float64)
     backdrop = np.broadcast_to(np.asarray(scene.background, np.float64), (hw, 3)).copy()
     opaque = np.zeros(hw, bool)
     occluder = {}
+    hit_depth = None
     if scene.occluder is not None:
         hit_depth, normal, hit_point = occluder_hits(view, scene.occluder)
         opaque = np.isfinite(hit_depth)
@@ -245,24 +227,24 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
             occluder_direct=color * light_rgb * lambert[:, None],
         )
         backdrop[opaque] = 0.0  # the shading stage adds the occluder's colour (§13)
-        # kim-2003 §3: depth test on, hair does not write depth.
-        pieces = [piece.take(np.flatnonzero(piece.depths < hit_depth[piece.pixel])) for piece in pieces]
         lap("occluder")
 
-    # Only what compositing needs is grouped by pixel: segment, coverage, t (not depth),
-    # into aligned arrays that the geometry stage shares with JAX (`_host`), in one
-    # counting-sort pass (`group_parts`); the raster's fields are released after, and the
-    # C heap they leave is handed back to the system (`release_heap`).
-    frag_pixel, (frag_i0, frag_coverage, frag_t) = group_parts(
-        [(piece.pixel, piece.segment, piece.coverage, piece.t) for piece in pieces], hw
-    )
-    del pieces
+    # Rasterised nearest segment first; each fragment names its segment's first point
+    # (the segment is that point and the next). Depth only for the occluder's depth test.
+    raster = (xy[s0], xy[s1], depth[s0], depth[s1], widths, cam.width, cam.height, True)
+    place = _fragments_on_device if setup_on_device() else _fragments_on_host
+    drawn, (frag_pixel, frag_i0, frag_coverage, frag_t) = place(raster, s0.astype(np.int32), hit_depth, lap)
+    # Hair whose segments all have length 0 (or that has none: one-point strands) draws
+    # nothing from any camera; that is not the camera's fault, so no warning then.
+    if not drawn and np.any(points[segments[:, 0]] != points[segments[:, 1]]):
+        warn_empty_view(scene)
     if segment_alpha is not None:  # §17's alpha texture scales the segment's opacity
         at_first_point = np.zeros(points.shape[0], segment_alpha.dtype)
         at_first_point[segments[:, 0]] = segment_alpha
-        frag_coverage *= at_first_point[frag_i0]
-    release_heap(n_frags * 16)  # the raster's 4 fields
-    lap("sort fragments")
+        if isinstance(frag_coverage, jax.Array):  # on the device, in the fragments' precision
+            frag_coverage = frag_coverage * jnp.asarray(at_first_point, frag_coverage.dtype)[frag_i0]
+        else:
+            frag_coverage *= at_first_point[frag_i0]
 
     shadow = None
     if scene.shadows.casts:
@@ -309,3 +291,52 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
         shading_inputs=inputs,
         **occluder,
     )
+
+
+def _fragments_on_host(raster, labels, hit_depth, lap):
+    """Whether the raster covered any pixel (before the occluder's depth test), and the
+    camera's fragments grouped by pixel, front to back (`frag_pixel`, `frag_i0`,
+    `frag_coverage`, `frag_t`), by the host's compiled loops: the raster in pieces, one
+    per core (`rasterize_parts`), read where they are by the counting sort (`group_parts`),
+    into aligned arrays that the geometry stage shares with JAX (`_host`)."""
+    with_depth = hit_depth is not None
+    pieces = rasterize_parts(*raster, depth=with_depth, labels=labels)
+    n_frags = sum(piece.size for piece in pieces)
+    lap("rasterize")
+    if with_depth:  # kim-2003 §3: depth test on, hair does not write depth.
+        pieces = [piece.take(np.flatnonzero(piece.depths < hit_depth[piece.pixel])) for piece in pieces]
+        lap("occluder")
+    # Only what compositing needs is grouped: segment, coverage, t (not depth).
+    frag_pixel, (frag_i0, frag_coverage, frag_t) = group_parts(
+        [(piece.pixel, piece.segment, piece.coverage, piece.t) for piece in pieces], raster[5] * raster[6]
+    )
+    del pieces
+    release_heap(n_frags * 16)  # the raster's 4 fields, handed back to the system
+    lap("sort fragments")
+    return n_frags > 0, (frag_pixel, frag_i0, frag_coverage, frag_t)
+
+
+def _fragments_on_device(raster, labels, hit_depth, lap):
+    """`_fragments_on_host`'s fragments as XLA programs on JAX's default device
+    (`_device_raster`): every candidate of the same raster plan, then one stable sort by
+    pixel that also drops the uncovered and occluded candidates. JAX arrays."""
+    candidates = device_candidates(raster_plan(*raster[:7]), labels, *raster[5:], depth=hit_depth is not None)
+    keep = candidates.coverage > 0
+    jax.block_until_ready(keep)  # the lap times the raster, not its dispatch
+    lap("rasterize")
+    if hit_depth is not None:  # kim-2003 §3: depth test on, hair does not write depth.
+        dtype = candidates.depths.dtype
+        # d < h for a float64 h is d < h↑, h rounded up to the next float of d's type, so
+        # the test in that type is the host's (which compares in float64).
+        bound = hit_depth.astype(dtype)
+        bound = np.where(bound < hit_depth, np.nextafter(bound, np.inf, dtype=dtype), bound)
+        # clip: an uncovered candidate's pixel may lie outside the image; it is dropped anyway.
+        keep &= candidates.depths < jnp.asarray(bound)[jnp.clip(candidates.pixel, 0, bound.size - 1)]
+    hw = raster[5] * raster[6]
+    frag_pixel, (frag_i0, frag_coverage, frag_t) = group_on_device(
+        candidates.pixel, keep, hw, candidates.segment, candidates.coverage, candidates.t
+    )
+    lap("sort fragments")
+    # Covered before the depth test: read back only when nothing is left after it.
+    drawn = frag_pixel.size > 0 or bool(jnp.any(candidates.coverage > 0))
+    return drawn, (frag_pixel, frag_i0, frag_coverage, frag_t)

@@ -15,10 +15,17 @@ from hairjax._geometry._host import (
     release_heap,
     to_device,
 )
+from hairjax._geometry._device_raster import SETUP_PLACEMENT
 from hairjax._geometry._setup import prepare
 from hairjax._geometry._stage import geometry_stage
 
 cpu_only = pytest.mark.skipif(jax.default_backend() != "cpu", reason="the CPU backend aliases host arrays")
+
+
+@pytest.fixture
+def host_setup(monkeypatch):
+    """The set-up's loops on the host, whatever HAIRJAX_SETUP says: what shares buffers."""
+    monkeypatch.setenv(SETUP_PLACEMENT, "host")
 
 
 @pytest.mark.parametrize("n", [1, 7, 1000])  # (an empty array has no data to align)
@@ -40,7 +47,7 @@ def test_to_device_shares_an_aligned_array_and_copies_otherwise():
 
 
 @cpu_only
-def test_the_geometry_stage_shares_the_set_ups_fragments():
+def test_the_geometry_stage_shares_the_set_ups_fragments(host_setup):
     """frag_pixel and frag_i0 (int32 in both) are the set-up's own buffers: the geometry
     stage adds no copy of them (BENCHMARKS.md, "Memory")."""
     scene = small_furball_scene(strands=100, size=32)
@@ -90,7 +97,7 @@ def test_in_parallel_returns_results_in_task_order():
 
 
 @cpu_only
-def test_release_shared_lets_xla_drop_a_forgotten_scenes_fragments():
+def test_release_shared_lets_xla_drop_a_forgotten_scenes_fragments(host_setup):
     import gc
     import weakref
 

@@ -152,8 +152,9 @@ class DeepOpacityMaps(AbstractShadowMethod):
             width_units=width_units,
         )
         depth_range = self.depth_range(lf.frame)
-        first = first_depths(lf.frags.pixel, lf.frags.depths, resolution)
-        u = layer_coordinate(lf.frags.depths, first[lf.frags.pixel], layers, depth_range)
+        pixel, depths = np.asarray(lf.frags.pixel), np.asarray(lf.frags.depths)  # planned on the host
+        first = first_depths(pixel, depths, resolution)
+        u = layer_coordinate(depths, first[pixel], layers, depth_range)
         # The minimum fires for fragments at or beyond the last boundary (u ≥ K): slice K,
         # counted in the texel's total only. u ≥ 0: z₀ is the texel's nearest fragment.
         j = np.minimum(np.floor(u), layers).astype(np.int64)
@@ -165,9 +166,9 @@ class DeepOpacityMaps(AbstractShadowMethod):
         plane, f, texel = deep_points(depth, texel, first, layers, depth_range)
         return DeepSetup(
             view=lf.frame.view,
-            frag_strand=lf.frag_strand,
-            frag_coverage=lf.frag_coverage,
-            frag_cell=(j * resolution**2 + lf.frags.pixel).astype(np.int32),
+            frag_strand=np.asarray(lf.frag_strand),
+            frag_coverage=np.asarray(lf.frag_coverage),
+            frag_cell=(j * resolution**2 + pixel).astype(np.int32),
             plane=plane.astype(np.int32),
             f=f,
             texel=texel.astype(np.int32),

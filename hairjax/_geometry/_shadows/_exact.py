@@ -73,7 +73,7 @@ class ExactShadows(AbstractShadowMethod):
         )
         frags, frame, tx, ty = lf.frags, lf.frame, lf.tx, lf.ty
         depth, seen, zmin, span = frame.depth, frame.seen, frame.zmin, frame.span
-        common = dict(frag_strand=lf.frag_strand, frag_coverage=lf.frag_coverage)
+        common = dict(frag_strand=np.asarray(lf.frag_strand), frag_coverage=np.asarray(lf.frag_coverage))
 
         # exact: fragments sorted by one float key, texel + depth fraction / 2.
         def key(texel, z):

@@ -7,11 +7,14 @@ from __future__ import annotations
 
 import dataclasses
 
+import jax.numpy as jnp
 import numpy as np
 
 from ..._constants import PIXEL_HALF_EXTENT, SHADOW_FILTER_RADIUS
+from .._device_raster import compact_on_device, device_candidates
 from .._projection import View, light_view
-from .._raster import Fragments, rasterize, ribbon_widths
+from .._raster import Arrays, Fragments, rasterize
+from .._raster_plan import raster_plan, ribbon_widths
 
 __all__ = ["LightFrame", "light_frame", "with_receivers", "map_margin", "LightFragments", "light_fragments"]
 
@@ -61,7 +64,7 @@ class LightFrame:
     zmin: float
     span: float
 
-    def slice_coordinate(self, z: np.ndarray, maps: int) -> np.ndarray:
+    def slice_coordinate(self, z: Arrays, maps: int) -> Arrays:
         """(z − D₀)·N/span: exactly N at z = D_N, so the farthest points' own fragments
         never count as nearer than the last plane."""
         return (z - self.zmin) * maps / self.span
@@ -117,8 +120,8 @@ class LightFragments:
 
     frame: LightFrame
     frags: Fragments
-    frag_strand: np.ndarray
-    frag_coverage: np.ndarray
+    frag_strand: Arrays
+    frag_coverage: Arrays
     tx: np.ndarray
     ty: np.ndarray
     inside: np.ndarray
@@ -135,13 +138,16 @@ def light_fragments(
     receivers: np.ndarray | None = None,
     segment_alpha: np.ndarray | None = None,
     width_units: str = "pixels",
+    on_device: bool = False,
 ) -> LightFragments:
     """Rasterise the strands from the light (same ribbons as the camera pass; width in
     texels = the strand's width in pixels, or its world width seen from the light,
     `ribbon_widths`), then find the texel of every point and of every point of
     `receivers` (`[Q, 3]`, optional: the per-point arrays get P + Q entries).
     `segment_alpha` (optional, `[E]`): a factor on each segment's opacity (the alpha
-    texture, §17)."""
+    texture, §17). `on_device`: rasterise as an XLA program on JAX's default device
+    (`_device_raster`): the fragments are then JAX arrays there, the per-point arrays
+    NumPy still."""
     frame = light_frame(points, segments, width, light, resolution, width_units)
     seg_ids = frame.drawable
     s0, s1 = segments[seg_ids, 0], segments[seg_ids, 1]
@@ -153,16 +159,15 @@ def light_fragments(
         frame.view.focal,
         frame.view.perspective,
     )
-    frags = rasterize(
-        frame.xy[s0],
-        frame.xy[s1],
-        frame.depth[s0],
-        frame.depth[s1],
-        widths,
-        resolution,
-        resolution,
-        frame.view.perspective,
-    )
+    raster = (frame.xy[s0], frame.xy[s1], frame.depth[s0], frame.depth[s1], widths, resolution, resolution)
+    if on_device:
+        labels = np.arange(len(seg_ids), dtype=np.int32)
+        candidates = device_candidates(
+            raster_plan(*raster), labels, *raster[5:], frame.view.perspective, depth=True
+        )
+        frags = compact_on_device(candidates)
+    else:
+        frags = rasterize(*raster, frame.view.perspective)
     frame = with_receivers(frame, receivers)
     xy, seen = frame.xy, frame.seen
     # Clip fires for a light at the hair's centre (near ≈ 1e-303: xy ~1e300, no int64); outside stays outside.
@@ -171,12 +176,17 @@ def light_fragments(
     inside = seen & (tx >= 0) & (tx < resolution) & (ty >= 0) & (ty < resolution)
     coverage = frags.coverage
     # Per drawn segment first (small tables), then one gather per fragment.
-    if segment_alpha is not None:
-        coverage = coverage * segment_alpha[seg_ids][frags.segment]
+    strand: Arrays = seg_strand[seg_ids].astype(np.int32)  # int32: the plan keeps it
+    factor: Arrays | None = None if segment_alpha is None else segment_alpha[seg_ids]
+    if on_device:  # the tables go to the fragments' device, the factor in their precision
+        strand = jnp.asarray(strand)
+        factor = None if factor is None else jnp.asarray(factor, coverage.dtype)
+    if factor is not None:
+        coverage = coverage * factor[frags.segment]
     return LightFragments(
         frame=frame,
         frags=frags,
-        frag_strand=seg_strand[seg_ids].astype(np.int32)[frags.segment],  # int32: the plan keeps it
+        frag_strand=strand[frags.segment],
         frag_coverage=coverage,
         tx=tx,
         ty=ty,

@@ -23,7 +23,9 @@ import numpy as np
 from jaxtyping import Array, Float, Int
 
 from ..._constants import SHADOW_FILTER_RADIUS
+from .._device_raster import setup_on_device
 from .._projection import View
+from .._raster import Arrays
 from ._base import AbstractShadowMethod, check_resolution, register_shadow_method
 from ._frame import LightFrame, light_fragments
 
@@ -50,9 +52,9 @@ class OpacityMapSetup:
     `f[P]` and texel `texel[P]` (−1 outside)."""
 
     view: View
-    frag_strand: np.ndarray
-    frag_coverage: np.ndarray
-    frag_cell: np.ndarray
+    frag_strand: Arrays
+    frag_coverage: Arrays
+    frag_cell: Arrays
     plane: np.ndarray
     f: np.ndarray
     texel: np.ndarray
@@ -104,16 +106,19 @@ class OpacityMaps(AbstractShadowMethod):
             receivers=receivers,
             segment_alpha=segment_alpha,
             width_units=width_units,
+            on_device=setup_on_device(),
         )
+        xp = jnp if isinstance(lf.frags.depths, jax.Array) else np  # where the light's fragments are
         # A fragment in [D_j, D_{j+1}) counts towards planes j + 1 … N (strictly nearer).
         # The clip fires only through rounding (a depth ulps below D₀ → slice 0); D_N gives N.
-        j = np.clip(np.floor(lf.frame.slice_coordinate(lf.frags.depths, maps)), 0, maps).astype(np.int64)
+        # int32: (N + 1)·R² ≤ MAX_MAP_CELLS < 2³¹.
+        j = xp.clip(xp.floor(lf.frame.slice_coordinate(lf.frags.depths, maps)), 0, maps).astype(np.int32)
         plane, f = point_planes(lf.frame, maps)
         return OpacityMapSetup(
             view=lf.frame.view,
             frag_strand=lf.frag_strand,
             frag_coverage=lf.frag_coverage,
-            frag_cell=(j * resolution**2 + lf.frags.pixel).astype(np.int32),
+            frag_cell=j * np.int32(resolution**2) + lf.frags.pixel,
             plane=plane.astype(np.int32),
             f=f,
             texel=np.where(lf.inside, lf.ty * resolution + lf.tx, -1).astype(np.int32),

@@ -1,0 +1,204 @@
+"""The raster and the grouping by pixel as XLA programs, for the set-up on an accelerator
+(docs/model.md §5, §6; docs/architecture.md "One GPU").
+
+On the CPU the set-up rasterises and groups with loops compiled by numba (`_raster`,
+`_group`): XLA's CPU backend has no fast stream compaction or stable sort, and its sort of
+the 55 M fragment keys at 100k strands / 1024² alone outlasts the GL render there
+(BENCHMARKS.md, "The device-resident set-up on this CPU"). On a GPU those are the
+primitives XLA is fast at (4 ms for that sort on an H200), and the host loops plus the
+fragments' trip to the device are most of a render. So where JAX's default device is not
+the CPU, the set-up runs the same raster there:
+
+- `device_candidates`: every candidate of the raster plan (`_raster_plan`: the same
+  columns and rows the host loop visits) evaluated in one XLA program, in raster order
+  (segment, column, row), with coverage 0 where the loop writes nothing;
+- `compact_on_device`: the covered candidates, in that order (the light's fragments);
+- `group_on_device`: the kept candidates sorted by pixel, stably, so that each pixel's
+  run is in raster order, front to back: the host's counting sort, as one XLA sort.
+
+Capacity policy: the plan's candidates are padded to power-of-two buckets of columns and
+segments (a similar scene reuses the compiled program), a plan whose candidates need more
+than the device's free memory is refused before anything is allocated (`SceneTooLarge`),
+and the count of kept fragments is the one value read back (their arrays' shape).
+
+`HAIRJAX_SETUP=host` or `=device` overrides where the set-up runs (default `auto`: on the
+device unless it is the CPU), e.g. to compare the two on one machine.
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax import lax
+
+from .._errors import SceneTooLarge
+from ._host import available_memory
+from ._raster import Fragments
+from ._raster_plan import RasterPlan
+
+__all__ = [
+    "SETUP_PLACEMENT",
+    "setup_on_device",
+    "device_candidates",
+    "compact_on_device",
+    "group_on_device",
+]
+
+SETUP_PLACEMENT = "HAIRJAX_SETUP"  # the environment variable: auto, host or device
+
+
+def setup_on_device() -> bool:
+    """Whether the set-up's raster and grouping run as XLA programs on JAX's default
+    device (`SETUP_PLACEMENT`; by default unless that device is the CPU)."""
+    choice = os.environ.get(SETUP_PLACEMENT, "auto")
+    if choice not in ("auto", "host", "device"):
+        raise ValueError(f"{SETUP_PLACEMENT} must be auto, host or device, got {choice!r}")
+    return choice == "device" or (choice == "auto" and jax.default_backend() != "cpu")
+
+
+def _bucket(n: int) -> int:
+    """`n` rounded up to a power of two (at least 4096): the programs compile per bucket."""
+    return max(4096, 1 << (max(n, 1) - 1).bit_length())
+
+
+def _free_bytes() -> int | None:
+    """Free memory of JAX's default device (the host's on the CPU), or None if unknown."""
+    device = jax.devices()[0]
+    if device.platform == "cpu":
+        return available_memory()
+    stats = device.memory_stats() or {}
+    if "bytes_limit" not in stats:
+        return None
+    return int(stats["bytes_limit"]) - int(stats.get("bytes_in_use", 0))
+
+
+def device_candidates(
+    plan: RasterPlan,
+    labels: np.ndarray,
+    image_width: int,
+    image_height: int,
+    perspective: bool,
+    *,
+    depth: bool,
+) -> Fragments:
+    """Every candidate of `plan` on the default device (`[C]` each, raster order), as
+    `Fragments` of JAX arrays: `segment` holds the segment's entry of `labels`, and
+    `coverage` is 0 where the host loop writes nothing (outside the image, the segment's
+    [0, L) or the ribbon, and the buckets' padding). `depth`: interpolate the depth."""
+    columns = np.asarray(plan.columns, np.int64)
+    n, total = columns.size, int(columns.sum())
+    n_pad, c_pad = _bucket(n + 1), _bucket(total + 1)
+    dtype = plan.seg_data.dtype
+    per_candidate = 8 + (3 if depth else 2) * dtype.itemsize + 8  # the fields, and a sort key and index
+    need, free = c_pad * plan.rows * per_candidate, _free_bytes()
+    if free is not None and need > free:
+        raise SceneTooLarge(
+            f"the {image_width}x{image_height} raster of this scene has {total * plan.rows:,} candidate "
+            f"fragments, which need {need / 2**30:.1f} GiB ({per_candidate} bytes each) on the device; "
+            f"{free / 2**30:.1f} GiB is free there: render fewer pixels (--size), fewer or thinner "
+            "strands, or with HAIRJAX_SETUP=host"
+        )
+    seg_data = np.zeros((n_pad, plan.seg_data.shape[1]), dtype)
+    seg_data[:n] = plan.seg_data  # padding rows: length 0, no candidate covered
+    # The padding columns belong to the first padding segment (row n), so that the
+    # columns' segments are a repeat of exactly c_pad entries.
+    counts = np.zeros(n_pad, np.int32)
+    counts[:n] = columns
+    counts[n] = c_pad - total
+    lo = np.zeros(n_pad, np.int32)
+    lo[:n] = plan.lo
+    label = np.zeros(n_pad, np.int32)
+    label[:n] = labels
+    out = _candidates(
+        seg_data, counts, lo, label, c_pad, plan.rows, image_width, image_height, bool(perspective), depth
+    )
+    return Fragments(out[0], out[1], out[2], out[3], out[4] if depth else None)
+
+
+@functools.partial(jax.jit, static_argnums=(4, 5, 6, 7, 8, 9))
+def _candidates(
+    seg_data, counts, lo, label, n_columns, rows, image_width, image_height, perspective, with_depth
+):
+    """(pixel, segment label, coverage, t[, depth]) of every candidate, `[n_columns·rows]`.
+
+    The same arithmetic, in the same order and precision, as the host loop (`_raster`'s
+    `raster`), so the two write the same fragments (up to where each compiler contracts
+    a multiply-add: tested)."""
+    dtype = seg_data.dtype
+    seg = jnp.repeat(jnp.arange(counts.shape[0], dtype=jnp.int32), counts, total_repeat_length=n_columns)
+    first_column = jnp.cumsum(counts) - counts
+    c = seg_data[seg]
+    x0, y0, dx, dy, length, w0, za, zb, xm, reach, w1 = (c[:, i, None] for i in range(11))
+    # Column k (exact in float32: < 2^24) of its segment's major axis.
+    k = (lo[seg] + (jnp.arange(n_columns, dtype=jnp.int32) - first_column[seg])).astype(dtype)[:, None]
+    x_major = xm > 0
+    da = jnp.where(x_major, dx, dy)
+    # Fires only on padding rows (length 0): a segment with columns has |da| ≥ L/√2 > 0.
+    da = jnp.where(da != 0, da, 1.0)
+    length_safe = jnp.where(length > 0, length, 1.0)  # fires likewise, on padding only
+    inv_len = 1.0 / length_safe
+    slope = jnp.where(x_major, dy, dx) / da
+    offset = reach * length / jnp.abs(da)
+    b_line = jnp.where(x_major, y0, x0) + (k + 0.5 - jnp.where(x_major, x0, y0)) * slope
+    m = jnp.floor(b_line - offset - 0.5) + 1.0 + jnp.arange(rows, dtype=dtype)[None, :]
+    px = jnp.where(x_major, k, m)
+    py = jnp.where(x_major, m, k)
+    rx = px + 0.5 - x0
+    ry = py + 0.5 - y0
+    s = (rx * dx + ry * dy) * inv_len
+    t = s * inv_len
+    half = 0.5 * (w0 + t * (w1 - w0))  # w₀ + t(w₁ − w₀) is exactly w₀ for constant widths
+    d = jnp.abs(rx * dy - ry * dx) * inv_len
+    cov = jnp.clip(jnp.minimum(d + 0.5, half) - jnp.maximum(d - 0.5, -half), 0.0, 1.0)
+    inside = (px >= 0) & (px < image_width) & (py >= 0) & (py < image_height)
+    # Padding rows have length 0 and fail s < L.
+    cov = jnp.where(inside & (s >= 0) & (s < length), cov, 0.0)
+    pixel = py.astype(jnp.int32) * image_width + px.astype(jnp.int32)
+    segment = jnp.broadcast_to(label[seg][:, None], pixel.shape)
+    fields = [pixel, segment, cov, t]
+    if with_depth:
+        if perspective:
+            # Fire only on padding rows (depth 0): drawn segments lie beyond the near plane.
+            za_safe, zb_safe = jnp.where(za != 0, za, 1.0), jnp.where(zb != 0, zb, 1.0)
+            z = 1.0 / ((1.0 - t) / za_safe + t / zb_safe)
+        else:
+            z = za + t * (zb - za)
+        # Fires for segments at constant depth: keep z exactly (no self-shadowing by a
+        # rounding error in 1/(1/z)).
+        fields.append(jnp.where(za == zb, za, z))
+    return tuple(f.ravel() for f in fields)
+
+
+def compact_on_device(candidates: Fragments) -> Fragments:
+    """The covered candidates, in raster order (`rasterize`'s fragments), on the device;
+    one value read back: their count."""
+    covered = candidates.coverage > 0
+    count = int(jnp.count_nonzero(covered))
+    (index,) = jnp.nonzero(covered, size=count)
+    return candidates.take(index)
+
+
+def group_on_device(
+    pixel: jax.Array, keep: jax.Array, n_pixels: int, *fields: jax.Array
+) -> tuple[jax.Array, tuple[jax.Array, ...]]:
+    """The entries where `keep` is set, grouped by `pixel` in their given order, on the
+    device: `(sorted pixel [F], fields [F] permuted alike)`, as `group_by_pixel` gives on
+    the host. One value read back: F."""
+    key, index, count = _sorted_by_pixel(pixel, keep, n_pixels)
+    count = int(count)
+    index = index[:count]
+    return key[:count], tuple(jnp.take(f, index, mode="clip") for f in fields)  # clip: in range, never fires
+
+
+@functools.partial(jax.jit, static_argnums=2)
+def _sorted_by_pixel(pixel, keep, n_pixels):
+    """Kept entries' pixels ascending, stably (the dropped ones keyed past the last
+    pixel), the permutation, and the count kept."""
+    key = jnp.where(keep, pixel, n_pixels)
+    index = jnp.arange(pixel.shape[0], dtype=jnp.int32)
+    key, index = lax.sort((key, index), num_keys=1, is_stable=True)
+    return key, index, jnp.count_nonzero(keep)
