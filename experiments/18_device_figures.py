@@ -31,7 +31,8 @@ Runtime: on the shared 2-core CPU (llvmpipe for GL) `--quick` (2k and 4k strands
 192², TressFX at 320 × 180) about 30 s; `--bench 20000x512 --skip tressfx` (with the fit)
 45 s; `--bench 100000x1024 --skip fit --repeats 2` (with TressFX at 1280 × 720) 80 s. The
 default sizes were planned to take under 3 minutes on a 16-core machine with an H200,
-most of it the NumPy set-up at 100k / 1024² and XLA's compilation.
+most of it the set-up at 100k / 1024² and XLA's compilation. `HAIRJAX_SETUP=host` times
+the host's set-up on a machine whose default device is a GPU (docs/model.md §5).
 """
 
 from __future__ import annotations
@@ -161,6 +162,7 @@ def machine_info() -> dict:
         "device_kind": jax.devices()[0].device_kind,
         "x64": bool(jax.config.jax_enable_x64),  # type: ignore[attr-defined]
         "numpy_version": np.__version__,
+        "setup_placement": "device" if hj.setup_on_device() else "host",  # HAIRJAX_SETUP, docs/model.md §5
     }
     for name in (
         "jaxlib",
@@ -460,7 +462,7 @@ def table(results: dict) -> str:
         add(f"fur ball {key}: shading stage", get(case, "shading", "median_s"))
         full_render(f"fur ball {key}: full render", case)
         stages = get(case, "jax", "stages") or {}
-        for stage in ("geometry set-up (NumPy)", "geometry opacity (JAX)", "shading"):
+        for stage in ("geometry set-up", "geometry opacity (JAX)", "shading"):
             if stage in stages:
                 add(f"    {stage}", stages[stage]["median_s"])
             if stage.startswith("geometry set-up"):

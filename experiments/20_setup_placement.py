@@ -26,8 +26,6 @@ from pathlib import Path
 import numpy as np
 
 import hairjax as hj
-from hairjax._geometry._device_raster import SETUP_PLACEMENT
-from hairjax._geometry._setup import prepare
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = sorted((ROOT / "experiments" / "scenes").glob("*.toml")) + [
@@ -41,10 +39,10 @@ def render_on(scene: hj.Scene, where: str, repeats: int):
     """(image, camera fragments as NumPy, median seconds of `repeats` warm renders) with
     the set-up placed `where`. Each render takes a fresh copy of `scene`: the set-up is
     cached per scene object."""
-    os.environ[SETUP_PLACEMENT] = where
+    os.environ[hj.SETUP_PLACEMENT] = where
     fresh = scene.replace()
     image = np.asarray(hj.render(fresh))  # the warm-up: compiles
-    setup = prepare(fresh)
+    setup = hj.prepare(fresh)
     fragments = tuple(np.asarray(x) for x in (setup.frag_pixel, setup.frag_i0, setup.frag_t))
     seconds = []
     for _ in range(repeats):
@@ -61,7 +59,7 @@ def main(argv=None) -> int:
     p.add_argument("--repeats", type=int, default=1, help="warm renders timed per placement (default 1)")
     p.add_argument("--json", type=Path, help="also write the table as JSON")
     args = p.parse_args(argv)
-    before = os.environ.get(SETUP_PLACEMENT)
+    before = os.environ.get(hj.SETUP_PLACEMENT)
     rows, worst = {}, 0.0
 
     def save() -> None:  # after every scene: a run stopped early keeps what it measured
@@ -100,9 +98,9 @@ def main(argv=None) -> int:
             save()
     finally:
         if before is None:
-            os.environ.pop(SETUP_PLACEMENT, None)
+            os.environ.pop(hj.SETUP_PLACEMENT, None)
         else:
-            os.environ[SETUP_PLACEMENT] = before
+            os.environ[hj.SETUP_PLACEMENT] = before
     ok = worst <= TOLERANCE
     print(f"largest difference {worst:.3g} ({'within' if ok else 'OVER'} {TOLERANCE:g})")
     save()

@@ -1,7 +1,7 @@
 """The staged renderer: scene → geometry stage → shading stage → image (docs/model.md,
 docs/architecture.md).
 
-- `_geometry/_setup.prepare(scene)`: NumPy set-up that depends on geometry, camera and light only.
+- `_geometry/_setup.prepare(scene)`: the set-up that depends on geometry, camera and light only.
 - `geometry_stage(scene, alpha)` (`_geometry/_stage.py`): compositing weights and Ω,
   differentiable in the per-strand `alpha`.
 - `shading_stage(geometry, params)` (`_shading/_stage.py`): the model's colours at the
@@ -78,7 +78,7 @@ def render_profiled(scene: Scene, params=None, *, progress: Progress | None = No
     t0 = time.perf_counter()
     setup = prepare(scene)
     t1 = time.perf_counter()
-    t1p = step(1, "geometry set-up (NumPy)")
+    t1p = step(1, "geometry set-up")
     geometry = jax.block_until_ready(geometry_stage(scene))
     t2 = time.perf_counter()
     t2p = step(2, "geometry opacity (JAX)")
@@ -86,7 +86,7 @@ def render_profiled(scene: Scene, params=None, *, progress: Progress | None = No
     t3 = time.perf_counter()
     step(3, "shading")
     timings = {f"geometry/{k}": v for k, v in setup.timings.items()}
-    timings["geometry set-up (NumPy)"] = t1 - t0
+    timings["geometry set-up"] = t1 - t0
     timings["geometry opacity (JAX)"] = t2 - t1p
     timings["shading"] = t3 - t2p
     timings["total"] = t3 - t0 - (t1p - t1) - (t2p - t2)  # the stages' sum, without the reports

@@ -165,11 +165,11 @@ def test_render_profiled_reports_its_stages():
     scene = tiny_scene()
     image, timings = render_profiled(scene, progress=recorder)
     assert recorder.calls == [
-        (1, 3, "geometry set-up (NumPy)"),
+        (1, 3, "geometry set-up"),
         (2, 3, "geometry opacity (JAX)"),
         (3, 3, "shading"),
     ]
-    stages = ("geometry set-up (NumPy)", "geometry opacity (JAX)", "shading")
+    stages = ("geometry set-up", "geometry opacity (JAX)", "shading")
     # The total is the stages' sum (float addition in another order: a few ulps).
     assert timings["total"] == pytest.approx(sum(timings[k] for k in stages), rel=1e-9)
     assert np.asarray(image).shape == (12, 12, 4)

@@ -1,5 +1,6 @@
-"""The geometry stage's set-up (NumPy): everything that depends on geometry, camera and
-light only (docs/model.md §2–§7, §13).
+"""The geometry stage's set-up: everything that depends on geometry, camera and light
+only (docs/model.md §2–§7, §13). NumPy and compiled loops on the host; on an accelerator
+the rasters and the grouping by pixel run there as XLA programs (`_device_raster`).
 
 Projection and the visibility order, the ribbons' fragments sorted front to back per
 pixel, the occluder's test and its light, the shading model's per-point inputs, and the

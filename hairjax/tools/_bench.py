@@ -73,6 +73,7 @@ def _machine_info(results: list[dict]) -> dict:
 
     backend = next((r.get("jax_backend") for r in results if r.get("jax_backend")), None)
     devices = next((r.get("jax_devices") for r in results if r.get("jax_devices")), None)
+    placement = next((r.get("setup_placement") for r in results if r.get("setup_placement")), None)
     return {
         "platform": platform.platform(),
         "machine": platform.machine(),
@@ -84,6 +85,7 @@ def _machine_info(results: list[dict]) -> dict:
         "jax_version": jax.__version__,
         "jax_backend": backend,
         "jax_devices": devices,
+        "setup_placement": placement,
     }
 
 
@@ -159,7 +161,8 @@ def bench_main(args) -> int:
     header = (
         f"hairjax bench ({backend}): median of {repeats} run(s) after 1 warm-up; "
         f"{machine['platform']}, {machine['cpu_count']} CPUs, "
-        f"jax {machine['jax_version']} ({machine['jax_backend']}, {dtype})\n"
+        f"jax {machine['jax_version']} ({machine['jax_backend']}, {dtype}), "
+        f"set-up on the {machine['setup_placement'] or 'host'}\n"
         f"scene: fur balls of {POINTS}-point strands, directional light, bins ordering "
         f"({ORDERING_BINS}), camera eye {EYE} target {TARGET} fov {FOV:g}{gl_line}"
     )

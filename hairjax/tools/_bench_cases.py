@@ -52,7 +52,7 @@ GL_PASSES = ("upload", "shadows", "camera pass")
 # "geometry_setup/<step>" with the step names of `Setup.timings`.
 STAGES = ("geometry_setup", "geometry_opacity", "shading", "gradient", "full_render")
 STAGE_LABELS = {
-    "geometry_setup": "geometry set-up (NumPy)",
+    "geometry_setup": "geometry set-up",
     "geometry_opacity": "geometry opacity (JAX)",
     "shading": "shading stage",
     "gradient": "gradient wrt kd, ks, p, kappa",

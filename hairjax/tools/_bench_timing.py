@@ -1,7 +1,7 @@
 """The child process of `hairjax bench`: one configuration, timed (BENCHMARKS.md).
 
 Each figure is the median of ``--repeats`` runs after one warm-up run that is not
-counted (it holds JAX's compilation). One run is `render_profiled(scene)`: the NumPy
+counted (it holds JAX's compilation). One run is `render_profiled(scene)`: the
 set-up (`prepare`, with the scene's cached set-up and geometry cleared first), the JAX
 opacity stage (`geometry_stage`) and the shading stage, each waited for with
 `jax.block_until_ready`; "full render" is their sum within a run. The shading stage
@@ -136,7 +136,7 @@ def _measure_jax(scene, repeats: int, progress) -> dict:
         del image  # so that two runs' arrays never coexist
         progress(f"run {i + 1}/{repeats}")
         image, timings = render_profiled(scene)
-        runs["geometry_setup"].append(timings["geometry set-up (NumPy)"])
+        runs["geometry_setup"].append(timings["geometry set-up"])
         runs["geometry_opacity"].append(timings["geometry opacity (JAX)"])
         runs["full_render"].append(timings["total"])
         for key, value in timings.items():
@@ -251,9 +251,12 @@ def child_main(argv) -> int:
         result.update(status="MemoryError" if oom else "error", error=f"{type(err).__name__}: {err}"[:2000])
     import jax
 
+    from .._geometry._device_raster import setup_on_device
+
     result["wall_s"] = time.perf_counter() - start
     result["peak_rss_kib"] = _peak_rss_kib()
     result["jax_backend"] = jax.default_backend()
+    result["setup_placement"] = "device" if setup_on_device() else "host"  # docs/model.md §5
     result["jax_devices"] = [str(d) for d in jax.devices()]
     result["x64"] = bool(jax.config.jax_enable_x64)  # type: ignore[attr-defined]  # jax declares its options at run time
     write_json_strict(Path(out_path), result)

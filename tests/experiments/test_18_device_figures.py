@@ -16,9 +16,9 @@ def test_device_figures_run(tmp_path, capsys):
     case = data["bench"]["300 @ 32x32"]
     assert case["strands"] == 300 and case["jax"]["image_finite"]
     stages = case["jax"]["stages"]
-    assert {"geometry set-up (NumPy)", "geometry opacity (JAX)", "shading"} <= set(stages)
+    assert {"geometry set-up", "geometry opacity (JAX)", "shading"} <= set(stages)
     # The full render is its stages, each timed after the one before ended.
-    parts = ("geometry set-up (NumPy)", "geometry opacity (JAX)", "shading")
+    parts = ("geometry set-up", "geometry opacity (JAX)", "shading")
     assert sum(stages[k]["median_s"] for k in parts) <= 1.5 * case["jax"]["full_render"]["median_s"]
     assert case["shading"]["median_s"] > 0 and case["jax"]["fragments"] > 0
     assert "fit" not in data and "tressfx" not in data  # skipped sections leave no entry

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from helpers import small_furball_scene
 
+from hairjax._geometry._device_raster import SETUP_PLACEMENT
 from hairjax._geometry._host import (
     _MALLOC_TRIM,
     ALIGNMENT,
@@ -15,7 +16,6 @@ from hairjax._geometry._host import (
     release_heap,
     to_device,
 )
-from hairjax._geometry._device_raster import SETUP_PLACEMENT
 from hairjax._geometry._setup import prepare
 from hairjax._geometry._stage import geometry_stage
 
