@@ -12,7 +12,7 @@ uint64 key and sorts keys alone) and keep the covered raster candidates (a compa
 about 2.3 F candidates to F). Those two XLA primitives, plus today's opacity and shading
 stages (already JAX), bound such a set-up's full render from below. Medians of
 `--repeats` runs after a warm-up. "Today's render" is the host set-up's
-(`HAIRJAX_SETUP=host`, set here); experiment 20 times the set-up built on this floor.
+(`HAIRJAX_SETUP=host`, set here); experiment 19 times the set-up built on this floor.
 """
 
 from __future__ import annotations

@@ -1,23 +1,34 @@
-"""The same images on every device: the JAX renderer on JAX's default device (a GPU where
-there is one) against the same renderer on the CPU, and the GL renderer against both, on
-every example scene (BENCHMARKS.md, "GPU: one NVIDIA H200").
+"""The same images on every device and from either set-up: the JAX renderer on JAX's
+default device (a GPU where there is one) against the same renderer on the CPU, its
+set-up on the host against its set-up on the device, and the GL renderer against both, on
+every example scene (BENCHMARKS.md, "GPU: one NVIDIA H200" and "The set-up on the device,
+built").
 
     python experiments/19_device_images.py --json out/device_images.json
+    python experiments/19_device_images.py --repeats 3 --json out/device_images.json   # with timings
 
 For each scene of `experiments/scenes/` and the built-in default scene it prints the
 largest absolute difference of the RGBA images: default device against the CPU (docs/model.md
 holds them to 1e-5: float32 arithmetic in another order, and a GPU's scatter-add in no
-fixed order), and GL against the default device's JAX (the bands docs/model.md §11
-explains). A scene whose hair file is missing is reported and skipped. On a machine with
-no accelerator both JAX images come from the CPU and must be equal. About 1 minute on
-this 2-core CPU.
+fixed order); the set-up's rasters and grouping as compiled loops on the host
+(`HAIRJAX_SETUP=host`) against XLA programs on the default device (`=device`, docs/model.md
+§5; on a machine without an accelerator that device is the CPU, which runs the programs a
+GPU would), with whether their camera fragments are the same and, with `--repeats N`, the
+median time of N warm renders of each; and GL against the default device's JAX (the bands
+docs/model.md §11 explains). A scene whose hair file is missing is reported and skipped.
+On a machine with no accelerator both JAX images come from the CPU and must be equal.
+About 3 minutes on this 2-core CPU at `--repeats 3`.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import os
+import statistics
 import sys
+import time
 from pathlib import Path
 
 import jax
@@ -38,6 +49,54 @@ def jax_image(path: Path, device) -> np.ndarray:
         return np.asarray(hj.render(hj.load_scene(path)))
 
 
+@contextlib.contextmanager
+def placed(where: str):
+    """The set-up placed `where` (`HAIRJAX_SETUP`) inside the block, as before after it."""
+    before = os.environ.get(hj.SETUP_PLACEMENT)
+    os.environ[hj.SETUP_PLACEMENT] = where
+    try:
+        yield
+    finally:
+        if before is None:
+            os.environ.pop(hj.SETUP_PLACEMENT, None)
+        else:
+            os.environ[hj.SETUP_PLACEMENT] = before
+
+
+def placed_render(path: Path, where: str, repeats: int):
+    """(image, camera fragments as NumPy, median seconds of `repeats` warm renders or None)
+    with the set-up placed `where`; every render on a fresh scene (the set-up is cached
+    per scene object)."""
+    with placed(where):
+        scene = hj.load_scene(path)
+        image = np.asarray(hj.render(scene))  # the warm-up: compiles
+        setup = hj.prepare(scene)
+        fragments = tuple(np.asarray(x) for x in (setup.frag_pixel, setup.frag_i0, setup.frag_t))
+        seconds = []
+        for _ in range(repeats):
+            again = scene.replace()
+            start = time.perf_counter()
+            np.asarray(hj.render(again))
+            seconds.append(time.perf_counter() - start)
+    return image, fragments, statistics.median(seconds) if seconds else None
+
+
+def setup_row(path: Path, repeats: int) -> dict:
+    """The host set-up against the device set-up on one scene."""
+    (host, host_frags, host_s), (device, device_frags, device_s) = (
+        placed_render(path, where, repeats) for where in ("host", "device")
+    )
+    return {
+        "max_abs": float(np.abs(host - device).max()),
+        "same_fragments": all(
+            a.shape == b.shape and np.array_equal(a, b) for a, b in zip(host_frags, device_frags)
+        ),
+        "fragments": int(host_frags[0].size),
+        "host_s": host_s,
+        "device_s": device_s,
+    }
+
+
 def gl_image(path: Path) -> np.ndarray | None:
     from hairjax.gl import GLUnavailable, render_gl
 
@@ -50,6 +109,7 @@ def gl_image(path: Path) -> np.ndarray | None:
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("scenes", nargs="*", type=Path, help="scene files (default: every example scene)")
+    p.add_argument("--repeats", type=int, default=0, help="warm renders timed per set-up placement")
     p.add_argument("--json", type=Path, help="also write the differences as JSON")
     args = p.parse_args(argv)
     default, cpu = jax.devices()[0], jax.devices("cpu")[0]
@@ -70,16 +130,23 @@ def main(argv=None) -> int:
             print(f"{path.stem:20s} skipped: {err}", flush=True)
             save()
             continue
+        setup = setup_row(path, args.repeats)
         gl = gl_image(path)
         device_diff = float(np.abs(on_default - on_cpu).max())
         gl_diff = None if gl is None else float(np.abs(gl - on_default).max())
-        worst = max(worst, device_diff)
-        rows[path.stem] = {"device_vs_cpu": device_diff, "gl_vs_device": gl_diff}
+        worst = max(worst, device_diff, setup["max_abs"])
+        rows[path.stem] = {"device_vs_cpu": device_diff, "gl_vs_device": gl_diff, "setup": setup}
         gl_text = "GL unavailable" if gl_diff is None else f"GL vs JAX {gl_diff:.3g}"
-        print(f"{path.stem:20s} {default.platform} vs cpu {device_diff:.3g}   {gl_text}", flush=True)
+        timing = "" if setup["host_s"] is None else f" ({setup['host_s']:.3f} s / {setup['device_s']:.3f} s)"
+        print(
+            f"{path.stem:20s} {default.platform} vs cpu {device_diff:.3g}   host vs device set-up "
+            f"{setup['max_abs']:.3g}, fragments {'same' if setup['same_fragments'] else 'DIFFER'}"
+            f"{timing}   {gl_text}",
+            flush=True,
+        )
         save()
     ok = worst <= TOLERANCE
-    print(f"largest device difference {worst:.3g} ({'within' if ok else 'OVER'} {TOLERANCE:g})")
+    print(f"largest difference {worst:.3g} ({'within' if ok else 'OVER'} {TOLERANCE:g})")
     save()
     return 0 if ok else 1
 

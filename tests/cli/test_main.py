@@ -61,14 +61,20 @@ def test_a_warning_is_one_line(monkeypatch, capsys):
     assert capsys.readouterr().err.strip().splitlines() == ["hairjax: warning: the hair covers no pixel"]
 
 
-def test_a_scene_beyond_memory_is_one_line_before_any_output(monkeypatch, tmp_path, capsys):
-    from hairjax._geometry import _capacity
+@pytest.mark.parametrize("placement", ["host", "device"])
+def test_a_scene_beyond_memory_is_one_line_before_any_output(monkeypatch, tmp_path, capsys, placement):
+    """Refused by the set-up's capacity policy (docs/model.md §5) where it runs: the host's
+    memory for the compiled loops, the device's for the XLA programs."""
+    from hairjax._geometry import _capacity, _device_raster
 
+    monkeypatch.setenv(_device_raster.SETUP_PLACEMENT, placement)
     monkeypatch.setattr(_capacity, "available_memory", lambda: 1000)  # bytes: nothing fits
+    monkeypatch.setattr(_device_raster, "_free_bytes", lambda: 1000)
     out = tmp_path / "x.exr"
     assert main(["render", "--size", "64", "-o", str(out)]) == 2
     err = capsys.readouterr().err
     lines = err.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in err
-    assert lines[0].startswith("hairjax: error: the 64x64 raster of this scene holds ") and "GiB" in lines[0]
+    says = "holds " if placement == "host" else "has "  # fragments counted, or candidates bounded
+    assert lines[0].startswith(f"hairjax: error: the 64x64 raster of this scene {says}") and "GiB" in lines[0]
     assert not out.exists()

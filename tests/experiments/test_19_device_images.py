@@ -1,19 +1,24 @@
-"""experiments/19_device_images.py runs end to end (BENCHMARKS.md "GPU: one NVIDIA H200")."""
+"""experiments/19_device_images.py runs end to end (BENCHMARKS.md "GPU: one NVIDIA H200",
+"The set-up on the device, built")."""
 
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 import jax
 from helpers import load_experiment
 
+import hairjax as hj
+
 SCENE = Path(__file__).resolve().parents[2] / "experiments" / "scenes" / "grazing.toml"
 
 
-def test_device_images_run(tmp_path):
+def test_device_images_run(tmp_path, monkeypatch):
+    monkeypatch.setenv(hj.SETUP_PLACEMENT, "host")
     out = tmp_path / "images.json"
-    assert load_experiment("19_device_images").main([str(SCENE), "--json", str(out)]) == 0
+    assert load_experiment("19_device_images").main([str(SCENE), "--repeats", "1", "--json", str(out)]) == 0
     data = json.loads(out.read_text())
     row = data["scenes"]["grazing"]
     if jax.default_backend() == "cpu":  # both images from the one CPU: the same program
@@ -21,3 +26,9 @@ def test_device_images_run(tmp_path):
     assert data["worst"] <= data["tolerance"] == 1e-5
     # GL against JAX: within the scene's band where GL runs (docs/model.md §11), else None.
     assert row["gl_vs_device"] is None or 0.0 <= row["gl_vs_device"] < 0.1
+    # The two set-ups write the same fragments, composited by the same programs.
+    setup = row["setup"]
+    assert setup["same_fragments"] is True and setup["fragments"] > 1000
+    assert setup["max_abs"] == 0.0
+    assert setup["host_s"] > 0 and setup["device_s"] > 0
+    assert os.environ[hj.SETUP_PLACEMENT] == "host"  # the experiment puts the placement back
