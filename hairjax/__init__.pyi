@@ -22,6 +22,7 @@ from ._fit import FitError as FitError
 from ._fit import FitResult as FitResult
 from ._fit import fit as fit
 from ._fit import fitted_image as fitted_image
+from ._geometry._capacity import fragment_bucket as fragment_bucket
 from ._geometry._device_raster import SETUP_PLACEMENT as SETUP_PLACEMENT
 from ._geometry._device_raster import setup_on_device as setup_on_device
 from ._geometry._ordering import AbstractOrdering as AbstractOrdering

@@ -160,3 +160,15 @@ def render_gl_with_edited_shader(scene, omega, old: str, new: str, occluder=None
         finally:
             patch.undo()
             _programs.clear_cache()
+
+
+FRAGMENT_FIELDS = ("frag_pixel", "frag_i0", "frag_t", "frag_weight")
+
+
+def real_fragments(geometry) -> dict[str, np.ndarray]:
+    """A `Geometry`'s fragment arrays without their bucket's padding (docs/model.md §6:
+    pixel H·W, weight 0, all after the real ones)."""
+    pixel = np.asarray(geometry.frag_pixel)
+    n = int(np.sum(pixel < geometry.height * geometry.width))
+    assert np.all(pixel[n:] == geometry.height * geometry.width)  # the padding is the tail
+    return {name: np.asarray(getattr(geometry, name))[:n] for name in FRAGMENT_FIELDS}

@@ -55,11 +55,13 @@ def test_paired_composite_equals_the_two_gathers_by_hand():
     colors = jnp.asarray(np.random.default_rng(0).random((p, 3)))
     i0, t, w, pixel = (np.asarray(x) for x in (g.frag_i0, g.frag_t, g.frag_weight, g.frag_pixel))
     c = np.asarray(colors)
-    by_hand = np.zeros((24 * 24, 3))
+    # One row past the image: the bucket's padding (pixel H·W), which the composite drops.
+    by_hand = np.zeros((24 * 24 + 1, 3))
     np.add.at(by_hand, pixel, w[:, None] * ((1 - t)[:, None] * c[i0] + t[:, None] * c[i0 + 1]))
     assert i0.max() == p - 2  # the case the wrap must not touch is exercised
+    assert pixel.max() == 24 * 24  # and padding
     for paired in (False, True):
-        np.testing.assert_allclose(composite(g, colors, paired=paired), by_hand, rtol=1e-12, atol=1e-14)
+        np.testing.assert_allclose(composite(g, colors, paired=paired), by_hand[:-1], rtol=1e-12, atol=1e-14)
 
 
 def test_composite_in_steps_equals_one_step_with_its_derivatives(monkeypatch):
@@ -85,10 +87,12 @@ def test_composite_in_steps_equals_one_step_with_its_derivatives(monkeypatch):
     colors = jnp.asarray(rng.random((p, 3)))
     probe = jnp.asarray(rng.random((24 * 24, 3)))
     i0, t, w, pixel = (np.asarray(x) for x in (g.frag_i0, g.frag_t, g.frag_weight, g.frag_pixel))
-    # The linear map by hand: A[pixel, point] with image = A @ colors.
-    a = np.zeros((24 * 24, p))
+    # The linear map by hand: A[pixel, point] with image = A @ colors; its last row is the
+    # bucket's padding (pixel H·W), which the composite drops.
+    a = np.zeros((24 * 24 + 1, p))
     np.add.at(a, (pixel, i0), w * (1 - t))
     np.add.at(a, (pixel, i0 + 1), w * t)
+    a = a[:-1]
     for paired in (False, True):
         np.testing.assert_allclose(composite(g, colors, paired=paired), a @ colors, rtol=1e-12, atol=1e-14)
         d_colors = jax.grad(lambda c: jnp.sum(composite(g, c, paired=paired) * probe))(colors)
@@ -101,7 +105,8 @@ def test_composite_in_steps_equals_one_step_with_its_derivatives(monkeypatch):
         return jnp.sum(composite(eqx.tree_at(lambda x: x.frag_weight, g, weight), colors) * probe)
 
     c = np.asarray(colors)
-    by_hand = np.sum(np.asarray(probe)[pixel] * ((1 - t)[:, None] * c[i0] + t[:, None] * c[i0 + 1]), axis=1)
+    padded_probe = np.concatenate([np.asarray(probe), np.zeros((1, 3))])  # padding adds to no pixel
+    by_hand = np.sum(padded_probe[pixel] * ((1 - t)[:, None] * c[i0] + t[:, None] * c[i0 + 1]), axis=1)
     np.testing.assert_allclose(jax.grad(of_weights)(g.frag_weight), by_hand, rtol=1e-12, atol=1e-14)
 
 

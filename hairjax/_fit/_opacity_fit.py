@@ -124,7 +124,7 @@ def _prepare(gains, scene: Scene, point: OpacityParams, names, target, sqrt_weig
         terms,
         # As the geometry stage passes them: shared with the set-up where it can (`_host`).
         jnp.asarray(setup.strand_of_point),
-        to_device(setup.frag_coverage, dtype),
+        to_device(setup.padded_fragments[2], dtype),  # coverage, padded as the geometry's fragments
         jnp.asarray(setup.opaque, dtype),
         scene.strands.num_strands,
         omega_unit,

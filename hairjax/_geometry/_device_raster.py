@@ -183,15 +183,22 @@ def compact_on_device(candidates: Fragments) -> Fragments:
 
 
 def group_on_device(
-    pixel: jax.Array, keep: jax.Array, n_pixels: int, *fields: jax.Array
-) -> tuple[jax.Array, tuple[jax.Array, ...]]:
+    pixel: jax.Array, keep: jax.Array, n_pixels: int, *fields: jax.Array, capacity=None
+) -> tuple[jax.Array, tuple[jax.Array, ...], int]:
     """The entries where `keep` is set, grouped by `pixel` in their given order, on the
-    device: `(sorted pixel [F], fields [F] permuted alike)`, as `group_by_pixel` gives on
-    the host. One value read back: F."""
+    device: `(sorted pixel, fields permuted alike, F)`, as `group_by_pixel` gives on the
+    host. One value read back: F. `capacity` (optional): a function of F giving the
+    arrays' length (`fragment_bucket`); entries from F on are then padding, pixel
+    `n_pixels` and fields 0. Without it the arrays hold the F entries."""
     key, index, count = _sorted_by_pixel(pixel, keep, n_pixels)
     count = int(count)
-    index = index[:count]
-    return key[:count], tuple(jnp.take(f, index, mode="clip") for f in fields)  # clip: in range, never fires
+    size = count if capacity is None else capacity(count)
+    kept = min(size, key.shape[0])  # a bucket may outgrow the candidates: padded below
+    key, index = key[:kept], index[:kept]
+    real = jnp.arange(kept) < count
+    grouped = tuple(jnp.where(real, jnp.take(f, index, mode="clip"), 0) for f in fields)  # clip: in range
+    pad = lambda x, value: jnp.pad(x, (0, size - kept), constant_values=value)  # noqa: E731
+    return pad(key, n_pixels), tuple(pad(f, 0) for f in grouped), count
 
 
 @functools.partial(jax.jit, static_argnums=2)

@@ -66,13 +66,16 @@ def group_by_pixel(
 
 
 def group_parts(
-    parts: Sequence[Sequence[np.ndarray]], n_pixels: int
+    parts: Sequence[Sequence[np.ndarray]], n_pixels: int, capacity: int = 0
 ) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
     """`group_by_pixel` of fragments given in consecutive parts, each `(pixel, *fields)`
     with one to three fields (alike in number and dtype across the parts): grouped as
     their concatenation would be, each part moved to the bands on its own thread (the
     raster's pieces, `rasterize_parts`, are read where they are); the bands are then
-    grouped by pixel on every core."""
+    grouped by pixel on every core.
+
+    `capacity`: the outputs' length when it exceeds the fragments' F: entries F … capacity
+    − 1 are padding, pixel `n_pixels` (past every pixel) and fields 0 (`fragment_bucket`)."""
     n_fields = len(parts[0]) - 1
     if not 1 <= n_fields <= 3 or any(
         len(part) != n_fields + 1 or any(f.shape != part[0].shape for f in part) for part in parts
@@ -85,17 +88,20 @@ def group_parts(
         bad = next(int(part[0][k]) for part, k in zip(parts, outside) if k >= 0)
         raise ValueError(f"pixel index {bad} is outside the {n_pixels} pixels [0, {n_pixels})")
     counts = np.sum(part_counts, axis=0) if len(part_counts) > 1 else part_counts[0]
-    if not counts.sum():  # no fragments (or no pixels): nothing to move
-        return aligned_empty(0, np.int32), tuple(aligned_empty(0, f.dtype) for f in parts[0][1:])
+    total = int(counts.sum())
+    sorted_pixel = aligned_empty(max(total, capacity), np.int32)
+    outs = tuple(aligned_empty(max(total, capacity), f.dtype) for f in parts[0][1:])
+    sorted_pixel[total:] = n_pixels
+    for out in outs:
+        out[total:] = 0
+    if not total:  # no fragments (or no pixels): nothing to move
+        return sorted_pixel, outs
     band_pixel = _bands(counts)  # each band's first pixel, and n_pixels
     # Each part's and all parts' fragments per band.
     part_bands = [np.add.reduceat(c, band_pixel[:-1]) for c in part_counts]
     band_sizes = np.sum(part_bands, axis=0) if len(part_bands) > 1 else part_bands[0]
     band_start = np.zeros(band_sizes.size + 1, np.int64)
     np.cumsum(band_sizes, out=band_start[1:])
-    total = int(band_start[-1])
-    sorted_pixel = aligned_empty(total, np.int32)
-    outs = tuple(aligned_empty(total, f.dtype) for f in parts[0][1:])
     # The loops take three fields; a missing one repeats the last (written twice, alike).
     outs3 = (outs + (outs[-1],) * 2)[:3]
 

@@ -25,6 +25,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ._capacity import fragment_bucket
 from ._host import aligned_empty, to_device
 
 __all__ = ["drawn_cutoff", "keep_visible", "keep_on_host", "keep_on_device"]
@@ -36,27 +37,38 @@ def drawn_cutoff(dtype) -> float:
     return float(np.finfo(dtype).eps) / 2
 
 
-def keep_visible(visible: jax.Array, *fields: jax.Array) -> tuple[jax.Array, ...]:
+def keep_visible(visible: jax.Array, *fields: jax.Array, fills=None) -> tuple[jax.Array, ...]:
     """Each of `fields` (`[F]`) at the entries where `visible` (`[F]` bool) is set, in
-    order: on the host for arrays on the CPU, else on their device."""
+    order: on the host for arrays on the CPU, else on their device. `fills` (one value per
+    field): pad the kept entries to their `fragment_bucket` with these."""
     on_cpu = all(d.platform == "cpu" for d in visible.devices())
-    return keep_on_host(visible, *fields) if on_cpu else keep_on_device(visible, *fields)
+    return (keep_on_host if on_cpu else keep_on_device)(visible, *fields, fills=fills)
 
 
-def keep_on_host(visible, *fields) -> tuple[jax.Array, ...]:
+def keep_on_host(visible, *fields, fills=None) -> tuple[jax.Array, ...]:
     """`keep_visible` through NumPy: 0.15 s for the 55 M fragments of the dense bench fur
     ball, against 0.63 s for XLA's `nonzero` on 2 cores (BENCHMARKS.md)."""
     index = np.flatnonzero(np.asarray(visible))
-    # mode="clip": with the default "raise", NumPy writes through a temporary buffer when
-    # `out` is given; the indices are in range, so clipping never changes one.
-    kept = (
-        np.take(np.asarray(f), index, out=aligned_empty(index.size, f.dtype), mode="clip") for f in fields
-    )
-    return tuple(to_device(k, k.dtype) for k in kept)
+    size = index.size if fills is None else fragment_bucket(index.size)
+    kept = []
+    for k, f in enumerate(fields):
+        out = aligned_empty(size, f.dtype)
+        # mode="clip": with the default "raise", NumPy writes through a temporary buffer when
+        # `out` is given; the indices are in range, so clipping never changes one.
+        np.take(np.asarray(f), index, out=out[: index.size], mode="clip")
+        if fills is not None:
+            out[index.size :] = fills[k]
+        kept.append(to_device(out, out.dtype))
+    return tuple(kept)
 
 
-def keep_on_device(visible, *fields) -> tuple[jax.Array, ...]:
+def keep_on_device(visible, *fields, fills=None) -> tuple[jax.Array, ...]:
     """`keep_visible` where the arrays live, with one host round-trip for the count."""
     count = int(jnp.count_nonzero(visible))
-    index = jnp.nonzero(visible, size=count)[0]
-    return tuple(jnp.take(f, index, mode="clip") for f in fields)  # clip: in range, never fires
+    size = count if fills is None else fragment_bucket(count)
+    index = jnp.nonzero(visible, size=size, fill_value=0)[0]
+    kept = (jnp.take(f, index, mode="clip") for f in fields)  # clip: in range, never fires
+    if fills is None:
+        return tuple(kept)
+    real = jnp.arange(size) < count  # the bucket's tail: padding
+    return tuple(jnp.where(real, k, v) for k, v in zip(kept, fills))

@@ -24,6 +24,7 @@ from .._errors import EmptyViewWarning
 from .._scene._scene import Scene
 from .._scene._strands import tangents, unit_rows
 from .._shading import PointInputs
+from ._capacity import fragment_bucket
 from ._device_raster import device_candidates, group_on_device, setup_on_device
 from ._group import group_parts
 from ._host import release_heap, release_shared
@@ -53,6 +54,10 @@ class GeometrySetup:
     frag_i0: Arrays  # [F] first point of the fragment's segment (the second is i0 + 1)
     frag_t: Arrays  # [F] screen-space position along the segment
     frag_coverage: Arrays  # [F]
+    # The same four (pixel, i0, coverage, t), padded to `fragment_bucket(F)` entries of
+    # pixel H·W and 0 (views of the same buffers on the host): what the geometry stage reads,
+    # so that its programs compile once per bucket.
+    padded_fragments: tuple[Arrays, Arrays, Arrays, Arrays]
     strand_of_point: np.ndarray  # [P] int32: a fragment's strand is strand_of_point[frag_i0]
     backdrop: np.ndarray  # [H*W, 3] the background behind the hair (0 on the occluder)
     opaque: np.ndarray  # [H*W] the occluder covers the pixel centre
@@ -234,7 +239,8 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
     # (the segment is that point and the next). Depth only for the occluder's depth test.
     raster = (xy[s0], xy[s1], depth[s0], depth[s1], widths, cam.width, cam.height, True)
     place = _fragments_on_device if setup_on_device() else _fragments_on_host
-    drawn, (frag_pixel, frag_i0, frag_coverage, frag_t) = place(raster, s0.astype(np.int32), hit_depth, lap)
+    drawn, padded, n_frags = place(raster, s0.astype(np.int32), hit_depth, lap)
+    frag_pixel, frag_i0, frag_coverage, frag_t = padded
     # Hair whose segments all have length 0 (or that has none: one-point strands) draws
     # nothing from any camera; that is not the camera's fault, so no warning then.
     if not drawn and np.any(points[segments[:, 0]] != points[segments[:, 1]]):
@@ -244,7 +250,8 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
         at_first_point[segments[:, 0]] = segment_alpha
         if isinstance(frag_coverage, jax.Array):  # on the device, in the fragments' precision
             frag_coverage = frag_coverage * jnp.asarray(at_first_point, frag_coverage.dtype)[frag_i0]
-        else:
+            padded = (frag_pixel, frag_i0, frag_coverage, frag_t)
+        else:  # in place: the exact views below see it (padding: coverage 0 stays 0)
             frag_coverage *= at_first_point[frag_i0]
 
     shadow = None
@@ -280,10 +287,11 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
         to_eye=unit_rows(view.origin - points).astype(dtype),
         base_color=base_color.astype(dtype),
         light_rgb=light_rgb,
-        frag_pixel=frag_pixel,
-        frag_i0=frag_i0,
-        frag_t=frag_t,
-        frag_coverage=frag_coverage,
+        frag_pixel=frag_pixel[:n_frags],
+        frag_i0=frag_i0[:n_frags],
+        frag_t=frag_t[:n_frags],
+        frag_coverage=frag_coverage[:n_frags],
+        padded_fragments=padded,
         strand_of_point=strands.strand_of_point.astype(np.int32),
         backdrop=backdrop,
         opaque=opaque,
@@ -295,9 +303,10 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
 
 
 def _fragments_on_host(raster, labels, hit_depth, lap):
-    """Whether the raster covered any pixel (before the occluder's depth test), and the
+    """Whether the raster covered any pixel (before the occluder's depth test), the
     camera's fragments grouped by pixel, front to back (`frag_pixel`, `frag_i0`,
-    `frag_coverage`, `frag_t`), by the host's compiled loops: the raster in pieces, one
+    `frag_coverage`, `frag_t`, padded to `fragment_bucket`), and their count, by the host's
+    compiled loops: the raster in pieces, one
     per core (`rasterize_parts`), read where they are by the counting sort (`group_parts`),
     into aligned arrays that the geometry stage shares with JAX (`_host`)."""
     with_depth = hit_depth is not None
@@ -308,13 +317,16 @@ def _fragments_on_host(raster, labels, hit_depth, lap):
         pieces = [piece.take(np.flatnonzero(piece.depths < hit_depth[piece.pixel])) for piece in pieces]
         lap("occluder")
     # Only what compositing needs is grouped: segment, coverage, t (not depth).
-    frag_pixel, (frag_i0, frag_coverage, frag_t) = group_parts(
-        [(piece.pixel, piece.segment, piece.coverage, piece.t) for piece in pieces], raster[5] * raster[6]
+    count = sum(piece.size for piece in pieces)
+    padded = group_parts(
+        [(piece.pixel, piece.segment, piece.coverage, piece.t) for piece in pieces],
+        raster[5] * raster[6],
+        fragment_bucket(count),
     )
     del pieces
     release_heap(n_frags * 16)  # the raster's 4 fields, handed back to the system
     lap("sort fragments")
-    return n_frags > 0, (frag_pixel, frag_i0, frag_coverage, frag_t)
+    return n_frags > 0, (padded[0], *padded[1]), count
 
 
 def _fragments_on_device(raster, labels, hit_depth, lap):
@@ -334,10 +346,16 @@ def _fragments_on_device(raster, labels, hit_depth, lap):
         # clip: an uncovered candidate's pixel may lie outside the image; it is dropped anyway.
         keep &= candidates.depths < jnp.asarray(bound)[jnp.clip(candidates.pixel, 0, bound.size - 1)]
     hw = raster[5] * raster[6]
-    frag_pixel, (frag_i0, frag_coverage, frag_t) = group_on_device(
-        candidates.pixel, keep, hw, candidates.segment, candidates.coverage, candidates.t
+    frag_pixel, grouped, count = group_on_device(
+        candidates.pixel,
+        keep,
+        hw,
+        candidates.segment,
+        candidates.coverage,
+        candidates.t,
+        capacity=fragment_bucket,
     )
     lap("sort fragments")
     # Covered before the depth test: read back only when nothing is left after it.
-    drawn = frag_pixel.size > 0 or bool(jnp.any(candidates.coverage > 0))
-    return drawn, (frag_pixel, frag_i0, frag_coverage, frag_t)
+    drawn = count > 0 or bool(jnp.any(candidates.coverage > 0))
+    return drawn, (frag_pixel, *grouped), count

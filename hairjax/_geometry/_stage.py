@@ -111,21 +111,26 @@ def _geometry_stage(scene: Scene, alpha, order, cutoff: float) -> Geometry:
     setup = prepare(scene, order=order)
     dtype = jnp.result_type(float)
     alpha = jnp.asarray(alpha, dtype=dtype)
-    # Shared with the set-up's aligned arrays where the dtypes agree (`_host`); sent once,
-    # for compositing and the Geometry alike (a copy each on a GPU).
-    frag_pixel, frag_i0 = to_device(setup.frag_pixel, jnp.int32), to_device(setup.frag_i0, jnp.int32)
+    hw = scene.camera.width * scene.camera.height
+    # The fragments padded to their bucket (`fragment_bucket`: pixel H·W, coverage 0, so
+    # weight 0), so that the programs below compile once per bucket. Shared with the
+    # set-up's aligned arrays where the dtypes agree (`_host`); sent once, for compositing
+    # and the Geometry alike (a copy each on a GPU).
+    pixel, i0, coverage, t = setup.padded_fragments
+    frag_pixel, frag_i0 = to_device(pixel, jnp.int32), to_device(i0, jnp.int32)
     weights, transmittance, alpha_channel, visible = composite_weights(
         alpha,
         jnp.asarray(setup.strand_of_point),
         frag_i0,
-        to_device(setup.frag_coverage, dtype),
+        to_device(coverage, dtype),
         frag_pixel,
         jnp.asarray(setup.opaque, dtype),
         jnp.asarray(cutoff, dtype),  # an array, not a static float: one compilation for every cutoff
     )
-    fragments: tuple[jax.Array, ...] = (frag_pixel, frag_i0, to_device(setup.frag_t, dtype), weights)
+    fragments: tuple[jax.Array, ...] = (frag_pixel, frag_i0, to_device(t, dtype), weights)
     if cutoff > 0 and not bool(jnp.all(visible)):
-        fragments = keep_visible(visible, *fragments)
+        # The padding (α = 0: "seen") is cut too, and the kept ones padded to their bucket.
+        fragments = keep_visible(visible & (frag_pixel < hw), *fragments, fills=(hw, 0, 0, 0))
     del visible
     release_heap(weights.size * 12)  # compositing's temporaries: α, the scan's runs
     omega = occluder_omega = None

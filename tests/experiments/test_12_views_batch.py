@@ -13,5 +13,8 @@ def test_views_batch_runs(capsys):
     assert load_experiment("12_views_batch").main(argv) == 0
     out = capsys.readouterr().out
     assert "2 views of 24², 500 strands" in out
-    times = [float(t) for t in re.findall(r": +([0-9.]+) ms", out)]
+    times = [float(t) for t in re.findall(r"shading, [^:]+: +([0-9.]+) ms", out)]
     assert len(times) == 2 and all(t > 0 for t in times)
+    firsts = re.search(r"first render of each view +: (.*)", out).group(1).split(", ")
+    assert len(firsts) == 2 and all(float(t.removesuffix(" ms")) > 0 for t in firsts)
+    assert re.search(r"its fragments \(bucket\) +: [0-9,]+ \([0-9,]+\), [0-9,]+ \([0-9,]+\)", out)

@@ -6,7 +6,7 @@ import dataclasses
 import jax
 import numpy as np
 import pytest
-from helpers import small_furball_scene
+from helpers import real_fragments, small_furball_scene
 
 import hairjax as hj
 from hairjax._fit import _batch, _problem, _shading_fit
@@ -33,7 +33,7 @@ def prepared(scenes, targets):
 def test_the_batch_gives_each_target_s_image_and_residuals(views):
     """The views' fragment counts differ; padded and stacked, each view's image is its own."""
     model, data = prepared(*views)
-    assert len({int(d.geometry.frag_pixel.shape[0]) for d in data}) == 3
+    assert len({real_fragments(d.geometry)["frag_pixel"].size for d in data}) == 3
     (stacked,) = _batch.batched(data)
     batch = _batch.batched_model(model)
     expected = np.concatenate([model.image(d, TRUE) for d in data])

@@ -6,7 +6,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from helpers import fit_image, fit_terms, small_furball_scene
+from helpers import fit_image, fit_terms, real_fragments, small_furball_scene
 
 import hairjax as hj
 from hairjax._fit import _convergence, _entry, _nnls, _problem, _shading_fit, _solvers, _space, _varpro
@@ -397,7 +397,10 @@ def test_pruned_fit_image_within_the_stated_bound():
     names = ("kd", "ks", "shininess", "kappa")
     exact = np.asarray(hj.render(dense, TRUE))[..., :3].reshape(-1, 3)
     terms = fit_terms(dense, TRUE, names, exact.reshape(48, 48, 3))
-    assert terms.geometry.frag_weight.shape[0] < hj.geometry_stage(dense).frag_weight.shape[0]
+    fit_kept, render_kept = (
+        real_fragments(g)["frag_weight"].size for g in (terms.geometry, hj.geometry_stage(dense))
+    )
+    assert fit_kept < render_kept
     image = np.asarray(fit_image(terms, TRUE.kd, TRUE.ks, TRUE.shininess, TRUE.kappa, TRUE.ambient))
     brightest = float(np.max(np.asarray(point_colors(hj.geometry_stage(dense), TRUE))))
     assert np.abs(image - exact).max() <= FIT_TRANSMITTANCE_CUTOFF * brightest

@@ -94,12 +94,20 @@ def test_grouping_on_the_device_is_the_hosts(n_pixels, raw, seed):
     segment = np.arange(pixel.size, dtype=np.int32)
     value = np.linspace(0, 1, pixel.size)
     want_pixel, (want_segment, want_value) = group_by_pixel(pixel[keep], n_pixels, segment[keep], value[keep])
-    got_pixel, (got_segment, got_value) = group_on_device(
-        jnp.asarray(pixel), jnp.asarray(keep), n_pixels, jnp.asarray(segment), jnp.asarray(value)
-    )
+    args = jnp.asarray(pixel), jnp.asarray(keep), n_pixels, jnp.asarray(segment), jnp.asarray(value)
+    got_pixel, (got_segment, got_value), count = group_on_device(*args)
+    assert count == want_pixel.size
     np.testing.assert_array_equal(np.asarray(got_pixel), want_pixel)
     np.testing.assert_array_equal(np.asarray(got_segment), want_segment)
     np.testing.assert_array_equal(np.asarray(got_value), want_value)
+    # Padded to a capacity: the same entries, then pixel n_pixels and zeros.
+    size = count + 5 + pixel.size  # beyond the inputs' length too
+    padded_pixel, (padded_segment, padded_value), _ = group_on_device(*args, capacity=lambda n: size)
+    np.testing.assert_array_equal(
+        np.asarray(padded_pixel), np.r_[want_pixel, np.full(size - count, n_pixels)]
+    )
+    np.testing.assert_array_equal(np.asarray(padded_segment), np.r_[want_segment, np.zeros(size - count)])
+    np.testing.assert_array_equal(np.asarray(padded_value), np.r_[want_value, np.zeros(size - count)])
 
 
 def test_placement_follows_the_environment(monkeypatch):
@@ -121,10 +129,14 @@ def test_a_raster_beyond_the_devices_memory_is_refused_before_it_is_allocated(mo
         device_candidates(plan, np.arange(len(plan.columns), dtype=np.int32), W, H, True, depth=False)
 
 
-def _scene(name, **changes):
+def _scene(name):
+    """The scene at 96 × 72 with 8 opacity maps of 64² (its light raster a sixteenth of
+    the default's: this file's time), or its own shadows where they are not opacity maps."""
     scene = hj.load_scene(name if name.endswith(".toml") else hj.default_scene_path())
     scene = scene.replace(camera=dataclasses.replace(scene.camera, width=96, height=72))
-    return scene.replace(**changes) if changes else scene
+    if scene.shadows.method == "opacity-maps":
+        scene = scene.replace(shadows=hj.Shadows("opacity-maps", 8, 64))
+    return scene
 
 
 SCENES = {

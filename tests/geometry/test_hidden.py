@@ -5,7 +5,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from helpers import small_furball_scene
+from helpers import FRAGMENT_FIELDS, real_fragments, small_furball_scene
 
 from hairjax._geometry._hidden import drawn_cutoff, keep_on_device, keep_on_host, keep_visible
 from hairjax._geometry._host import ALIGNMENT
@@ -46,7 +46,8 @@ def _runs(pixel: np.ndarray):
 
 def _kept_mask(everything, kept) -> np.ndarray:
     """Which of `everything`'s fragments are in `kept`, by their (pixel, segment) key."""
-    key = lambda g: np.asarray(g.frag_pixel, np.int64) << 32 | np.asarray(g.frag_i0, np.int64)  # noqa: E731
+    key = lambda f: f["frag_pixel"].astype(np.int64) << 32 | f["frag_i0"].astype(np.int64)  # noqa: E731
+    everything, kept = real_fragments(everything), real_fragments(kept)
     all_keys = key(everything)
     assert np.unique(all_keys).size == all_keys.size  # one fragment per segment and pixel
     return np.isin(all_keys, key(kept))
@@ -66,16 +67,15 @@ def test_the_kept_fragments_are_those_seen_through_the_cutoff(cutoff):
     t = _front_transmittance(scene)
     # The composite's T_k is a product of up to `longest` factors, each rounding by half an
     # epsilon of the working precision: fragments that near the cutoff may fall either way.
-    longest = max(stop - start for start, stop in _runs(np.asarray(everything.frag_pixel)))
+    longest = max(stop - start for start, stop in _runs(real_fragments(everything)["frag_pixel"]))
     slack = longest * float(np.finfo(WORKING).eps)
     mask = _kept_mask(everything, kept)
     assert np.all(mask[t >= c * (1 + slack)]) and not np.any(mask[t < c * (1 - slack)])
     assert (t < c * (1 - slack)).sum() >= 10  # the scene does hide fragments at this cutoff
     # The kept fragments are the full stage's, in order, with their own weights.
-    for name in ("frag_pixel", "frag_i0", "frag_t", "frag_weight"):
-        np.testing.assert_array_equal(
-            np.asarray(getattr(kept, name)), np.asarray(getattr(everything, name))[mask]
-        )
+    kept_fragments, all_fragments = real_fragments(kept), real_fragments(everything)
+    for name in FRAGMENT_FIELDS:
+        np.testing.assert_array_equal(kept_fragments[name], all_fragments[name][mask])
     np.testing.assert_array_equal(np.asarray(kept.transmittance), np.asarray(everything.transmittance))
 
 
