@@ -16,7 +16,8 @@ out, they move the pixel by less than c times the brightest colour among them.
 Which fragments are hidden depends on the opacities, so the cut is made once they are
 known (`keep_visible`), and a traced α (the opacity's gradient) keeps every fragment. On
 the CPU the cut runs in NumPy, into buffers JAX shares (`_host`); on another device it
-stays there, after one round-trip for the count of kept fragments (the arrays' shape).
+stays there, after one round-trip for the count of kept fragments. The geometry stage
+pads what it keeps to its bucket (`fragment_bucket`, docs/model.md §6).
 """
 
 from __future__ import annotations
