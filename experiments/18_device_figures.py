@@ -297,13 +297,27 @@ def jax_and_gl(out: dict, scene, repeats: int, label: str, save, shading: bool) 
     save()
 
 
-def bench_case(out: dict, strands: int, size: int, sizes: dict, repeats: int, save) -> None:
+def bench_case(out: dict, strands: int, size: int, sizes: dict, repeats: int, save, host_too: bool) -> None:
+    """One fur ball: JAX (set-up where JAX runs), GL, and with `host_too` on an accelerator
+    JAX again with the set-up on the host (`HAIRJAX_SETUP=host`, docs/model.md §5)."""
     label = f"{count(strands)} @ {size}²"
     scene = bench_scene(
         dict(strands=strands, size=size, maps=sizes["maps"], map_resolution=sizes["map_resolution"])
     )
     out.update(strands=strands, size=size, segments=int(len(scene.strands.segments())))
     jax_and_gl(out, scene, repeats, label, save, shading=True)
+    if host_too and hj.setup_on_device():
+        before = os.environ.get(hj.SETUP_PLACEMENT)
+        os.environ[hj.SETUP_PLACEMENT] = "host"
+        try:
+            out["jax_host_setup"] = time_jax(scene.replace(), repeats, f"{label}, set-up on the host")
+        finally:
+            if before is None:
+                del os.environ[hj.SETUP_PLACEMENT]
+            else:
+                os.environ[hj.SETUP_PLACEMENT] = before
+            hj.forget(scene)
+        save()
 
 
 def fit_case(strands: int, size: int, repeats: int) -> dict:
@@ -461,6 +475,8 @@ def table(results: dict) -> str:
     for key, case in results.get("bench", {}).items():
         add(f"fur ball {key}: shading stage", get(case, "shading", "median_s"))
         full_render(f"fur ball {key}: full render", case)
+        if "jax_host_setup" in case:
+            add("    full render, set-up on the host", get(case, "jax_host_setup", "full_render", "median_s"))
         stages = get(case, "jax", "stages") or {}
         for stage in ("geometry set-up", "geometry opacity (JAX)", "shading"):
             if stage in stages:
@@ -515,7 +531,12 @@ def main(argv=None) -> int:
         default=os.environ.get("HAIRJAX_CACHE_DIR", str(Path.home() / ".cache" / "hairjax" / "xla")),
         help="JAX's compilation cache folder, shared with the hairjax command ('' for none)",
     )
-    p.add_argument("--skip", default="", help="comma-separated sections to skip: bench,fit,tressfx")
+    p.add_argument(
+        "--skip",
+        default="",
+        help="comma-separated sections to skip: bench,fit,tressfx; host-setup: on an accelerator, "
+        "the fur balls' second JAX timing with the set-up on the host",
+    )
     p.add_argument(
         "--bench",
         default=None,
@@ -593,7 +614,9 @@ def main(argv=None) -> int:
                 "bench",
                 f"{count(strands)} @ {size}x{size}",
                 {},
-                lambda out, n=strands, s=size: bench_case(out, n, s, sizes, args.repeats, save),
+                lambda out, n=strands, s=size: bench_case(
+                    out, n, s, sizes, args.repeats, save, "host-setup" not in skip
+                ),
             )
 
     section("bench", bench)
