@@ -97,6 +97,15 @@ def setup_row(path: Path, repeats: int) -> dict:
     }
 
 
+def write_images(folder: Path, name: str, jax_image: np.ndarray, gl: np.ndarray | None) -> None:
+    """`NAME_jax.exr`, and where GL ran `NAME_gl.exr` and `NAME_diff.exr` (|GL − JAX|)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    hj.write_image(folder / f"{name}_jax.exr", jax_image)
+    if gl is not None:
+        hj.write_image(folder / f"{name}_gl.exr", gl)
+        hj.write_image(folder / f"{name}_diff.exr", np.abs(gl - jax_image))
+
+
 def gl_image(path: Path) -> np.ndarray | None:
     from hairjax.gl import GLUnavailable, render_gl
 
@@ -111,6 +120,12 @@ def main(argv=None) -> int:
     p.add_argument("scenes", nargs="*", type=Path, help="scene files (default: every example scene)")
     p.add_argument("--repeats", type=int, default=0, help="warm renders timed per set-up placement")
     p.add_argument("--json", type=Path, help="also write the differences as JSON")
+    p.add_argument(
+        "--images",
+        type=Path,
+        help="also write each scene's JAX and GL images and |GL − JAX| (EXR) into this folder: "
+        "the evidence for a GL difference beyond its band on a new driver",
+    )
     args = p.parse_args(argv)
     default, cpu = jax.devices()[0], jax.devices("cpu")[0]
     print(f"default device {default} against {cpu}", flush=True)
@@ -132,6 +147,8 @@ def main(argv=None) -> int:
             continue
         setup = setup_row(path, args.repeats)
         gl = gl_image(path)
+        if args.images is not None:
+            write_images(args.images, path.stem, on_default, gl)
         device_diff = float(np.abs(on_default - on_cpu).max())
         gl_diff = None if gl is None else float(np.abs(gl - on_default).max())
         worst = max(worst, device_diff, setup["max_abs"])

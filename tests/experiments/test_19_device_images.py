@@ -8,6 +8,7 @@ import os
 from pathlib import Path
 
 import jax
+import numpy as np
 from helpers import load_experiment
 
 import hairjax as hj
@@ -18,7 +19,8 @@ SCENE = Path(__file__).resolve().parents[2] / "experiments" / "scenes" / "grazin
 def test_device_images_run(tmp_path, monkeypatch):
     monkeypatch.setenv(hj.SETUP_PLACEMENT, "host")
     out = tmp_path / "images.json"
-    assert load_experiment("19_device_images").main([str(SCENE), "--repeats", "1", "--json", str(out)]) == 0
+    argv = [str(SCENE), "--repeats", "1", "--json", str(out), "--images", str(tmp_path / "images")]
+    assert load_experiment("19_device_images").main(argv) == 0
     data = json.loads(out.read_text())
     row = data["scenes"]["grazing"]
     if jax.default_backend() == "cpu":  # both images from the one CPU: the same program
@@ -32,3 +34,9 @@ def test_device_images_run(tmp_path, monkeypatch):
     assert setup["max_abs"] == 0.0
     assert setup["host_s"] > 0 and setup["device_s"] > 0
     assert os.environ[hj.SETUP_PLACEMENT] == "host"  # the experiment puts the placement back
+    # The images, and where GL ran their difference, as read back.
+    jax_image = hj.read_image(tmp_path / "images" / "grazing_jax.exr")
+    assert jax_image.shape[2] == 4 and np.all(np.isfinite(jax_image))
+    if row["gl_vs_device"] is not None:
+        diff = hj.read_image(tmp_path / "images" / "grazing_diff.exr")
+        assert abs(float(diff.max()) - row["gl_vs_device"]) <= 1e-6  # float32 EXR of the same difference
