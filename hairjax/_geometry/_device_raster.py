@@ -12,14 +12,15 @@ the CPU, the set-up runs the same raster there:
 - `device_candidates`: every candidate of the raster plan (`_raster_plan`: the same
   columns and rows the host loop visits) evaluated in one XLA program, in raster order
   (segment, column, row), with coverage 0 where the loop writes nothing;
-- `compact_on_device`: the covered candidates, in that order (the light's fragments);
+- `rasterize_on_device`: `rasterize`'s fragments, the covered candidates in that order
+  (the light's), kept as the hidden fragments' cut keeps its own (`keep_on_device`);
 - `group_on_device`: the kept candidates sorted by pixel, stably, so that each pixel's
   run is in raster order, front to back: the host's counting sort, as one XLA sort.
 
-Capacity policy: the plan's candidates are padded to power-of-two buckets of columns and
-segments (a similar scene reuses the compiled program), a plan whose candidates need more
-than the device's free memory is refused before anything is allocated (`SceneTooLarge`),
-and the count of kept fragments is the one value read back (their arrays' shape).
+Capacity policy: the plan's columns and segments are padded to the fragments' buckets
+(`fragment_bucket`: a similar scene reuses the compiled program), a plan whose candidates
+need more than the device's free memory is refused before anything is allocated
+(`SceneTooLarge`), and the count of kept fragments is the one value read back.
 
 `HAIRJAX_SETUP=host` or `=device` overrides where the set-up runs (default `auto`: on the
 device unless it is the CPU), e.g. to compare the two on one machine.
@@ -36,15 +37,17 @@ import numpy as np
 from jax import lax
 
 from .._errors import SceneTooLarge
+from ._capacity import fragment_bucket
+from ._hidden import keep_on_device
 from ._host import available_memory
 from ._raster import Fragments
-from ._raster_plan import RasterPlan
+from ._raster_plan import raster_plan
 
 __all__ = [
     "SETUP_PLACEMENT",
     "setup_on_device",
     "device_candidates",
-    "compact_on_device",
+    "rasterize_on_device",
     "group_on_device",
 ]
 
@@ -60,11 +63,6 @@ def setup_on_device() -> bool:
     return choice == "device" or (choice == "auto" and jax.default_backend() != "cpu")
 
 
-def _bucket(n: int) -> int:
-    """`n` rounded up to a power of two (at least 4096): the programs compile per bucket."""
-    return max(4096, 1 << (max(n, 1) - 1).bit_length())
-
-
 def _free_bytes() -> int | None:
     """Free memory of JAX's default device (the host's on the CPU), or None if unknown."""
     device = jax.devices()[0]
@@ -77,21 +75,27 @@ def _free_bytes() -> int | None:
 
 
 def device_candidates(
-    plan: RasterPlan,
-    labels: np.ndarray,
+    xy0: np.ndarray,
+    xy1: np.ndarray,
+    z0: np.ndarray,
+    z1: np.ndarray,
+    width: np.ndarray,
     image_width: int,
     image_height: int,
     perspective: bool,
     *,
-    depth: bool,
+    depth: bool = True,
+    labels: np.ndarray | None = None,
 ) -> Fragments:
-    """Every candidate of `plan` on the default device (`[C]` each, raster order), as
-    `Fragments` of JAX arrays: `segment` holds the segment's entry of `labels`, and
-    `coverage` is 0 where the host loop writes nothing (outside the image, the segment's
-    [0, L) or the ribbon, and the buckets' padding). `depth`: interpolate the depth."""
-    columns = np.asarray(plan.columns, np.int64)
+    """Every candidate of `rasterize`'s raster plan (the same arguments) on the default
+    device (`[C]` each, raster order), as `Fragments` of JAX arrays: `coverage` is 0
+    where the host loop writes nothing (outside the image, the segment's [0, L) or the
+    ribbon, and the buckets' padding)."""
+    plan = raster_plan(xy0, xy1, z0, z1, width, image_width, image_height)
+    columns = plan.columns
     n, total = columns.size, int(columns.sum())
-    n_pad, c_pad = _bucket(n + 1), _bucket(total + 1)
+    labels = np.arange(n, dtype=np.int32) if labels is None else np.asarray(labels, np.int32)
+    n_pad, c_pad = fragment_bucket(n + 1), fragment_bucket(total + 1)
     dtype = plan.seg_data.dtype
     per_candidate = 8 + (3 if depth else 2) * dtype.itemsize + 8  # the fields, and a sort key and index
     need, free = c_pad * plan.rows * per_candidate, _free_bytes()
@@ -173,13 +177,15 @@ def _candidates(
     return tuple(f.ravel() for f in fields)
 
 
-def compact_on_device(candidates: Fragments) -> Fragments:
-    """The covered candidates, in raster order (`rasterize`'s fragments), on the device;
-    one value read back: their count."""
-    covered = candidates.coverage > 0
-    count = int(jnp.count_nonzero(covered))
-    (index,) = jnp.nonzero(covered, size=count)
-    return candidates.take(index)
+def rasterize_on_device(*args, **kwargs) -> Fragments:
+    """`rasterize` (the same arguments) on the default device: the covered candidates of
+    `device_candidates`, in raster order. One value read back: their count."""
+    candidates = device_candidates(*args, **kwargs)
+    fields = (candidates.pixel, candidates.segment, candidates.coverage, candidates.t)
+    depth = () if candidates.depth is None else (candidates.depth,)
+    kept = keep_on_device(candidates.coverage > 0, *fields, *depth)
+    pixel, segment, coverage, t = kept[:4]
+    return Fragments(pixel, segment, coverage, t, kept[4] if depth else None)
 
 
 def group_on_device(

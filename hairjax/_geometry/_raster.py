@@ -36,7 +36,7 @@ import numpy as np
 from .._constants import PIXEL_HALF_EXTENT
 from ._capacity import check_memory
 from ._host import compile_loop, host_threads, in_parallel, split_evenly
-from ._raster_plan import RasterPlan, raster_plan, ribbon_widths
+from ._raster_plan import raster_plan, ribbon_widths
 
 __all__ = [
     "Arrays",
@@ -45,8 +45,6 @@ __all__ = [
     "rasterize_parts",
     "ribbon_coverage",
     "ribbon_widths",
-    "raster_plan",
-    "RasterPlan",
     "PARALLEL_MIN",
 ]
 

@@ -32,7 +32,6 @@ from ._occluder import occluder_hits, occluder_light_view, occluder_visibility
 from ._ordering import segment_depth
 from ._projection import View, camera_view
 from ._raster import Arrays, rasterize_parts, ribbon_widths
-from ._raster_plan import raster_plan
 
 __all__ = ["GeometrySetup", "prepare", "visibility_order", "to_light", "warn_empty_view"]
 
@@ -333,7 +332,7 @@ def _fragments_on_device(raster, labels, hit_depth, lap):
     """`_fragments_on_host`'s fragments as XLA programs on JAX's default device
     (`_device_raster`): every candidate of the same raster plan, then one stable sort by
     pixel that also drops the uncovered and occluded candidates. JAX arrays."""
-    candidates = device_candidates(raster_plan(*raster[:7]), labels, *raster[5:], depth=hit_depth is not None)
+    candidates = device_candidates(*raster, depth=hit_depth is not None, labels=labels)
     keep = candidates.coverage > 0
     jax.block_until_ready(keep)  # the lap times the raster, not its dispatch
     lap("rasterize")

@@ -15,14 +15,13 @@ import hairjax as hj
 from hairjax._errors import SceneTooLarge
 from hairjax._geometry import _device_raster
 from hairjax._geometry._device_raster import (
-    compact_on_device,
     device_candidates,
     group_on_device,
+    rasterize_on_device,
     setup_on_device,
 )
 from hairjax._geometry._group import group_by_pixel
 from hairjax._geometry._raster import rasterize
-from hairjax._geometry._raster_plan import raster_plan
 from hairjax._geometry._setup import prepare
 
 W, H = 90, 70
@@ -46,10 +45,7 @@ def _segments(seed, n=400, snap=False):
 
 
 def _on_device(xy0, xy1, z0, z1, width, perspective, labels=None):
-    n = len(xy0)
-    labels = np.arange(n, dtype=np.int32) if labels is None else labels
-    plan = raster_plan(xy0, xy1, z0, z1, width, W, H)
-    return compact_on_device(device_candidates(plan, labels, W, H, perspective, depth=True))
+    return rasterize_on_device(xy0, xy1, z0, z1, width, W, H, perspective, labels=labels)
 
 
 @pytest.mark.parametrize("perspective", [True, False])
@@ -124,9 +120,8 @@ def test_placement_follows_the_environment(monkeypatch):
 
 def test_a_raster_beyond_the_devices_memory_is_refused_before_it_is_allocated(monkeypatch):
     monkeypatch.setattr(_device_raster, "_free_bytes", lambda: 1000)
-    plan = raster_plan(*_segments(3), W, H)
     with pytest.raises(SceneTooLarge, match=r"candidate fragments, which need .* GiB .* on the device"):
-        device_candidates(plan, np.arange(len(plan.columns), dtype=np.int32), W, H, True, depth=False)
+        device_candidates(*_segments(3), W, H, True, depth=False)
 
 
 def _scene(name):

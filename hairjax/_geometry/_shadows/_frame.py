@@ -11,10 +11,10 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..._constants import PIXEL_HALF_EXTENT, SHADOW_FILTER_RADIUS
-from .._device_raster import compact_on_device, device_candidates
+from .._device_raster import rasterize_on_device
 from .._projection import View, light_view
 from .._raster import Arrays, Fragments, rasterize
-from .._raster_plan import raster_plan, ribbon_widths
+from .._raster_plan import ribbon_widths
 
 __all__ = ["LightFrame", "light_frame", "with_receivers", "map_margin", "LightFragments", "light_fragments"]
 
@@ -160,14 +160,7 @@ def light_fragments(
         frame.view.perspective,
     )
     raster = (frame.xy[s0], frame.xy[s1], frame.depth[s0], frame.depth[s1], widths, resolution, resolution)
-    if on_device:
-        labels = np.arange(len(seg_ids), dtype=np.int32)
-        candidates = device_candidates(
-            raster_plan(*raster), labels, *raster[5:], frame.view.perspective, depth=True
-        )
-        frags = compact_on_device(candidates)
-    else:
-        frags = rasterize(*raster, frame.view.perspective)
+    frags = (rasterize_on_device if on_device else rasterize)(*raster, frame.view.perspective)
     frame = with_receivers(frame, receivers)
     xy, seen = frame.xy, frame.seen
     # Clip fires for a light at the hair's centre (near ≈ 1e-303: xy ~1e300, no int64); outside stays outside.
