@@ -307,15 +307,10 @@ def bench_case(out: dict, strands: int, size: int, sizes: dict, repeats: int, sa
     out.update(strands=strands, size=size, segments=int(len(scene.strands.segments())))
     jax_and_gl(out, scene, repeats, label, save, shading=True)
     if host_too and hj.setup_on_device():
-        before = os.environ.get(hj.SETUP_PLACEMENT)
-        os.environ[hj.SETUP_PLACEMENT] = "host"
         try:
-            out["jax_host_setup"] = time_jax(scene.replace(), repeats, f"{label}, set-up on the host")
+            with hj.setup_placed("host"):
+                out["jax_host_setup"] = time_jax(scene.replace(), repeats, f"{label}, set-up on the host")
         finally:
-            if before is None:
-                del os.environ[hj.SETUP_PLACEMENT]
-            else:
-                os.environ[hj.SETUP_PLACEMENT] = before
             hj.forget(scene)
         save()
 

@@ -23,9 +23,7 @@ About 3 minutes on this 2-core CPU at `--repeats 3`.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
-import os
 import statistics
 import sys
 import time
@@ -49,25 +47,11 @@ def jax_image(path: Path, device) -> np.ndarray:
         return np.asarray(hj.render(hj.load_scene(path)))
 
 
-@contextlib.contextmanager
-def placed(where: str):
-    """The set-up placed `where` (`HAIRJAX_SETUP`) inside the block, as before after it."""
-    before = os.environ.get(hj.SETUP_PLACEMENT)
-    os.environ[hj.SETUP_PLACEMENT] = where
-    try:
-        yield
-    finally:
-        if before is None:
-            os.environ.pop(hj.SETUP_PLACEMENT, None)
-        else:
-            os.environ[hj.SETUP_PLACEMENT] = before
-
-
 def placed_render(path: Path, where: str, repeats: int):
     """(image, camera fragments as NumPy, median seconds of `repeats` warm renders or None)
     with the set-up placed `where`; every render on a fresh scene (the set-up is cached
     per scene object)."""
-    with placed(where):
+    with hj.setup_placed(where):
         scene = hj.load_scene(path)
         image = np.asarray(hj.render(scene))  # the warm-up: compiles
         setup = hj.prepare(scene)

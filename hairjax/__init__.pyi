@@ -25,6 +25,7 @@ from ._fit import fitted_image as fitted_image
 from ._geometry._capacity import fragment_bucket as fragment_bucket
 from ._geometry._device_raster import SETUP_PLACEMENT as SETUP_PLACEMENT
 from ._geometry._device_raster import setup_on_device as setup_on_device
+from ._geometry._device_raster import setup_placed as setup_placed
 from ._geometry._ordering import AbstractOrdering as AbstractOrdering
 from ._geometry._ordering import Ordering as Ordering
 from ._geometry._ordering import draw_order as draw_order

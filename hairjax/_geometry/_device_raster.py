@@ -28,6 +28,7 @@ device unless it is the CPU), e.g. to compare the two on one machine.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import os
 
@@ -46,6 +47,7 @@ from ._raster_plan import raster_plan
 __all__ = [
     "SETUP_PLACEMENT",
     "setup_on_device",
+    "setup_placed",
     "device_candidates",
     "rasterize_on_device",
     "group_on_device",
@@ -61,6 +63,23 @@ def setup_on_device() -> bool:
     if choice not in ("auto", "host", "device"):
         raise ValueError(f"{SETUP_PLACEMENT} must be auto, host or device, got {choice!r}")
     return choice == "device" or (choice == "auto" and jax.default_backend() != "cpu")
+
+
+@contextlib.contextmanager
+def setup_placed(where: str):
+    """The set-up placed `where` ("auto", "host" or "device", as `SETUP_PLACEMENT` takes
+    it) inside the block, and as before after it: e.g. both set-ups on one machine."""
+    if where not in ("auto", "host", "device"):
+        raise ValueError(f"the set-up's placement must be auto, host or device, got {where!r}")
+    before = os.environ.get(SETUP_PLACEMENT)
+    os.environ[SETUP_PLACEMENT] = where
+    try:
+        yield
+    finally:
+        if before is None:
+            del os.environ[SETUP_PLACEMENT]
+        else:
+            os.environ[SETUP_PLACEMENT] = before
 
 
 def _free_bytes() -> int | None:

@@ -3,6 +3,7 @@ the same fragments as the host's compiled loops, in the same order. Run here on 
 device (`HAIRJAX_SETUP=device`), which executes the programs a GPU would."""
 
 import dataclasses
+import os
 
 import jax
 import jax.numpy as jnp
@@ -116,6 +117,19 @@ def test_placement_follows_the_environment(monkeypatch):
     monkeypatch.setenv(_device_raster.SETUP_PLACEMENT, "gpu")
     with pytest.raises(ValueError, match="auto, host or device"):
         setup_on_device()
+
+
+def test_setup_placed_sets_the_placement_and_puts_it_back(monkeypatch):
+    monkeypatch.setenv(_device_raster.SETUP_PLACEMENT, "host")
+    with hj.setup_placed("device"):
+        assert setup_on_device()
+    assert not setup_on_device()
+    monkeypatch.delenv(_device_raster.SETUP_PLACEMENT)
+    with pytest.raises(RuntimeError), hj.setup_placed("device"):  # put back after an error too
+        raise RuntimeError
+    assert _device_raster.SETUP_PLACEMENT not in os.environ
+    with pytest.raises(ValueError, match="auto, host or device"), hj.setup_placed("gpu"):
+        pass
 
 
 def test_a_raster_beyond_the_devices_memory_is_refused_before_it_is_allocated(monkeypatch):
