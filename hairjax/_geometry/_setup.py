@@ -305,9 +305,9 @@ def _fragments_on_host(raster, labels, hit_depth, lap):
     """Whether the raster covered any pixel (before the occluder's depth test), the
     camera's fragments grouped by pixel, front to back (`frag_pixel`, `frag_i0`,
     `frag_coverage`, `frag_t`, padded to `fragment_bucket`), and their count, by the host's
-    compiled loops: the raster in pieces, one
-    per core (`rasterize_parts`), read where they are by the counting sort (`group_parts`),
-    into aligned arrays that the geometry stage shares with JAX (`_host`)."""
+    compiled loops: the raster in pieces, one per core (`rasterize_parts`), read where they
+    are by the counting sort (`group_parts`), into aligned arrays that the geometry stage
+    shares with JAX (`_host`)."""
     with_depth = hit_depth is not None
     pieces = rasterize_parts(*raster, depth=with_depth, labels=labels)
     n_frags = sum(piece.size for piece in pieces)

@@ -52,9 +52,9 @@ class AbstractShadowMethod(abc.ABC):
         segment_alpha: np.ndarray | None = None,
         width_units: str = "pixels",
     ) -> Any:
-        """What Ω needs that does not depend on opacity (NumPy; the fragments may be JAX arrays
-        on an accelerator, docs/model.md §5), for the strand points and
-        then the `receivers` (`[Q, 3]`, the occluder's surface points, §13)."""
+        """What Ω needs that does not depend on opacity (NumPy; the fragments may be JAX
+        arrays on an accelerator, docs/model.md §5), for the strand points and then the
+        `receivers` (`[Q, 3]`, the occluder's surface points, §13)."""
 
     @abc.abstractmethod
     def omega(self, setup, alpha: Float[Array, " S"]) -> Float[Array, " PQ"]:
