@@ -21,20 +21,38 @@ __all__ = ["load_points", "append_point", "rewrite_points", "check_config"]
 
 # What a config must agree on for its folder's points to be kept.
 _SAME = ("scene_digest", "repeats", "reference")
+# The keys every stored point holds, by file: what a resumed run reads of it.
+_REQUIRED = {"points.jsonl": ("path", "knob", "value"), "joint.jsonl": ("path", "settings")}
 
 
 def load_points(out, name: str = "points.jsonl") -> list[dict]:
-    """The finished points in `out`/`name` (a line cut short by an interruption is
-    ignored: it is redone on resume)."""
+    """The finished points in `out`/`name`, each a JSON object holding the keys its kind
+    of sweep reads (`_REQUIRED`).
+    A last line cut short by an interruption is ignored: it is redone on resume.
+
+    **Raises:** `SweepError` naming the file and the line for any other line that is not
+    such an object (a damaged or foreign file), rather than failing later on its content.
+    """
     path = Path(out) / name
     if not path.exists():
         return []
+    try:
+        lines = path.read_text().splitlines()
+    except (OSError, UnicodeDecodeError) as err:
+        raise SweepError(f"{path}: cannot read the finished points: {err}") from None
     points = []
-    for line in path.read_text().splitlines():
+    for number, line in enumerate(lines, start=1):
         try:
-            points.append(json.loads(line))
+            point = json.loads(line)
         except json.JSONDecodeError:
-            continue  # fires only for a last line cut short by a kill
+            if number == len(lines):
+                continue  # fires only for a last line cut short by a kill
+            raise SweepError(f"{path}:{number}: not a JSON line; remove the line or pass --restart") from None
+        missing = [k for k in _REQUIRED.get(name, ()) if k not in point] if isinstance(point, dict) else None
+        if missing is None or missing:
+            what = f"a point without {', '.join(missing)}" if missing else "not a JSON object"
+            raise SweepError(f"{path}:{number}: {what}; remove the line or pass --restart")
+        points.append(point)
     return points
 
 
@@ -70,7 +88,7 @@ def check_config(
             raise SweepError(f"{out} holds another kind of sweep ({other}); choose another --out")
     path = out / name
     if path.exists() and not restart:
-        old = json.loads(path.read_text())
+        old = _read_config(path)
         same = {k: old.get(k) for k in (*_SAME, *keys)}
         if same != {k: config[k] for k in same}:
             raise SweepError(
@@ -81,3 +99,14 @@ def check_config(
         for file in (points, *[f"reference_{p}.npz" for p in PATHS]):
             (out / file).unlink(missing_ok=True)
     write_json(path, config)
+
+
+def _read_config(path: Path) -> dict:
+    """A sweep's settings file as a JSON object; SweepError naming it otherwise."""
+    try:
+        old = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
+        raise SweepError(f"{path}: damaged settings file ({err}); pass --restart to start afresh") from None
+    if not isinstance(old, dict):
+        raise SweepError(f"{path}: damaged settings file (not a JSON object); pass --restart to start afresh")
+    return old

@@ -2,6 +2,7 @@
 
 import dataclasses
 import json
+import re
 
 import numpy as np
 import pytest
@@ -239,3 +240,45 @@ def test_cheapest_within_ten_percent_of_the_best_error_against_a_target():
     # Best 5e-4 (bins = exact, 3 s): within 10 %, maps = 64 (5.4e-4) at 2.5 s is cheaper.
     assert "| jax | maps = 64 (2.5 s) | 64 (2.5 s) | exact (3 s) |" in text
     assert "digest 0123456789abcdef" in text
+
+
+# A damaged store, found when the sweep resumes: one line naming the file (and the line),
+# exit 2, before any render. `content` replaces the file in a folder a sweep left.
+DAMAGED = {
+    "torn sweep.json": ("sweep.json", '{"scene": "tiny", "rep', r"sweep\.json: damaged settings file"),
+    "sweep.json not an object": ("sweep.json", "[1, 2]\n", r"sweep\.json: damaged settings file"),
+    "a number in points.jsonl": ("points.jsonl", '3\n{"path": "jax"', r"points\.jsonl:1: not a JSON object"),
+    "a torn line before the last": (
+        "points.jsonl",
+        '{"path": "jax", "kno\n{"path": "jax", "knob": "bins", "value": 1}\n',
+        r"points\.jsonl:1: not a JSON line",
+    ),
+    "a point without its keys": ("points.jsonl", '{"path": "jax"}\n', r"points\.jsonl:1: a point without knob"),
+    "a list in joint.jsonl": ("joint.jsonl", '[1]\n{"path": "jax"}\n', r"joint\.jsonl:1: not a JSON object"),
+    "torn joint.json": ("joint.json", "{", r"joint\.json: damaged settings file"),
+}
+
+
+@pytest.mark.parametrize("case", DAMAGED)
+def test_a_damaged_store_is_named_on_resume(case, tmp_path, monkeypatch, capsys):
+    name, content, message = DAMAGED[case]
+    joint = name.startswith("joint")
+    (tmp_path / name).write_text(content)
+    if name.endswith(".jsonl"):  # settings taken as matching, so the points are read
+        monkeypatch.setattr(sweep_mod, "check_config", lambda *a, **k: None)
+        monkeypatch.setattr("hairjax.tools._joint.check_config", lambda *a, **k: None)
+
+    def no_render(*args):
+        raise AssertionError("a renderer was made before the store was checked")
+
+    monkeypatch.setattr("hairjax.tools._measure.renderer", no_render)
+    monkeypatch.setattr(sweep_mod, "renderer", no_render)
+    monkeypatch.setattr("hairjax.tools._joint.renderer", no_render)
+    toml = tmp_path / "tiny.toml"
+    toml.write_text('[hair]\nsource = "furball"\nstrands = 20\npoints = 4\n[camera]\nwidth = 8\nheight = 8\n')
+    argv = ["sweep", str(toml), "--out", str(tmp_path), "--paths", "jax", "--knobs", "bins", "--quick"]
+    assert cli.main([*argv, *(["--joint"] if joint else [])]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "Traceback" not in err, err
+    assert err.startswith(f"hairjax: error: {tmp_path / name}"), err
+    assert re.search(message, err), err
