@@ -6,7 +6,15 @@ import argparse
 import sys
 from pathlib import Path
 
-from ._outputs import IMAGE_SUFFIXES, Output, check_outputs, written_together
+from ._outputs import (
+    FILE_OVERHEAD,
+    IMAGE_SUFFIXES,
+    Output,
+    check_free_space,
+    check_outputs,
+    image_bytes,
+    written_together,
+)
 
 __all__ = ["run"]
 
@@ -27,20 +35,35 @@ def _print_profile(first: dict, second: dict) -> None:
         print(f"{key:<{width}}  {first[key]:8.3f} s  {second.get(key, float('nan')):8.3f} s")
 
 
+def _image_outputs(args: argparse.Namespace) -> list[Output]:
+    """-o (EXR or PNG) and --png (PNG only), or the default -o."""
+    outputs = []
+    if args.output is not None or args.png is None:
+        outputs.append(Output(args.output or DEFAULT_OUTPUT, IMAGE_SUFFIXES, "-o"))
+    if args.png is not None:
+        outputs.append(Output(args.png, (".png",), "--png"))
+    return outputs
+
+
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from .._progress import reporter
-    from ._scenes import load_cli_scene, scene_overrides, scene_path
+    from ._scenes import load_cli_scene, recorded_changes, scene_path
 
-    images = [p for p in (args.output, args.png) if p is not None] or [DEFAULT_OUTPUT]
-    outputs = [Output(p, IMAGE_SUFFIXES, "--png" if p == args.png else "-o") for p in images]
+    outputs = _image_outputs(args)
     check_outputs(outputs)  # first the images: the sidecar's name is the first image's
+    images = [o.path for o in outputs]
     sidecar = images[0].with_suffix(".json") if args.sidecar else None
     if sidecar is not None:
-        check_outputs([*outputs, Output(sidecar, (".json",), "the sidecar (--no-sidecar: none)")])
+        outputs = [*outputs, Output(sidecar, (".json",), "the sidecar (--no-sidecar: none)")]
+        check_outputs(outputs)
 
     scene = load_cli_scene(args, args.scene)
+    width, height = scene.camera.width, scene.camera.height
+    check_free_space(
+        [(o, FILE_OVERHEAD if o.path == sidecar else image_bytes(o.path, width, height)) for o in outputs]
+    )
     with reporter("render", quiet=args.quiet) as progress:
         if args.backend == "gl":
             from ..gl import render_gl
@@ -72,7 +95,7 @@ def run(args: argparse.Namespace) -> int:
             write_image(tmp, image)
         if sidecar is not None:
             path = scene_path(args.scene)
-            record = render_record(scene, path, scene_overrides(args, path), args.backend, timings, images)
+            record = render_record(scene, path, recorded_changes(args, path), args.backend, timings, images)
             write_json(temps[-1], record)
     if not args.quiet:
         for p in paths:

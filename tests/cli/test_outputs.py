@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import subprocess
 from pathlib import Path
 
@@ -19,8 +20,17 @@ import numpy as np
 import pytest
 
 import hairjax as hj
+from hairjax._io._image import ImageError
 from hairjax.cli import main
-from hairjax.cli._outputs import BadOutput, Output, check_output, check_outputs, written_together
+from hairjax.cli._outputs import (
+    FILE_OVERHEAD,
+    BadOutput,
+    Output,
+    check_output,
+    check_outputs,
+    image_bytes,
+    written_together,
+)
 
 
 @contextlib.contextmanager
@@ -157,3 +167,98 @@ def test_render_without_output_and_only_png_writes_only_the_png(tmp_path, monkey
     )
     assert main(["render", str(scene), "--png", "v.png", "-q"]) == 0
     assert sorted(p.name for p in tmp_path.iterdir()) == ["s.toml", "v.json", "v.png"]
+
+
+TINY = '[hair]\nsource = "furball"\nstrands = 30\npoints = 4\n[camera]\nwidth = 16\nheight = 12\n'
+
+
+def test_png_takes_only_a_png(tmp_path, capsys):
+    (tmp_path / "s.toml").write_text(TINY)
+    assert main(["render", str(tmp_path / "s.toml"), "--png", str(tmp_path / "x.exr")]) == 2
+    err = capsys.readouterr().err
+    assert f"{tmp_path / 'x.exr'} (--png): unsupported extension '.exr'; use .png" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.toml"]
+
+
+def test_the_same_path_for_o_and_png_names_both_options(tmp_path, capsys):
+    a = tmp_path / "a.png"
+    assert main(["render", "-o", str(a), "--png", str(a)]) == 2
+    assert f"{a}: named by both -o and --png" in capsys.readouterr().err
+
+
+def test_the_image_is_renamed_last_and_a_failed_rename_restores_the_old_files(tmp_path, monkeypatch):
+    """The sidecar and the image of a render before it; a rename that fails (here the
+    image's, the last) leaves both old files, and no temporary."""
+    image, sidecar = tmp_path / "r.exr", tmp_path / "r.json"
+    image.write_text("old image")
+    sidecar.write_text("old sidecar")
+    renamed = []
+    real_replace = os.replace
+
+    def replace(src, dst):
+        if Path(dst) == image and not Path(src).name.endswith(".old"):
+            raise PermissionError(13, "Permission denied")
+        renamed.append(Path(dst).name)
+        return real_replace(src, dst)
+
+    monkeypatch.setattr(os, "replace", replace)
+    with pytest.raises(OSError) as raised:
+        with written_together([image, sidecar]) as (ti, ts):
+            ti.write_text("new image")
+            ts.write_text("new sidecar")
+    assert raised.value.filename == str(image) and raised.value.strerror == "Permission denied"
+    assert image.read_text() == "old image" and sidecar.read_text() == "old sidecar"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.exr", "r.json"]  # no temporary left
+    monkeypatch.setattr(os, "replace", real_replace)
+    renamed.clear()
+    monkeypatch.setattr(os, "replace", lambda s, d: renamed.append(Path(d).name) or real_replace(s, d))
+    with written_together([image, sidecar]) as (ti, ts):
+        ti.write_text("new image")
+        ts.write_text("new sidecar")
+    assert [n for n in renamed if not n.endswith(".old")] == ["r.json", "r.exr"]  # the image last
+    assert image.read_text() == "new image" and sidecar.read_text() == "new sidecar"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.exr", "r.json"]
+
+
+def test_a_failed_write_names_the_users_path_not_the_temporary(tmp_path):
+    image = tmp_path / "r.exr"
+    with pytest.raises(OSError) as raised:
+        with written_together([image]) as (tmp,):
+            raise OSError(28, "No space left on device", str(tmp))
+    assert str(raised.value) == f"[Errno 28] No space left on device: '{image}'"
+    with pytest.raises(OSError, match=rf"^{re.escape(str(image))}: write failed: disk full$"):
+        with written_together([image]) as (tmp,):
+            raise ImageError(f"{tmp}: write failed: disk full")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_full_disk_is_refused_before_the_work(tmp_path, monkeypatch, capsys):
+    """statvfs says 1000 bytes are free: the 16 × 12 EXR and its sidecar need more. The
+    refusal comes after the scene is read (its size gives the image's) and before the render."""
+    (tmp_path / "s.toml").write_text(TINY)
+
+    class Full:
+        f_bavail, f_frsize = 1, 1000
+
+    monkeypatch.setattr(os, "statvfs", lambda path: Full())
+
+    def never(*args, **kwargs):
+        raise AssertionError("rendered on a full disk")
+
+    monkeypatch.setattr("hairjax._render.render_profiled", never)
+    out = tmp_path / "r.exr"
+    assert main(["render", str(tmp_path / "s.toml"), "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1, err
+    assert f"{out} (-o), {tmp_path / 'r.json'} (the sidecar" in err
+    assert f"but {tmp_path} has 1000 bytes free" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.toml"]
+
+
+def test_image_bytes_bounds_the_written_file(tmp_path):
+    """The estimate is an upper bound of what write_image writes (noise: deflate gains nothing)."""
+    image = np.random.default_rng(0).random((40, 50, 4))
+    for name in ("a.exr", "a.png"):
+        hj.write_image(tmp_path / name, image)
+        size = (tmp_path / name).stat().st_size
+        assert size <= image_bytes(tmp_path / name, 50, 40) < size + 2 * FILE_OVERHEAD

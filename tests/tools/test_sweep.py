@@ -253,7 +253,11 @@ DAMAGED = {
         '{"path": "jax", "kno\n{"path": "jax", "knob": "bins", "value": 1}\n',
         r"points\.jsonl:1: not a JSON line",
     ),
-    "a point without its keys": ("points.jsonl", '{"path": "jax"}\n', r"points\.jsonl:1: a point without knob"),
+    "a point without its keys": (
+        "points.jsonl",
+        '{"path": "jax"}\n',
+        r"points\.jsonl:1: a point without knob",
+    ),
     "a list in joint.jsonl": ("joint.jsonl", '[1]\n{"path": "jax"}\n', r"joint\.jsonl:1: not a JSON object"),
     "torn joint.json": ("joint.json", "{", r"joint\.json: damaged settings file"),
 }
