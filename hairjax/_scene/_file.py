@@ -20,7 +20,9 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import re
 import tomllib
+import warnings
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -47,7 +49,19 @@ __all__ = [
     "scene_tables",
     "with_overrides",
     "scene_for_hair",
+    "UNSET",
+    "blamed_on",
 ]
+
+
+class _Unset:
+    """The value of an override that removes its key (`hairjax … --unset table.key`)."""
+
+    def __repr__(self) -> str:
+        return "UNSET"
+
+
+UNSET: Any = _Unset()
 
 LIGHT_KINDS = ("directional", "point")
 CAMERA_FRAMES = ("auto",)
@@ -55,7 +69,19 @@ MESH_FILE_SUFFIXES = (".obj",)
 
 _FIXED_TABLES: dict[str, tuple[str, ...]] = {
     "hair": HAIR_KEYS,
-    "camera": ("frame", "eye", "target", "up", "fov", "width", "height", "near"),
+    "camera": (
+        "frame",
+        "eye",
+        "target",
+        "up",
+        "fov",
+        "width",
+        "height",
+        "near",
+        "azimuth",
+        "elevation",
+        "zoom",
+    ),
     "light": ("kind", "direction", "position", "color"),
     "occluder": ("kind", "center", "radius", "color", "path"),
     "background": ("color",),
@@ -132,7 +158,10 @@ def load_scene(path: str | os.PathLike, overrides: Mapping[str, Any] | None = No
 
 
 def with_overrides(data: Mapping[str, Any], overrides: Mapping[str, Any], where: str) -> dict[str, Any]:
-    """`data` (parsed TOML) with each `"table.key": value` of `overrides` set, in a copy.
+    """`data` (parsed TOML) with each `"table.key": value` of `overrides` set, in a copy; a
+    value `UNSET` removes the key. Setting (or removing) `shading.model`, `shadows.method`
+    or `ordering.method` also removes the table's other keys from `data` that the new
+    choice does not read, with a warning naming them (`_switched`).
 
     **Raises:** `SceneError` naming the key, and the allowed tables or keys, for a table
     or key that no scene file may hold (a typo); values are checked later, with the file's.
@@ -141,7 +170,10 @@ def with_overrides(data: Mapping[str, Any], overrides: Mapping[str, Any], where:
     tables = scene_tables()
     for dotted, value in overrides.items():
         if dotted in TOP_LEVEL_KEYS:
-            out[dotted] = value
+            if value is UNSET:
+                out.pop(dotted, None)
+            else:
+                out[dotted] = value
             continue
         table, _, key = dotted.partition(".")
         if table not in tables:
@@ -153,8 +185,74 @@ def with_overrides(data: Mapping[str, Any], overrides: Mapping[str, Any], where:
         entry = out.setdefault(table, {})
         if not isinstance(entry, dict):  # the file holds `table = value`, not a table: refused later
             raise SceneError(f"{where}: {table} is not a table, so {dotted!r} cannot be set")
-        entry[key] = value
+        if value is UNSET:
+            entry.pop(key, None)
+        else:
+            entry[key] = value
+    _switched(out, overrides, where)
     return out
+
+
+def _choice_keys(table: str, choice: Any) -> tuple[str, ...] | None:
+    """The keys (besides the choice's own) that `table`'s `choice` reads, or None for a
+    name that is not registered (refused later, with the allowed names)."""
+    if table == "shading":
+        cls = shading_model_class(choice) if choice in shading_model_names() else None
+        return None if cls is None else cls.table_keys
+    names, lookup = (
+        (shadow_method_names(), shadow_method_class)
+        if table == "shadows"
+        else (ordering_names(), ordering_class)
+    )
+    return _field_names(lookup(choice)) if choice in names else None
+
+
+# The tables whose one key chooses a registered class, that key and the default choice.
+_CHOICES = (
+    ("shading", "model", "kajiya-kay"),
+    ("shadows", "method", "opacity-maps"),
+    ("ordering", "method", "bins"),
+)
+
+
+def _switched(out: dict[str, Any], overrides: Mapping[str, Any], where: str) -> None:
+    """Where `overrides` set (or removed) a table's choice, drop the keys of that table
+    that came from the file and that the new choice does not read (the default scene's
+    `shadows.maps` when switching to "exact"), and warn once naming them."""
+    for table, key, default in _CHOICES:
+        entry = out.get(table)
+        if f"{table}.{key}" not in overrides or not isinstance(entry, dict):
+            continue
+        choice = entry.get(key, default)
+        reads = _choice_keys(table, choice)
+        if reads is None:
+            continue
+        dropped = [k for k in entry if k != key and k not in reads and f"{table}.{k}" not in overrides]
+        for k in dropped:
+            del entry[k]
+        if dropped:
+            keys = ", ".join(f"{table}.{k}" for k in dropped)
+            warnings.warn(f"{where}: {table}.{key} = {choice!r} does not read {keys}: dropped", stacklevel=3)
+
+
+_DOTTED = re.compile(r"\b([a-z_]+\.[a-z_]+)\b")
+
+
+def blamed_on(err: SceneError, where: str, origins: Mapping[str, str]) -> SceneError:
+    """`err` (a message `where: …`) blamed on the command-line option that set the key it
+    names first (`origins`: `"table.key"` → e.g. `"--set shading.kd=-1"`), or `err`
+    itself when that key came from the file."""
+    text = str(err)
+    if not text.startswith(f"{where}: "):
+        return err
+    rest = text[len(where) + 2 :]
+    first = _DOTTED.search(rest)
+    if first is None or first.group(1) not in origins:
+        return err
+    try:
+        return type(err)(f"{origins[first.group(1)]}: {rest}")  # SceneTooLarge stays one
+    except TypeError:  # a subclass whose constructor takes other arguments
+        return SceneError(f"{origins[first.group(1)]}: {rest}")
 
 
 def scene_from_dict(
@@ -177,7 +275,7 @@ def scene_from_dict(
         if not isinstance(scene_name, str) or not scene_name:
             raise SceneError(f"{where}: name must be a non-empty string, got {describe(scene_name)}")
 
-    camera_args, frame = _read_camera(tables["camera"])
+    camera_args, framing = _read_camera(tables["camera"])
     camera = build(where, Camera, **camera_args)
     light = build(where, Light, **_read_light(tables["light"]))
     shading = _read_shading(where, tables["shading"])
@@ -196,8 +294,10 @@ def scene_from_dict(
     # the other tables fail first.
     patches = read_patches(tables["hair"])
     strands = read_hair(tables["hair"], Path(base_dir))
-    if frame == "auto":  # eye, target and up from the hair (the table's size, fov, near)
-        camera = build(where, _framed, strands=strands, camera=camera, near=camera_args.get("near"))
+    if framing is not None:  # eye, target and up from the hair (the table's size, fov, near)
+        camera = build(
+            where, _framed, strands=strands, camera=camera, near=camera_args.get("near"), framing=framing
+        )
 
     reference = None
     if "reference" in data:
@@ -242,8 +342,13 @@ def _split_tables(data: Mapping[str, Any], where: str) -> dict[str, Table]:
 # --------------------------------------------------------------------------- readers
 
 
-def _read_camera(table: Table) -> tuple[dict[str, Any], str | None]:
-    """The Camera's keyword arguments, and `frame` ("auto" or None)."""
+# camera.frame = "auto"'s keys: where the eye sits round and above the hair, and how close.
+_FRAMING_KEYS = ("azimuth", "elevation", "zoom")
+
+
+def _read_camera(table: Table) -> tuple[dict[str, Any], dict[str, Any] | None]:
+    """The Camera's keyword arguments, and with `frame = "auto"` the framing's (azimuth,
+    elevation, zoom: `frame_camera`'s), else None."""
     frame = table.choice("frame", CAMERA_FRAMES)
     if frame == "auto":
         # The framing sets these three; a given one would be silently replaced.
@@ -253,6 +358,15 @@ def _read_camera(table: Table) -> tuple[dict[str, Any], str | None]:
                     f"{table.where}: camera.frame = 'auto' and camera.{key} exclude each other: "
                     f"the framing places the camera; remove one of them"
                 )
+    else:
+        for key in _FRAMING_KEYS:
+            if key in table:
+                raise SceneError(f"{table.where}: camera.{key} applies only to frame = 'auto'")
+    framing = given(
+        azimuth=table.number("azimuth"),
+        elevation=table.number("elevation", lo=-90, hi=90, lo_open=True, hi_open=True),
+        zoom=table.number("zoom", lo=0, lo_open=True),
+    )
     # Ranges (fov, sizes, near, eye != target, up) are Camera's checks.
     return given(
         eye=table.vec3("eye"),
@@ -262,12 +376,13 @@ def _read_camera(table: Table) -> tuple[dict[str, Any], str | None]:
         width=table.integer("width"),
         height=table.integer("height"),
         near=table.number("near"),
-    ), frame
+    ), framing if frame == "auto" else None
 
 
-def _framed(strands, camera: Camera, near: float | None) -> Camera:
-    """`frame_camera` for the strands, with the table's image size and fov (and near)."""
-    framed = frame_camera(strands, width=camera.width, height=camera.height, fov=camera.fov)
+def _framed(strands, camera: Camera, near: float | None, framing: Mapping[str, float]) -> Camera:
+    """`frame_camera` for the strands, with the table's image size and fov (and near) and
+    the framing's azimuth, elevation and zoom."""
+    framed = frame_camera(strands, width=camera.width, height=camera.height, fov=camera.fov, **framing)
     return framed if near is None else dataclasses.replace(framed, near=near)
 
 

@@ -54,18 +54,33 @@ def bounding_sphere(points) -> tuple[np.ndarray, float]:
     return centre, radius
 
 
-def frame_camera(strands: Strands, *, width: int = 512, height: int = 512, fov: float = 40.0) -> Camera:
-    """A camera that shows all of `strands` from a three-quarter view.
+def frame_camera(
+    strands: Strands,
+    *,
+    width: int = 512,
+    height: int = 512,
+    fov: float = 40.0,
+    azimuth: float = FRAME_AZIMUTH,
+    elevation: float = FRAME_ELEVATION,
+    zoom: float = 1.0,
+) -> Camera:
+    """A camera that shows all of `strands`, by default from a three-quarter view.
 
     The eye looks at the centre of the strands' bounding sphere (`bounding_sphere`) from
-    azimuth `FRAME_AZIMUTH` (35°, from the front +z towards +x) and elevation
-    `FRAME_ELEVATION` (20°, towards +y, which stays up in the image), at the distance
-    r / sin(φ/2) × `FRAME_MARGIN` (1.1), with φ the smaller of the vertical `fov` and the
-    horizontal field of view of a `width` × `height` image: the sphere's silhouette then
-    lies inside the image, in wide and tall images alike. `near` is Camera's default
-    (1e-3 × that distance). SceneError for a bad `fov`, `width` or `height` (Camera's
-    checks) or strands without points.
+    `azimuth` degrees (default `FRAME_AZIMUTH`, 35°; 0 is the front, +z, and positive
+    angles turn towards +x) and `elevation` degrees (default `FRAME_ELEVATION`, 20°,
+    towards +y, which stays up in the image; in (−90, 90)), at the distance
+    r / sin(φ/2) × `FRAME_MARGIN` (1.1) / `zoom`, with φ the smaller of the vertical `fov`
+    and the horizontal field of view of a `width` × `height` image: at `zoom` 1 the
+    sphere's silhouette lies inside the image, in wide and tall images alike; `zoom` 2
+    comes twice as close. `near` is Camera's default (1e-3 × that distance). SceneError
+    for a bad `fov`, `width` or `height` (Camera's checks), an elevation of ±90° or more,
+    a zoom ≤ 0, or strands without points.
     """
+    if not -90 < elevation < 90:  # at ±90° the view is parallel to up (+y)
+        raise SceneError(f"camera.elevation must be in (-90, 90) degrees, got {elevation!r}")
+    if not (math.isfinite(zoom) and zoom > 0) or not math.isfinite(azimuth):
+        raise SceneError(f"camera.zoom must be > 0 and camera.azimuth finite, got {zoom!r}, {azimuth!r}")
     checked = Camera(fov=fov, width=width, height=height)  # SceneError for a bad fov or size
     fov, width, height = checked.fov, checked.width, checked.height
     centre, radius = bounding_sphere(strands.points)
@@ -75,8 +90,8 @@ def frame_camera(strands: Strands, *, width: int = 512, height: int = 512, fov: 
         radius = 1.0
     half_v = math.radians(fov) / 2
     half_h = math.atan(math.tan(half_v) * width / height)
-    distance = radius / math.sin(min(half_v, half_h)) * FRAME_MARGIN
-    az, el = math.radians(FRAME_AZIMUTH), math.radians(FRAME_ELEVATION)
+    distance = radius / math.sin(min(half_v, half_h)) * FRAME_MARGIN / zoom
+    az, el = math.radians(azimuth), math.radians(elevation)
     direction = np.array([math.cos(el) * math.sin(az), math.sin(el), math.cos(el) * math.cos(az)])
     eye = centre + distance * direction
     return Camera(

@@ -12,10 +12,11 @@ __all__ = ["run"]
 def run(args: argparse.Namespace) -> int:
     from .._animate import load_animation, write_frames
     from .._progress import reporter
-    from ._scenes import scene_overrides
+    from ._scenes import options_blamed, scene_origins, scene_overrides
 
     check_outputs([Output(args.output, (), "-o")])
-    animation = load_animation(args.scene, scene_overrides(args, args.scene))
+    with options_blamed(args.scene, scene_origins(args)):
+        animation = load_animation(args.scene, scene_overrides(args, args.scene))
     with reporter("animate", quiet=args.quiet) as progress:
         written = write_frames(
             animation,

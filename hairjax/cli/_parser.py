@@ -11,7 +11,15 @@ import argparse
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
-__all__ = ["build_parser", "parse_size", "positive_int", "parse_assignment", "SOLVER_NAMES", "COMMANDS"]
+__all__ = [
+    "build_parser",
+    "parse_size",
+    "positive_int",
+    "parse_assignment",
+    "parse_key",
+    "SOLVER_NAMES",
+    "COMMANDS",
+]
 
 # The fit's solvers and their short names, as `hairjax/_fit/_solvers.py` has them (a test
 # keeps the two equal); listed here so that --help and the check need no optimistix.
@@ -69,6 +77,14 @@ def parse_assignment(text: str) -> tuple[str, str]:
     return key.strip(), value.strip()
 
 
+def parse_key(text: str) -> str:
+    """argparse type for --unset: `table.key` (or a top-level key such as `name`)."""
+    key = text.strip()
+    if not key or "=" in key or any(not part for part in key.split(".")):
+        raise argparse.ArgumentTypeError(f"expected table.key, got {text!r}")
+    return key
+
+
 class _Formatter(argparse.RawDescriptionHelpFormatter):
     """Help that shows each option's default, unless there is none or the help says it."""
 
@@ -111,6 +127,14 @@ def _scene_options() -> argparse.ArgumentParser:
         metavar="TABLE.KEY=VALUE",
         help="override a scene-file key, value in TOML (e.g. shading.kd=0.3, camera.fov=30); repeatable",
     )
+    scene.add_argument(
+        "--unset",
+        action="append",
+        type=parse_key,
+        default=[],
+        metavar="TABLE.KEY",
+        help="remove a scene-file key, so its default applies (e.g. shadows.maps); repeatable",
+    )
     scene.add_argument("--seed", type=int, help="random seed of procedural hair (hair.seed)")
     scene.add_argument(
         "--size",
@@ -149,7 +173,9 @@ def build_parser() -> argparse.ArgumentParser:
         type=Path,
         help="output image, .exr (linear float) or .png (default: out/render.exr)",
     )
-    p.add_argument("--png", type=Path, help="also write an 8-bit sRGB PNG here (alone: only the PNG)")
+    p.add_argument(
+        "--png", type=Path, help="also write an 8-bit sRGB PNG here, a .png file (alone: only the PNG)"
+    )
     p.add_argument(
         "--profile", action="store_true", help="print the time of each stage, first and second run"
     )

@@ -144,3 +144,48 @@ def test_scene_for_hair_widths_follow_the_asset():
     assert np.all(scene.strands.alpha == 0.5)  # as a scene file's hair
     assert (scene.camera.width, scene.camera.height) == (80, 60)
     assert scene.name == "ponytail_tail"
+
+
+def test_azimuth_elevation_and_zoom_place_the_eye():
+    """From the front (azimuth 0, elevation 0) the eye lies on +z from the centre; zoom 2
+    halves the distance."""
+    base = frame_camera(cloud())
+    cam = frame_camera(cloud(), azimuth=0.0, elevation=0.0, zoom=2.0)
+    d = np.subtract(cam.eye, cam.target)
+    assert cam.target == base.target
+    assert abs(d[0]) < 1e-12 and abs(d[1]) < 1e-12 and d[2] > 0  # float64 rounding of cos/sin
+    dist = np.linalg.norm(np.subtract(base.eye, base.target))
+    assert np.linalg.norm(d) == pytest.approx(dist / 2, rel=1e-12)
+    cam = frame_camera(cloud(), azimuth=180.0, elevation=-30.0)
+    d = np.subtract(cam.eye, cam.target)
+    assert d[2] < 0 and math.degrees(math.asin(d[1] / np.linalg.norm(d))) == pytest.approx(-30.0, abs=1e-9)
+
+
+def test_framing_keys_in_a_scene_file(tmp_path):
+    hair = tmp_path / "s.toml"
+    hair.write_text(
+        '[hair]\nsource = "furball"\nstrands = 20\npoints = 4\n'
+        '[camera]\nframe = "auto"\nazimuth = 0.0\nelevation = 0.0\nzoom = 1.5\nwidth = 32\nheight = 32\n'
+    )
+    scene = hj.load_scene(hair)
+    expected = frame_camera(scene.strands, width=32, height=32, azimuth=0.0, elevation=0.0, zoom=1.5)
+    assert scene.camera.eye == expected.eye
+    for text, message in (
+        ("elevation = 90.0", r"camera\.elevation must be in \(-90, 90\)"),
+        ("zoom = 0", r"camera\.zoom must be > 0"),
+    ):
+        hair.write_text(f'[hair]\nsource = "furball"\n[camera]\nframe = "auto"\n{text}\n')
+        with pytest.raises(SceneError, match=message):
+            hj.load_scene(hair)
+    hair.write_text('[hair]\nsource = "furball"\n[camera]\nazimuth = 10.0\n')
+    with pytest.raises(SceneError, match=r"camera\.azimuth applies only to frame = 'auto'"):
+        hj.load_scene(hair)
+
+
+@pytest.mark.skipif(not ASSETS, reason=f"no hair assets in {DATA}")
+def test_a_hair_file_is_framed_from_the_front_with_set():
+    scene = scene_for_hair(
+        ASSETS[0], width=32, height=32, overrides={"camera.azimuth": 0, "camera.elevation": 0}
+    )
+    d = np.subtract(scene.camera.eye, scene.camera.target)
+    assert abs(d[0]) < 1e-9 * np.linalg.norm(d) and d[2] > 0  # on +z: the front
