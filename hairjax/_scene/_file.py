@@ -35,7 +35,7 @@ from .._geometry._shadows import shadow_method_class, shadow_method_names
 from .._shading import Streaks, shading_model_class, shading_model_names
 from ._camera import Camera
 from ._framing import WIDTH_FRACTION, bounding_sphere, frame_camera, key_light
-from ._hair_table import HAIR_KEYS, read_hair, read_patches
+from ._hair_table import HAIR_KEYS, PROCEDURAL_SOURCES, read_hair, read_patches
 from ._light import Light
 from ._occluder import OCCLUDER_KINDS, Occluder
 from ._reference import REFERENCE_KEYS, ReferenceSettings, read_reference
@@ -92,6 +92,15 @@ _FIXED_TABLES: dict[str, tuple[str, ...]] = {
     "reference": REFERENCE_KEYS,
 }
 TOP_LEVEL_KEYS = ("name",)
+# [hair]'s keys that `read_patches` reads into `Scene.patches`.
+PATCH_KEYS = (
+    "geometry",
+    "patch_width",
+    "opaque_core",
+    "patch_strands",
+    "patch_strand_alpha",
+    "patch_strand_tips",
+)
 
 
 def _union(groups) -> tuple[str, ...]:
@@ -302,7 +311,13 @@ def scene_from_dict(
     reference = None
     if "reference" in data:
         reference = build(where, ReferenceSettings, **read_reference(tables["reference"]))
-    scene_args = given(background=background, streaks=streaks, patches=patches, reference=reference)
+    scene_args = given(
+        background=background,
+        streaks=streaks,
+        patches=patches,
+        reference=reference,
+        file_tables=_file_tables(data, Path(base_dir)),
+    )
     return build(
         where,
         Scene,
@@ -319,6 +334,19 @@ def scene_from_dict(
 
 
 # --------------------------------------------------------------------------- tables
+
+
+def _file_tables(data: Mapping[str, Any], base_dir: Path) -> dict[str, dict[str, Any]]:
+    """[hair] (without the patch keys, which `Scene.patches` holds; a file source as an
+    absolute path) and [animation], as given: what `Scene.file_tables` keeps."""
+    hair = {k: v for k, v in data.get("hair", {}).items() if k not in PATCH_KEYS}
+    source = hair.get("source")
+    if isinstance(source, str) and source not in PROCEDURAL_SOURCES:
+        hair["source"] = str(Path(source) if Path(source).is_absolute() else (base_dir / source).resolve())
+    tables = {"hair": hair}
+    if "animation" in data:
+        tables["animation"] = dict(data["animation"])
+    return tables
 
 
 def _split_tables(data: Mapping[str, Any], where: str) -> dict[str, Table]:
@@ -497,10 +525,11 @@ def scene_for_hair(
         _, radius = bounding_sphere(scene.strands.points)
         # Fires when every point coincides: frame_camera then frames one world unit.
         radius = radius if radius > 0 else 1.0
-        strands = scene.strands.replace(
-            width=np.full(scene.strands.num_strands, WIDTH_FRACTION * radius), width_units="world"
-        )
-        scene = scene.replace(strands=strands)
+        width = WIDTH_FRACTION * radius
+        strands = scene.strands.replace(width=np.full(scene.strands.num_strands, width), width_units="world")
+        tables = dict(scene.file_tables or {})
+        tables["hair"] = {**tables.get("hair", {}), "width": width, "width_units": "world"}
+        scene = scene.replace(strands=strands, file_tables=tables)
     if not any(key.startswith("light.") for key in overrides):
         scene = scene.replace(light=key_light(scene.camera))
     return scene

@@ -9,6 +9,8 @@ shading stage takes its differentiable parameters from its shading model
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
@@ -75,6 +77,10 @@ class Scene:
     `reference`: the fibres and path tracer of the physically based reference
     (`hairjax.reference_image`, docs/reference.md), or None for `ReferenceSettings()`;
     the JAX and GL renderers do not read it.
+    `file_tables`: the scene file's tables a Scene holds no values for, as `load_scene`
+    read them: `[hair]` (the generator's or the file's keys, a file path resolved), from
+    which `strands` came, and `[animation]`; `save_scene` writes them back. None for a
+    scene built in Python; `replace(strands=…)` drops `[hair]`.
     """
 
     strands: Strands
@@ -89,6 +95,7 @@ class Scene:
     streaks: Streaks | None = None
     patches: PatchGeometry | None = None
     reference: ReferenceSettings | None = None
+    file_tables: Mapping[str, Mapping[str, Any]] | None = None
 
     def __post_init__(self):
         for key, kind in (
@@ -123,4 +130,7 @@ class Scene:
         if "params" in changes:
             shading = changes.pop("shading", self.shading)
             changes["shading"] = shading.replace_params(changes.pop("params"))
+        if "strands" in changes and "file_tables" not in changes and self.file_tables is not None:
+            # The [hair] table no longer describes the strands.
+            changes["file_tables"] = {k: v for k, v in self.file_tables.items() if k != "hair"}
         return dataclasses.replace(self, **changes)

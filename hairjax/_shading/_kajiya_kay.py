@@ -27,6 +27,7 @@ from ._model import (
     register_shading_model,
     rgb_param,
     rgb_uniform,
+    values_repr,
 )
 from ._transforms import LOG
 
@@ -74,6 +75,9 @@ class ShadingParams(eqx.Module):
 
     def __check_init__(self):
         check_params(self, colors=("kd", "ks", "ambient"), positive=("shininess",), non_negative=("kappa",))
+
+    def __repr__(self) -> str:
+        return values_repr(self)
 
 
 def specular_power(gap: Float[ArrayLike, "*shape"], p: Float[ArrayLike, ""]) -> Float[Array, "*shape"]:

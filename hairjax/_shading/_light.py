@@ -20,7 +20,7 @@ from jaxtyping import Array, Float
 
 from .._errors import SceneError
 from .._vectors import safe_normalize
-from ._model import RGBLike  # an array, a number or 3 numbers
+from ._model import RGBLike, values_repr  # RGBLike: an array, a number or 3 numbers
 
 if TYPE_CHECKING:
     from .._geometry._stage import Geometry
@@ -60,6 +60,9 @@ class LightParams(eqx.Module):
             c = np.asarray(self.color, dtype=np.float64)
             if not np.all(np.isfinite(c)) or np.any(c < 0):
                 raise SceneError(f"light.color must be finite and >= 0, got {c.tolist()}")
+
+    def __repr__(self) -> str:
+        return values_repr(self)
 
     @classmethod
     def from_light(cls, light: Light) -> LightParams:

@@ -184,6 +184,9 @@ class KajiyaKayLookup(KajiyaKay):
     def gl_table(self, params: ShadingParams):
         return kajiya_kay_table(params.shininess, int(self.size), type(self).cone)
 
+    def table(self) -> dict:
+        return {**super().table(), "lookup_size": int(self.size)}
+
     @classmethod
     def from_table(cls, table) -> KajiyaKayLookup:
         return cls(params=read_kajiya_kay_params(table), **table.given(size=table.integer("lookup_size")))

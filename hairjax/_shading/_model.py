@@ -13,7 +13,7 @@ per-point inputs are made). It owns everything that differs between models:
 - `searched`: the parameters the colour is not linear in, with the transforms the fit
   searches them through;
 - its GL side: `gl_id` (the shader's branch), `gl_uniforms`, `gl_table`, `gl_attributes`;
-- its scene-file table: `table_keys` and `from_table`.
+- its scene-file table: `table_keys` and `from_table`, and back: `table`.
 
 A subclass is registered under its `name` with `@register_shading_model`; the scene
 reader, `fit` and the renderers find it there, so a new model is one module plus that
@@ -23,6 +23,7 @@ line (docs/architecture.md shows a toy model).
 from __future__ import annotations
 
 import abc
+import dataclasses
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any, ClassVar
 
@@ -53,6 +54,8 @@ __all__ = [
     "shading_model_names",
     "check_params",
     "RGBLike",
+    "param_values",
+    "values_repr",
 ]
 
 # What a parameter class takes for an RGB gain: an array or one number (it broadcasts), or
@@ -142,6 +145,41 @@ def check_params(
                 raise SceneError(f"shading.{name} must be {text}, got {shown}")
 
 
+def param_values(params: eqx.Module) -> dict[str, Any]:
+    """Each field of a parameter pytree that holds a value, as TOML data: a float, or a
+    list of floats (an RGB gain), each the shortest decimal that reads back to the same
+    value in the array's own precision (0.55, not float32's 0.550000011920929)."""
+    out: dict[str, Any] = {}
+    for field in dataclasses.fields(params):
+        value = getattr(params, field.name)
+        if value is not None:
+            array = np.asarray(value)
+            # str of a NumPy scalar is its shortest round-tripping decimal, in its dtype.
+            numbers = [float(str(x)) for x in array.ravel()]
+            out[field.name] = numbers if array.ndim else numbers[0]
+    return out
+
+
+def values_repr(params: eqx.Module) -> str:
+    """`Name(kd=[0.6, 0.6, 0.6], shininess=40, …)`: a parameter pytree's values (6
+    significant digits), where equinox's repr shows shapes only; traced values (inside
+    `jax.jit` or `jax.grad`) as equinox shows them."""
+    leaves = jax.tree_util.tree_leaves(params)
+    if any(isinstance(x, jax.core.Tracer) for x in leaves):
+        return eqx.tree_pformat(params)
+
+    def show(value) -> str:
+        if value is None:
+            return "None"
+        array = np.asarray(value, dtype=np.float64)
+        if array.ndim == 0:
+            return f"{float(array):.6g}"
+        return "[" + ", ".join(f"{x:.6g}" for x in array.ravel()) + "]"
+
+    fields = ", ".join(f"{f.name}={show(getattr(params, f.name))}" for f in dataclasses.fields(params))
+    return f"{type(params).__name__}({fields})"
+
+
 class AbstractShadingModel(eqx.Module):
     """A shading model: differentiable `params` and static configuration (module
     docstring). Subclasses set the class variables and implement `reflectance`."""
@@ -206,6 +244,11 @@ class AbstractShadingModel(eqx.Module):
     def from_table(cls, table: Table) -> AbstractShadingModel:
         """The model from a scene file's [shading] table (`Table` getters check types;
         the parameters' own checks give the ranges)."""
+
+    def table(self) -> dict[str, Any]:
+        """The [shading] table `from_table` reads back to this model: `model` and the
+        parameters' values; a model with static configuration adds its keys."""
+        return {"model": self.name, **param_values(self.params)}
 
 
 SHADING_MODELS: Registry[AbstractShadingModel] = Registry("shading", "model", "name")

@@ -6,6 +6,7 @@ Its per-point inputs (normals, textures) are made in `_scheuermann_inputs.py`.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 from typing import Any, ClassVar
 
@@ -29,6 +30,7 @@ from ._model import (
     rgb_param,
     rgb_uniform,
     scalar_param,
+    values_repr,
 )
 from ._scheuermann_inputs import ScheuermannMaps, ScheuermannPoints, scheuermann_inputs
 from ._transforms import IDENTITY, LOG
@@ -96,6 +98,9 @@ class ScheuermannParams(eqx.Module):
             finite=("primary_shift", "secondary_shift"),
             non_negative=("kappa",),
         )
+
+    def __repr__(self) -> str:
+        return values_repr(self)
 
 
 # --------------------------------------------------------------------------- per point (JAX)
@@ -281,6 +286,17 @@ class Scheuermann(AbstractShadingModel):
     def gl_attributes(self, inputs: PointInputs) -> list:
         pts = inputs.extra
         return [(pts.normal, "3f", "in_normal"), (np.stack([pts.shift, pts.mask], axis=1), "2f", "in_maps")]
+
+    def table(self) -> dict[str, Any]:
+        """[shading]: the parameters, then `maps`' keys (a texture as a list, no
+        normal_center where the roots' centre is used)."""
+        maps = {f.name: getattr(self.maps, f.name) for f in dataclasses.fields(self.maps)}
+        if maps["normal_center"] is None:
+            del maps["normal_center"]
+        for key, value in maps.items():
+            if isinstance(value, tuple):  # a texture or a point: TOML arrays
+                maps[key] = [list(v) if isinstance(v, tuple) else v for v in value]
+        return {**super().table(), **maps}
 
     @classmethod
     def from_table(cls, table) -> Scheuermann:
