@@ -10,7 +10,15 @@ import argparse
 import sys
 
 from ._main import EXIT_NOT_CONVERGED
-from ._outputs import IMAGE_SUFFIXES, Output, check_outputs, written_together
+from ._outputs import (
+    FILE_OVERHEAD,
+    IMAGE_SUFFIXES,
+    Output,
+    check_free_space,
+    check_outputs,
+    image_bytes,
+    written_together,
+)
 
 __all__ = ["run"]
 
@@ -23,7 +31,43 @@ def _outputs(args: argparse.Namespace) -> list[Output]:
         outputs.append(Output(args.out, IMAGE_SUFFIXES, "--out"))
     if args.plot is not None:
         outputs.append(Output(args.plot, (".png",), "--plot"))
+    if args.save_scene is not None:
+        outputs.append(Output(args.save_scene, (".toml",), "--save-scene"))
     return outputs
+
+
+def _sizes(outputs: list[Output], scene) -> list[tuple[Output, int]]:
+    """Each output's expected bytes: an image of the scene's size (the plot: three side
+    by side), a small text file otherwise."""
+    width, height = scene.camera.width, scene.camera.height
+    sizes = {"--out": image_bytes, "--plot": lambda p, w, h: image_bytes(p, 3 * w, h)}
+    return [(o, sizes[o.option](o.path, width, height) if o.option in sizes else FILE_OVERHEAD) for o in outputs]
+
+
+def fitted_scene(scene, result):
+    """`scene` with `result`'s fitted parameters: the model's, and the light's direction
+    and colour or the strands' opacity where the fit fitted them (a saved scene's shadows
+    then follow the fitted light, where the fit held them at the scene's)."""
+    import dataclasses
+
+    import numpy as np
+
+    scene = scene.replace(params=result.params)
+    if result.light is not None and scene.light.kind == "directional":
+        light = {
+            # str of a NumPy scalar: the shortest decimal of the fitted float32 (or float64).
+            k: tuple(float(str(x)) for x in np.asarray(v))
+            for k, v in (("direction", result.light.direction), ("color", result.light.color))
+            if v is not None
+        }
+        scene = scene.replace(light=dataclasses.replace(scene.light, **light))
+    if result.alpha is not None:
+        alpha = float(result.alpha)
+        tables = dict(scene.file_tables or {})
+        if "hair" in tables:
+            tables["hair"] = {**tables["hair"], "alpha": alpha}
+        scene = scene.replace(strands=scene.strands.replace(alpha=alpha), file_tables=tables)
+    return scene
 
 
 def _table(result, names, fittable) -> str:
@@ -67,6 +111,11 @@ def run(args: argparse.Namespace) -> int:
     # Everything is read and checked before any rendering starts.
     targets = [read_image(t) for t in args.target]
     first = load_cli_scene(args, args.scene)
+    check_free_space(_sizes(outputs, first))
+    if args.save_scene is not None:  # a scene a file cannot describe is refused before the fit
+        from .._scene._save import scene_data
+
+        scene_data(first)
     extra = [load_cli_scene(args, s) for s in args.scenes]
     scenes = [first, *extra, *[first] * (len(targets) - 1 - len(extra))]
     holdout = None
@@ -120,6 +169,10 @@ def run(args: argparse.Namespace) -> int:
                 from .._io._files import write_json
 
                 write_json(tmp, result.to_json())
+            elif out.option == "--save-scene":
+                from .._scene._save import save_scene
+
+                save_scene(fitted_scene(first, result), tmp)
             elif out.option == "--out":
                 from .._io._image import write_image
 

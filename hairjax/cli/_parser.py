@@ -281,6 +281,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--plot", type=Path, help="PNG of target, fit and residual side by side (the first target)"
     )
+    p.add_argument(
+        "--save-scene",
+        type=Path,
+        metavar="SCENE.toml",
+        help="write the first scene with the fitted parameters as a scene file (docs/fitting.md)",
+    )
 
     p = command(
         "sweep",

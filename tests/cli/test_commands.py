@@ -307,3 +307,35 @@ def test_a_camera_that_misses_the_hair_warns_once(scene_file, tmp_path, capsys):
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("hairjax: warning: the hair covers no pixel")
     assert "bounding box" in lines[0] and "eye" in lines[0]
+
+
+def test_fit_save_scene_writes_the_fitted_parameters(scene_file, tmp_path, monkeypatch):
+    """--save-scene: a scene file holding the fitted model parameters, light and opacity,
+    which renders what --out rendered where the fit fitted the model's parameters alone
+    (the fit is replaced by its result: no compilation)."""
+    from hairjax._fit import FitResult
+
+    scene = hj.load_scene(scene_file)
+    fitted = hj.ShadingParams(kd=(0.3, 0.5, 0.2), ks=0.4, shininess=25.0, kappa=2.5)
+    fields = dict(params=fitted, initial=scene.params, fitted=("kd",), loss=[1.0], steps=1, time_s=0.1)
+    fields |= dict(geometry_s=0.1, std_error={"kd": None}, undetermined=(), rmse=0.5, termination="converged")
+    result = FitResult(**fields)
+    monkeypatch.setattr("hairjax._fit.fit", lambda *args, **kwargs: result)
+    target, out, saved = tmp_path / "t.exr", tmp_path / "fitted.exr", tmp_path / "fitted.toml"
+    hj.write_image(target, np.zeros((30, 40, 4)))
+    argv = ["fit", str(scene_file), "--target", str(target), "-q", "--out", str(out)]
+    assert main([*argv, "--save-scene", str(saved)]) == 0
+    assert "kd = [0.3, 0.5, 0.2]" in saved.read_text() and "shininess = 25.0" in saved.read_text()
+    again = hj.load_scene(saved)
+    assert np.array_equal(np.asarray(again.params.kd), np.asarray(fitted.kd))
+    np.testing.assert_array_equal(hj.read_image(out), np.asarray(hj.render(again), dtype=np.float32))
+    light = hj.LightParams(direction=(0.1, -0.9, -0.4), color=(1.0, 0.8, 0.6))
+    monkeypatch.setattr(
+        "hairjax._fit.fit",
+        lambda *a, **k: FitResult(**fields, light=light, initial_light=light, alpha=0.25, initial_alpha=0.5),
+    )
+    assert main([*argv, "--save-scene", str(saved)]) == 0
+    again = hj.load_scene(saved)
+    assert again.light.direction == (0.1, -0.9, -0.4) and again.light.color == (1.0, 0.8, 0.6)
+    assert np.all(again.strands.alpha == 0.25)
+    assert main([*argv, "--save-scene", str(tmp_path / "fitted.json")]) == 2  # a scene file is .toml
