@@ -52,7 +52,6 @@ from ._scene._camera import Camera as Camera
 from ._scene._file import default_scene_path as default_scene_path
 from ._scene._file import load_scene as load_scene
 from ._scene._file import scene_for_hair as scene_for_hair
-from ._scene._save import save_scene as save_scene
 from ._scene._framing import frame_camera as frame_camera
 from ._scene._framing import key_light as key_light
 from ._scene._light import Light as Light
@@ -61,6 +60,7 @@ from ._scene._procedural import combed as combed
 from ._scene._procedural import furball as furball
 from ._scene._procedural import scalp as scalp
 from ._scene._reference import ReferenceSettings as ReferenceSettings
+from ._scene._save import save_scene as save_scene
 from ._scene._scene import PatchGeometry as PatchGeometry
 from ._scene._scene import Scene as Scene
 from ._scene._strands import Strands as Strands

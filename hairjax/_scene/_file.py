@@ -20,9 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import re
 import tomllib
-import warnings
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -35,10 +33,12 @@ from .._geometry._shadows import shadow_method_class, shadow_method_names
 from .._shading import Streaks, shading_model_class, shading_model_names
 from ._camera import Camera
 from ._framing import WIDTH_FRACTION, bounding_sphere, frame_camera, key_light
-from ._hair_table import HAIR_KEYS, PROCEDURAL_SOURCES, read_hair, read_patches
+from ._hair_table import PROCEDURAL_SOURCES, read_hair, read_patches
+from ._keys import PATCH_KEYS, TOP_LEVEL_KEYS, field_names, scene_tables
 from ._light import Light
 from ._occluder import OCCLUDER_KINDS, Occluder
-from ._reference import REFERENCE_KEYS, ReferenceSettings, read_reference
+from ._overrides import UNSET, blamed_on, with_overrides
+from ._reference import ReferenceSettings, read_reference
 from ._scene import Scene
 from ._table import Table, build, describe, given
 
@@ -54,84 +54,9 @@ __all__ = [
 ]
 
 
-class _Unset:
-    """The value of an override that removes its key (`hairjax … --unset table.key`)."""
-
-    def __repr__(self) -> str:
-        return "UNSET"
-
-
-UNSET: Any = _Unset()
-
 LIGHT_KINDS = ("directional", "point")
 CAMERA_FRAMES = ("auto",)
 MESH_FILE_SUFFIXES = (".obj",)
-
-_FIXED_TABLES: dict[str, tuple[str, ...]] = {
-    "hair": HAIR_KEYS,
-    "camera": (
-        "frame",
-        "eye",
-        "target",
-        "up",
-        "fov",
-        "width",
-        "height",
-        "near",
-        "azimuth",
-        "elevation",
-        "zoom",
-    ),
-    "light": ("kind", "direction", "position", "color"),
-    "occluder": ("kind", "center", "radius", "color", "path"),
-    "background": ("color",),
-    "streaks": ("texels", "width", "contrast", "seed"),
-    # Read by `hairjax animate` only (hairjax/_animate.py); a still render shows the rest pose.
-    "animation": ("amplitude", "frequency", "phase", "inertia", "frames"),
-    # Read by `hairjax reference` only (hairjax/_reference/): the fibres' BSDF and the path tracer.
-    "reference": REFERENCE_KEYS,
-}
-TOP_LEVEL_KEYS = ("name",)
-# [hair]'s keys that `read_patches` reads into `Scene.patches`.
-PATCH_KEYS = (
-    "geometry",
-    "patch_width",
-    "opaque_core",
-    "patch_strands",
-    "patch_strand_alpha",
-    "patch_strand_tips",
-)
-
-
-def _union(groups) -> tuple[str, ...]:
-    return tuple(dict.fromkeys(k for keys in groups for k in keys))
-
-
-def scene_tables() -> dict[str, tuple[str, ...]]:
-    """Every table of a scene file and the keys it may hold. [shading], [shadows] and
-    [ordering] take the keys of every registered model, method and ordering."""
-    tables = dict(_FIXED_TABLES)
-    tables["shading"] = ("model",) + _union(shading_model_class(n).table_keys for n in shading_model_names())
-    tables["shadows"] = ("method",) + _union(
-        tuple(f.name for f in dataclasses.fields(shadow_method_class(n))) for n in shadow_method_names()
-    )
-    tables["ordering"] = ("method",) + _union(
-        tuple(f.name for f in dataclasses.fields(ordering_class(n))) for n in ordering_names()
-    )
-    order = (
-        "hair",
-        "camera",
-        "light",
-        "shading",
-        "shadows",
-        "ordering",
-        "occluder",
-        "background",
-        "streaks",
-        "animation",
-        "reference",
-    )
-    return {name: tables[name] for name in order}
 
 
 def default_scene_path() -> Path:
@@ -164,104 +89,6 @@ def load_scene(path: str | os.PathLike, overrides: Mapping[str, Any] | None = No
     data = with_overrides(data, overrides or {}, str(path))
     # Resolve now so the scene does not depend on the working directory later.
     return scene_from_dict(data, path.resolve().parent, path.stem, source=str(path))
-
-
-def with_overrides(data: Mapping[str, Any], overrides: Mapping[str, Any], where: str) -> dict[str, Any]:
-    """`data` (parsed TOML) with each `"table.key": value` of `overrides` set, in a copy; a
-    value `UNSET` removes the key. Setting (or removing) `shading.model`, `shadows.method`
-    or `ordering.method` also removes the table's other keys from `data` that the new
-    choice does not read, with a warning naming them (`_switched`).
-
-    **Raises:** `SceneError` naming the key, and the allowed tables or keys, for a table
-    or key that no scene file may hold (a typo); values are checked later, with the file's.
-    """
-    out: dict[str, Any] = {k: dict(v) if isinstance(v, Mapping) else v for k, v in data.items()}
-    tables = scene_tables()
-    for dotted, value in overrides.items():
-        if dotted in TOP_LEVEL_KEYS:
-            if value is UNSET:
-                out.pop(dotted, None)
-            else:
-                out[dotted] = value
-            continue
-        table, _, key = dotted.partition(".")
-        if table not in tables:
-            raise SceneError(f"{where}: no table [{table}] for {dotted!r}; tables: {', '.join(tables)}")
-        if key not in tables[table]:
-            raise SceneError(
-                f"{where}: [{table}] has no key {key!r} ({dotted!r}); keys: {', '.join(tables[table])}"
-            )
-        entry = out.setdefault(table, {})
-        if not isinstance(entry, dict):  # the file holds `table = value`, not a table: refused later
-            raise SceneError(f"{where}: {table} is not a table, so {dotted!r} cannot be set")
-        if value is UNSET:
-            entry.pop(key, None)
-        else:
-            entry[key] = value
-    _switched(out, overrides, where)
-    return out
-
-
-def _choice_keys(table: str, choice: Any) -> tuple[str, ...] | None:
-    """The keys (besides the choice's own) that `table`'s `choice` reads, or None for a
-    name that is not registered (refused later, with the allowed names)."""
-    if table == "shading":
-        cls = shading_model_class(choice) if choice in shading_model_names() else None
-        return None if cls is None else cls.table_keys
-    names, lookup = (
-        (shadow_method_names(), shadow_method_class)
-        if table == "shadows"
-        else (ordering_names(), ordering_class)
-    )
-    return _field_names(lookup(choice)) if choice in names else None
-
-
-# The tables whose one key chooses a registered class, that key and the default choice.
-_CHOICES = (
-    ("shading", "model", "kajiya-kay"),
-    ("shadows", "method", "opacity-maps"),
-    ("ordering", "method", "bins"),
-)
-
-
-def _switched(out: dict[str, Any], overrides: Mapping[str, Any], where: str) -> None:
-    """Where `overrides` set (or removed) a table's choice, drop the keys of that table
-    that came from the file and that the new choice does not read (the default scene's
-    `shadows.maps` when switching to "exact"), and warn once naming them."""
-    for table, key, default in _CHOICES:
-        entry = out.get(table)
-        if f"{table}.{key}" not in overrides or not isinstance(entry, dict):
-            continue
-        choice = entry.get(key, default)
-        reads = _choice_keys(table, choice)
-        if reads is None:
-            continue
-        dropped = [k for k in entry if k != key and k not in reads and f"{table}.{k}" not in overrides]
-        for k in dropped:
-            del entry[k]
-        if dropped:
-            keys = ", ".join(f"{table}.{k}" for k in dropped)
-            warnings.warn(f"{where}: {table}.{key} = {choice!r} does not read {keys}: dropped", stacklevel=3)
-
-
-_DOTTED = re.compile(r"\b([a-z_]+\.[a-z_]+)\b")
-
-
-def blamed_on(err: SceneError, where: str, origins: Mapping[str, str]) -> SceneError:
-    """`err` (a message `where: …`) blamed on the command-line option that set the key it
-    names first (`origins`: `"table.key"` → e.g. `"--set shading.kd=-1"`), or `err`
-    itself when that key came from the file."""
-    text = str(err)
-    if not text.startswith(f"{where}: "):
-        return err
-    rest = text[len(where) + 2 :]
-    first = _DOTTED.search(rest)
-    if first is None or first.group(1) not in origins:
-        return err
-    try:
-        return type(err)(f"{origins[first.group(1)]}: {rest}")  # SceneTooLarge stays one
-    except TypeError:  # a subclass whose constructor takes other arguments
-        return SceneError(f"{origins[first.group(1)]}: {rest}")
 
 
 def scene_from_dict(
@@ -443,12 +270,8 @@ def _read_method(where: str, table: Table, default: str, names, lookup):
     """[shadows] or [ordering]: the registered class named by `method`, built from its
     dataclass fields (their checks give the ranges)."""
     cls = lookup(table.choice("method", names) or default)
-    table.only_keys_of("method", cls.method, _field_names(cls))
+    table.only_keys_of("method", cls.method, field_names(cls))
     return build(where, cls, **table.options(cls))
-
-
-def _field_names(cls) -> tuple[str, ...]:
-    return tuple(f.name for f in dataclasses.fields(cls))
 
 
 def _read_streaks(table: Table) -> dict[str, Any]:
@@ -525,10 +348,10 @@ def scene_for_hair(
         _, radius = bounding_sphere(scene.strands.points)
         # Fires when every point coincides: frame_camera then frames one world unit.
         radius = radius if radius > 0 else 1.0
-        width = WIDTH_FRACTION * radius
-        strands = scene.strands.replace(width=np.full(scene.strands.num_strands, width), width_units="world")
+        ribbon = WIDTH_FRACTION * radius
+        strands = scene.strands.replace(width=np.full(scene.strands.num_strands, ribbon), width_units="world")
         tables = dict(scene.file_tables or {})
-        tables["hair"] = {**tables.get("hair", {}), "width": width, "width_units": "world"}
+        tables["hair"] = {**tables.get("hair", {}), "width": ribbon, "width_units": "world"}
         scene = scene.replace(strands=strands, file_tables=tables)
     if not any(key.startswith("light.") for key in overrides):
         scene = scene.replace(light=key_light(scene.camera))

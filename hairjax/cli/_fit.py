@@ -41,7 +41,9 @@ def _sizes(outputs: list[Output], scene) -> list[tuple[Output, int]]:
     by side), a small text file otherwise."""
     width, height = scene.camera.width, scene.camera.height
     sizes = {"--out": image_bytes, "--plot": lambda p, w, h: image_bytes(p, 3 * w, h)}
-    return [(o, sizes[o.option](o.path, width, height) if o.option in sizes else FILE_OVERHEAD) for o in outputs]
+    return [
+        (o, sizes[o.option](o.path, width, height) if o.option in sizes else FILE_OVERHEAD) for o in outputs
+    ]
 
 
 def fitted_scene(scene, result):
