@@ -99,13 +99,14 @@ def test_size_wins_over_set(scene_file):
     assert scene.camera.width == 20
 
 
-def test_switching_the_shadow_method_drops_the_keys_it_does_not_read(scene_file, capsys):
+def test_switching_the_shadow_method_drops_the_keys_it_does_not_read(scene_file, tmp_path, capsys):
     """The file's [shadows] has maps = 4 and resolution = 32; "exact" reads resolution
     only: maps is dropped, with one warning naming it."""
     with pytest.warns(UserWarning, match=r"shadows\.method = 'exact' does not read shadows\.maps: dropped$"):
         scene = _scene(scene_file, "--set", 'shadows.method="exact"')
     assert scene.shadows.method == "exact" and scene.shadows.resolution == 32
-    assert main(["render", "--set", "shadows.method=exact", "--size", "8", "-o", "x.exr", "-q"]) == 0
+    out = str(tmp_path / "x.exr")
+    assert main(["render", "--set", "shadows.method=exact", "--size", "8", "-o", out, "-q"]) == 0
     err = capsys.readouterr().err.strip().splitlines()
     warning = "shadows.method = 'exact' does not read shadows.maps: dropped"
     assert err == [f"hairjax: warning: {hj.default_scene_path()}: {warning}"]
