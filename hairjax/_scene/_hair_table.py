@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .._errors import SceneError
+from .._io import FORMATS, load_hair
 from ._procedural import combed, furball, scalp
 from ._scene import PatchGeometry
 from ._strands import WIDTH_UNITS, Strands
@@ -14,7 +15,7 @@ from ._table import Table, given
 __all__ = ["read_hair", "read_patches", "HAIR_KEYS", "HAIR_FILE_SUFFIXES", "PROCEDURAL_SOURCES"]
 
 PROCEDURAL_SOURCES = ("furball", "scalp", "combed")
-HAIR_FILE_SUFFIXES = (".hair", ".tfx", ".ply")
+HAIR_FILE_SUFFIXES = tuple(FORMATS)  # every format hairjax/_io reads
 
 # Defaults that belong to the file format rather than to a dataclass: a scene's hair is
 # semi-transparent unless the file says otherwise, whatever its source.
@@ -159,7 +160,8 @@ def _generate_hair(table: Table, source: str, alpha: float, width: float) -> Str
 
 
 def _load_hair_file(table: Table, source: str, base_dir: Path, alpha: float, width: float) -> Strands:
-    """Read a .hair/.tfx/.ply file; a relative path is relative to the scene's directory."""
+    """Read a hair file (`HAIR_FILE_SUFFIXES`); a relative path is relative to the scene's
+    directory."""
     path = Path(source)
     if not path.is_absolute():
         path = base_dir / path
@@ -171,8 +173,6 @@ def _load_hair_file(table: Table, source: str, base_dir: Path, alpha: float, wid
             f"{source!r}; relative paths are resolved against the scene "
             "file's directory)"
         )
-    from .._io import load_hair  # Lazy: only file sources need the readers.
-
     try:
         return load_hair(path, alpha=alpha, width=width)
     except (OSError, ValueError) as e:  # ValueError includes HairFormatError.

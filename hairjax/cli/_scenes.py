@@ -3,8 +3,9 @@
 `--set table.key=value` reads `value` as TOML (`0.3`, `[1, 0, 0]`, `true`, `"furball"`);
 text that is not TOML is taken as a string, so `--set hair.source=furball` works. Every
 override then passes the scene file's own checks (`load_scene(path, overrides)`), so a
-typo names the key and the allowed ones. A hair file (.hair, .tfx, .ply) given where a
-scene is expected is framed automatically (`[camera] frame = "auto"`, docs/scenes.md).
+typo names the key and the allowed ones. A hair file (any suffix of hairjax/_io's
+`FORMATS`) given where a scene is expected is framed automatically (`[camera] frame =
+"auto"`, docs/scenes.md); any other suffix but .toml is an unknown file type.
 """
 
 from __future__ import annotations
@@ -72,6 +73,13 @@ def load_cli_scene(args: argparse.Namespace, path: Path | None):
     from .._scene._file import load_scene
 
     path = scene_path(path)
+    if path.suffix and path.suffix.lower() not in (".toml",) + HAIR_FILE_SUFFIXES:
+        from .._errors import SceneError
+
+        known = ", ".join(HAIR_FILE_SUFFIXES)
+        raise SceneError(
+            f"{path}: unknown file type {path.suffix!r} (known: .toml scenes; hair files {known})"
+        )
     overrides = scene_overrides(args, path)
     if path.suffix.lower() in HAIR_FILE_SUFFIXES:
         from .._scene._file import scene_for_hair
