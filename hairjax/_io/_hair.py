@@ -120,15 +120,15 @@ def parse_hair(data: bytes, path) -> dict:
     # The ranges of docs/scenes.md "Input ranges": a thickness is a fibre diameter, a
     # transparency a fraction of light let through.
     if "thickness" in attributes:
-        bad = first_outside(attributes["thickness"], lo=0.0, lo_open=True)
-        if bad is not None:
-            value = attributes["thickness"][bad]
-            fail(f"the thickness of point {bad} is {value:g}; it must be finite and > 0")
+        outside = first_outside(attributes["thickness"], lo=0.0, lo_open=True)
+        if outside is not None:
+            value = attributes["thickness"][outside]
+            fail(f"the thickness of point {outside} is {value:g}; it must be finite and > 0")
     if "transparency" in attributes:
-        bad = first_outside(attributes["transparency"], lo=0.0, hi=1.0)
-        if bad is not None:
-            value = attributes["transparency"][bad]
-            fail(f"the transparency of point {bad} is {value:g}; it must lie in [0, 1]")
+        outside = first_outside(attributes["transparency"], lo=0.0, hi=1.0)
+        if outside is not None:
+            value = attributes["transparency"][outside]
+            fail(f"the transparency of point {outside} is {value:g}; it must lie in [0, 1]")
     color = None
     if "colour" in layout:
         color = np.frombuffer(data, "<f4", 3 * n_points, layout["colour"]).reshape(n_points, 3)

@@ -166,11 +166,11 @@ def parse_tfx(data: bytes, path) -> dict:
         ("strand_thickness", "thickness of strand", 0.0, True),
         ("vertex_color", "colour (RGBA) of vertex", 0.0, False),
     ):
-        bad = None if name not in attributes else first_outside(attributes[name], lo=lo, lo_open=lo_open)
-        if bad is not None:
-            value = np.atleast_1d(attributes[name][bad])
+        outside = None if name not in attributes else first_outside(attributes[name], lo=lo, lo_open=lo_open)
+        if outside is not None:
+            value = np.atleast_1d(attributes[name][outside])
             rule = "finite and > 0" if lo_open else "finite and ≥ 0"
-            fail(f"the {what} {bad} is {', '.join(f'{v:g}' for v in value)}; it must be {rule}")
+            fail(f"the {what} {outside} is {', '.join(f'{v:g}' for v in value)}; it must be {rule}")
 
     return {
         "points": xyz.astype(np.float64),

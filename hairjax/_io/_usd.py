@@ -30,12 +30,14 @@ The names are those of the USD schema reference for `UsdGeomBasisCurves`,
 from __future__ import annotations
 
 import functools
+import re
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from .._errors import HairFormatError, MissingDependency
+from .._scene._strands import first_outside
 
 __all__ = ["read_usd", "write_usd", "USD_SUFFIXES"]
 
@@ -74,9 +76,14 @@ def read_usd(path) -> dict:
     Usd, UsdGeom = pxr.Usd, pxr.UsdGeom
     path = Path(path)
     try:
+        with open(path, "rb"):  # the reason a file cannot be read, in the words of the others
+            pass
+    except OSError as error:
+        raise HairFormatError(path, f"cannot read the file: {error.strerror or error}") from error
+    try:
         stage = Usd.Stage.Open(str(path))
     except pxr.Tf.ErrorException as err:  # fires for a file USD cannot parse
-        raise HairFormatError(path, f"not a USD stage USD can open: {_first_line(err)}") from err
+        raise HairFormatError(path, f"not a USD stage USD can open: {_tf_message(err)}") from err
     if stage is None:  # fires when USD declines the file without raising
         raise HairFormatError(path, "not a USD stage USD can open")
     z_up = UsdGeom.GetStageUpAxis(stage) == UsdGeom.Tokens.z
@@ -113,8 +120,12 @@ def _fail(path, prim, problem: str):
     raise HairFormatError(path, f"{prim.GetPath()}: {problem}")
 
 
-def _first_line(err: Exception) -> str:
-    return next((line.strip() for line in str(err).splitlines() if line.strip()), type(err).__name__)
+def _tf_message(err: Exception) -> str:
+    """The message of USD's first error, without the C++ function, file and line that
+    precede it (`Error in 'f' at line n in file x.cpp : 'message'`)."""
+    first = next((line.strip() for line in str(err).splitlines() if line.strip()), type(err).__name__)
+    match = re.search(r"^Error in .* : '(.*?)'?$", first)
+    return match.group(1) if match else first
 
 
 def _read_prim(curves, time, fail) -> dict | None:
@@ -138,6 +149,9 @@ def _read_prim(curves, time, fail) -> dict | None:
         widths = _per_point(
             np.asarray(widths, np.float64), curves.GetWidthsInterpolation(), counts, "widths", fail
         )
+        outside = first_outside(widths, lo=0.0, lo_open=True)  # docs/scenes.md "Input ranges"
+        if outside is not None:
+            fail(f"the width of point {outside} is {widths[outside]:g}; widths must be finite and > 0")
     color = None
     primvar = curves.GetDisplayColorPrimvar()
     if primvar.HasAuthoredValue():

@@ -1,0 +1,51 @@
+"""The [hair] table takes every hair file format hairjax/_io reads (`FORMATS`): the new
+USC-HairSalon and USD files are scene sources too, and the allowed list names them."""
+
+from __future__ import annotations
+
+import struct
+
+import numpy as np
+import pytest
+
+from hairjax._errors import SceneError
+from hairjax._io import FORMATS
+from hairjax._scene._file import load_scene
+from hairjax._scene._hair_table import HAIR_FILE_SUFFIXES
+
+POINTS = np.array([[0, 0, 0], [0, 1, 0], [0, 2, 1], [1, 0, 0], [1, 1, 0]], np.float32)
+
+
+def test_suffixes_are_the_readers():
+    assert HAIR_FILE_SUFFIXES == tuple(FORMATS)
+    assert {".data", ".usd", ".usda", ".usdc", ".usdz"} <= set(HAIR_FILE_SUFFIXES)
+
+
+def test_a_data_file_as_scene_source(tmp_path):
+    body = struct.pack("<i", 2)
+    for part in (POINTS[:3], POINTS[3:]):
+        body += struct.pack("<i", len(part)) + part.tobytes()
+    (tmp_path / "h.data").write_bytes(body)
+    (tmp_path / "s.toml").write_text('[hair]\nsource = "h.data"\nscale = 2.0\n')
+    scene = load_scene(tmp_path / "s.toml")
+    assert scene.strands.offsets.tolist() == [0, 3, 5]
+    assert np.array_equal(scene.strands.points, 2.0 * POINTS)
+
+
+def test_a_usd_file_as_scene_source(tmp_path):
+    UsdGeom = pytest.importorskip("pxr.UsdGeom")
+    from pxr import Usd, Vt
+
+    stage = Usd.Stage.CreateNew(str(tmp_path / "h.usda"))
+    curves = UsdGeom.BasisCurves.Define(stage, "/hair")
+    curves.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(POINTS))
+    curves.CreateCurveVertexCountsAttr(Vt.IntArray([3, 2]))
+    stage.GetRootLayer().Save()
+    (tmp_path / "s.toml").write_text('[hair]\nsource = "h.usda"\n')
+    assert load_scene(tmp_path / "s.toml").strands.offsets.tolist() == [0, 3, 5]
+
+
+def test_an_unknown_source_suffix_lists_the_formats(tmp_path):
+    (tmp_path / "s.toml").write_text('[hair]\nsource = "h.xyz"\n')
+    with pytest.raises(SceneError, match=r"hair\.source .*\.data/\.usd/\.usda/\.usdc/\.usdz file"):
+        load_scene(tmp_path / "s.toml")
