@@ -79,11 +79,16 @@ FORMATS = {
 
 
 def _format(path: Path, writing: bool = False) -> HairFormat:
+    """The format of `path` by its suffix; `HairFormatError` listing the known suffixes
+    (with `writing`, those hairjax writes) when it has none."""
     suffix = path.suffix.lower()
-    if suffix not in FORMATS or (writing and FORMATS[suffix].write is None):
-        known = [s for s, f in FORMATS.items() if f.write is not None or not writing]
-        kind = "writable hair file types" if writing else "known"
-        raise HairFormatError(path, f"unknown file type {path.suffix!r} ({kind}: {', '.join(known)})")
+    if suffix not in FORMATS:
+        raise HairFormatError(path, f"unknown file type {path.suffix!r} (known: {', '.join(FORMATS)})")
+    if writing and FORMATS[suffix].write is None:
+        writable = ", ".join(s for s, f in FORMATS.items() if f.write is not None)
+        raise HairFormatError(
+            path, f"hairjax reads {FORMATS[suffix].name} files but does not write them (writes: {writable})"
+        )
     return FORMATS[suffix]
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .._errors import SceneError
-from .._io import FORMATS, load_hair
+from .._io import FORMATS
 from ._procedural import combed, furball, scalp
 from ._scene import PatchGeometry
 from ._strands import WIDTH_UNITS, Strands
@@ -173,6 +173,8 @@ def _load_hair_file(table: Table, source: str, base_dir: Path, alpha: float, wid
             f"{source!r}; relative paths are resolved against the scene "
             "file's directory)"
         )
+    from .._io import load_hair  # at call time, so that tests can replace it
+
     try:
         return load_hair(path, alpha=alpha, width=width)
     except (OSError, ValueError) as e:  # ValueError includes HairFormatError.

@@ -161,7 +161,7 @@ def first_outside(values, lo: float = -np.inf, hi: float = np.inf, lo_open: bool
     # Comparisons with NaN are False, so NaN counts as outside; ±inf fails isfinite.
     inside = np.isfinite(values) & (values > lo if lo_open else values >= lo) & (values <= hi)
     if values.ndim > 1:
-        inside = inside.reshape(len(values), -1).all(axis=1)
+        inside = inside.all(axis=tuple(range(1, values.ndim)))
     bad = np.flatnonzero(~inside)
     return int(bad[0]) if bad.size else None
 

@@ -18,6 +18,7 @@ import sys
 import numpy as np
 import pytest
 
+import hairjax as hj
 from hairjax._errors import HairFormatError
 from hairjax._io import load_hair, save_hair
 from hairjax._scene._strands import Strands
@@ -88,7 +89,7 @@ def test_reads_what_the_reference_writes(tmp_path):
 
 
 def test_reference_reads_what_hairjax_writes(tmp_path):
-    path = save_hair(Strands(GRID.reshape(-1, 3), np.arange(7) * 100, 1.0, 1.0), tmp_path / "out.data")
+    path = hj.save_hair(Strands(GRID.reshape(-1, 3), np.arange(7) * 100, 1.0, 1.0), tmp_path / "out.data")
     assert np.array_equal(reference_read(path), GRID)
     assert path.stat().st_size == 4 + 6 * (4 + 100 * 12)
 
@@ -140,3 +141,18 @@ def test_malformed(tmp_path, data, message):
     path.write_bytes(data)
     with pytest.raises(HairFormatError, match=rf"^{path}: .*{message}"):
         load_hair(path)
+
+
+def test_save_hair_names_the_formats_it_writes(tmp_path):
+    strands = Strands(GRID.reshape(-1, 3), np.arange(7) * 100, 1.0, 1.0)
+    writes = r"\(writes: \.data, \.usd, \.usda, \.usdc, \.usdz\)"
+    with pytest.raises(
+        HairFormatError,
+        match=rf"out\.hair: hairjax reads Cem Yuksel HAIR files but does not write them {writes}$",
+    ):
+        save_hair(strands, tmp_path / "out.hair")
+    with pytest.raises(
+        HairFormatError, match=r"out\.xyz: unknown file type '\.xyz' \(known: \.hair, .*\.usdz\)$"
+    ):
+        save_hair(strands, tmp_path / "out.xyz")
+    assert list(tmp_path.iterdir()) == []
