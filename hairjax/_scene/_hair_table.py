@@ -80,12 +80,20 @@ def read_hair(table: Table, base_dir: Path) -> Strands:
     if is_file:
         strands = _load_hair_file(table, source, base_dir, alpha, width)
     else:
-        strands = _generate_hair(table, source, alpha, width)
+        try:
+            strands = _generate_hair(table, source, alpha, width)
+        except SceneError:
+            raise
+        except ValueError as e:  # e.g. a length that takes points beyond the coordinate bound
+            raise SceneError(f"{where}: the {source!r} hair: {e}") from e
 
     if scale is not None or translate is not None:
-        strands = strands.transformed(
-            1.0 if scale is None else scale, (0.0, 0.0, 0.0) if translate is None else translate
-        )
+        try:
+            strands = strands.transformed(
+                1.0 if scale is None else scale, (0.0, 0.0, 0.0) if translate is None else translate
+            )
+        except ValueError as e:  # a point moved beyond the coordinate bound (docs/scenes.md)
+            raise SceneError(f"{where}: after hair.scale and hair.translate, {e}") from e
     if color is not None:
         strands = strands.replace(color=color)  # Strands broadcasts it to every point.
     units = table.choice("width_units", WIDTH_UNITS)

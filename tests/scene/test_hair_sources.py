@@ -49,3 +49,21 @@ def test_an_unknown_source_suffix_lists_the_formats(tmp_path):
     (tmp_path / "s.toml").write_text('[hair]\nsource = "h.xyz"\n')
     with pytest.raises(SceneError, match=r"hair\.source .*\.data/\.usd/\.usda/\.usdc/\.usdz file"):
         load_scene(tmp_path / "s.toml")
+
+
+@pytest.mark.parametrize("keys", ["scale = 1e19", "translate = [0, -2e18, 0]"])
+def test_scale_and_translate_beyond_the_coordinate_bound(tmp_path, keys):
+    path = tmp_path / "s.toml"
+    path.write_text(f'[hair]\nsource = "furball"\nstrands = 4\n{keys}\n')
+    with pytest.raises(
+        SceneError,
+        match=rf"^{path}: after hair\.scale and hair\.translate, point \d+ = .* lies beyond ±1e\+18",
+    ):
+        load_scene(path)
+
+
+def test_procedural_hair_beyond_the_coordinate_bound_names_the_file(tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text('[hair]\nsource = "furball"\nstrands = 4\nlength = 1e19\n')
+    with pytest.raises(SceneError, match=rf"^{path}: the 'furball' hair: point \d+ = .* lies beyond ±1e\+18"):
+        load_scene(path)
