@@ -92,7 +92,12 @@ def read_usd(path) -> dict:
     for prim in stage.Traverse():
         if prim.IsA(UsdGeom.BasisCurves):
             fail = functools.partial(_fail, path, prim)
-            part = _read_prim(UsdGeom.BasisCurves(prim), time, fail)
+            try:
+                part = _read_prim(UsdGeom.BasisCurves(prim), time, fail)
+            except (TypeError, ValueError) as err:  # a value of the wrong type (not a HairFormatError)
+                if isinstance(err, HairFormatError):
+                    raise
+                fail(f"an attribute holds a value of the wrong type ({err})")
             if part is not None:
                 parts.append(part)
     if not parts:
@@ -143,7 +148,12 @@ def _read_prim(curves, time, fail) -> dict | None:
             f"and add up to the {len(points)} points"
         )
     matrix = np.asarray(curves.ComputeLocalToWorldTransform(time), dtype=np.float64)
-    points = points @ matrix[:3, :3] + matrix[3, :3]  # USD's row vectors: p · M
+    if not (np.isfinite(points).all() and np.isfinite(matrix).all()):
+        fail("its points or its transform hold a NaN or infinite value")
+    # Points within the coordinate bound and a finite transform: the product is finite
+    # unless the transform scales beyond it, which Strands then refuses naming the point.
+    with np.errstate(over="ignore", invalid="ignore"):
+        points = points @ matrix[:3, :3] + matrix[3, :3]  # USD's row vectors: p · M
     widths = curves.GetWidthsAttr().Get(time)
     if widths is not None:
         widths = _per_point(

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import struct
 import sys
+import warnings
 
 import numpy as np
 import pytest
@@ -156,3 +157,26 @@ def test_save_hair_names_the_formats_it_writes(tmp_path):
     ):
         save_hair(strands, tmp_path / "out.xyz")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_corrupted_files_give_one_error_or_finite_strands(tmp_path):
+    """Seeded byte flips in a good file: a HairFormatError naming it, or finite strands
+    (possibly with the dropped-strand warning); never another exception or a numpy warning."""
+    good = tmp_path / "good.data"
+    reference_write(good, GRID[:3, :5])
+    data = good.read_bytes()
+    rng = np.random.default_rng(31)
+    path = tmp_path / "corrupt.data"
+    for _ in range(200):
+        corrupted = bytearray(data)
+        for at in rng.integers(0, len(data), size=rng.integers(1, 4)):
+            corrupted[at] = int(rng.integers(0, 256))
+        path.write_bytes(bytes(corrupted))
+        try:
+            with warnings.catch_warnings():
+                warnings.filterwarnings("ignore", "dropped", UserWarning)
+                strands = load_hair(path)
+        except HairFormatError as error:
+            assert str(error).startswith(f"{path}: ")
+        else:
+            assert np.isfinite(strands.points).all()

@@ -234,3 +234,24 @@ def test_missing_usd_core_names_the_pip_line(tmp_path, monkeypatch):
     path.write_text("#usda 1.0\n")
     with pytest.raises(MissingDependency, match=r"usd-core.*pip install 'hairjax\[usd\]'"):
         load_hair(path)
+
+
+@needs_usd
+def test_corrupted_text_gives_one_error_or_finite_strands(tmp_path):
+    """Seeded byte flips in a .usda (text; USD's own crate reader can crash on flipped bytes
+    of a .usdc, so binary files are not fuzzed here): a HairFormatError naming the file, or
+    finite strands; never another exception or a numpy warning."""
+    data = two_prim_stage(tmp_path / "good.usda").read_bytes()
+    rng = np.random.default_rng(17)
+    path = tmp_path / "corrupt.usda"
+    for _ in range(100):
+        corrupted = bytearray(data)
+        for at in rng.integers(0, len(data), size=rng.integers(1, 4)):
+            corrupted[at] = int(rng.integers(0, 256))
+        path.write_bytes(bytes(corrupted))
+        try:
+            strands = load_hair(path)
+        except HairFormatError as error:
+            assert str(error).startswith(f"{path}: ")
+        else:
+            assert np.isfinite(strands.points).all()
