@@ -31,7 +31,7 @@ system-packages:
 # Reinstall only when the package metadata changes.
 $(STAMP): pyproject.toml | $(BIN)/python system-packages
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[test,reference]'  # reference: Mitsuba, so its tests run
+	$(BIN)/python -m pip install --quiet -e '.[test,reference,usd]'  # reference: Mitsuba, usd: usd-core, so their tests run
 	$(BIN)/python -m ipykernel install --sys-prefix --name python3 >/dev/null  # the notebooks' kernelspec
 	touch $(STAMP)
 

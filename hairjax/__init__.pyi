@@ -43,6 +43,7 @@ from ._geometry._stage import Geometry as Geometry
 from ._geometry._stage import geometry_stage as geometry_stage
 from ._io import hair_info as hair_info
 from ._io import load_hair as load_hair
+from ._io import save_hair as save_hair
 from ._io._image import read_image as read_image
 from ._io._image import write_image as write_image
 from ._reference import reference_image as reference_image

@@ -61,3 +61,12 @@ RASTER_SUBPIXEL_BITS = 8
 # texture "should have fully opaque regions"): this share of the strands across a patch
 # reaches alpha 1; the others peak at patch_strand_alpha … 1 − (1 − that)/128.
 PATCH_OPAQUE_STRANDS = 0.5
+
+# Strand points and mesh vertices (docs/model.md §1, docs/scenes.md "Input ranges"): every
+# coordinate within ±COORDINATE_BOUND. The renderers work in float32 (largest finite value
+# 3.4e38), and the projection and the framing square differences of coordinates
+# (|p − eye|², |p − q|²). For points within 5 bounds of the origin on every axis (the hair,
+# and a camera placed a few hair sizes away) a squared distance is at most
+# 3 · (10 · 1e18)² = 3e38, still finite in float32; the perspective divide (§2) is by depths
+# kept ≥ near, so it adds no factor the bound must cover.
+COORDINATE_BOUND = 1e18

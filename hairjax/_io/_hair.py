@@ -32,6 +32,7 @@ import struct
 import numpy as np
 
 from .._errors import HairFormatError
+from .._scene._strands import first_outside
 
 __all__ = ["parse_hair"]
 
@@ -116,12 +117,22 @@ def parse_hair(data: bytes, path) -> dict:
     for name in ("thickness", "transparency"):
         if name in layout:
             attributes[name] = np.frombuffer(data, "<f4", n_points, layout[name]).astype(np.float64)
+    # The ranges of docs/scenes.md "Input ranges": a thickness is a fibre diameter, a
+    # transparency a fraction of light let through.
+    if "thickness" in attributes:
+        outside = first_outside(attributes["thickness"], lo=0.0, lo_open=True)
+        if outside is not None:
+            value = attributes["thickness"][outside]
+            fail(f"the thickness of point {outside} is {value:g}; it must be finite and > 0")
+    if "transparency" in attributes:
+        outside = first_outside(attributes["transparency"], lo=0.0, hi=1.0)
+        if outside is not None:
+            value = attributes["transparency"][outside]
+            fail(f"the transparency of point {outside} is {value:g}; it must lie in [0, 1]")
     color = None
     if "colour" in layout:
         color = np.frombuffer(data, "<f4", 3 * n_points, layout["colour"]).reshape(n_points, 3)
-        if not np.all(np.isfinite(color)):
-            fail("the colour array contains NaN or infinite values")
-        color = color.astype(np.float64)
+        color = color.astype(np.float64)  # its range is checked by Strands, naming the point
 
     return {
         "points": points.astype(np.float64),

@@ -5,7 +5,8 @@ Read: ``v x y z [w]`` (w ignored) and ``f`` with one of the vertex forms ``v``, 
 ones count back from the last vertex read so far); a polygon with n ≥ 3 corners is fanned
 into the triangles (0, k, k + 1). Every other statement (``vt``, ``vn``, ``o``, ``g``,
 ``s``, ``usemtl``, ``mtllib``, comments) is ignored. Anything malformed raises
-`MeshFormatError` naming the file and the line.
+`MeshFormatError` naming the file and the line, a vertex coordinate that is not finite or
+lies beyond ±`COORDINATE_BOUND` (1e18, hairjax/_constants.py) included.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._constants import COORDINATE_BOUND
 from .._errors import MeshFormatError
 
 __all__ = ["parse_obj", "load_obj"]
@@ -60,6 +62,13 @@ def parse_obj(text: str, path) -> tuple[np.ndarray, np.ndarray]:
                 ) from None
             if not all(math.isfinite(c) for c in xyz):
                 raise MeshFormatError(path, number, f"'v' coordinates must be finite: {raw.strip()!r}")
+            if not all(abs(c) <= COORDINATE_BOUND for c in xyz):
+                raise MeshFormatError(
+                    path,
+                    number,
+                    f"'v' coordinates must lie within ±{COORDINATE_BOUND:g} (the bound that keeps the "
+                    f"float32 projection finite, docs/scenes.md): {raw.strip()!r}",
+                )
             vertices.append(xyz)
         elif words[0] == "f":
             if len(words) < 4:

@@ -231,8 +231,7 @@ def _strands_from(values: dict, elements, fail) -> dict:
             color /= 255.0
         elif kinds != {"f"}:
             fail("vertex colours must be uchar (0..255) or float; got another type")
-        if not np.all(np.isfinite(color)):
-            fail("the vertex colours contain NaN or infinite values")
+        # Their range (finite, ≥ 0) is checked by Strands, which names the point.
     attributes = {
         prop: np.array(vertex[prop]) for prop in vprops if prop not in ("x", "y", "z", "red", "green", "blue")
     }

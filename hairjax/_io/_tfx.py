@@ -43,6 +43,7 @@ import struct
 import numpy as np
 
 from .._errors import HairFormatError
+from .._scene._strands import first_outside
 
 __all__ = ["parse_tfx", "tfx_version"]
 
@@ -160,6 +161,16 @@ def parse_tfx(data: bytes, path) -> dict:
         if name != "positions":
             values = read(name)
             attributes[name] = values.astype(np.int64 if values.dtype.kind == "u" else np.float64)
+    # The ranges of docs/scenes.md "Input ranges" (each rule's name, the value's, the range).
+    for name, what, lo, lo_open in (
+        ("strand_thickness", "thickness of strand", 0.0, True),
+        ("vertex_color", "colour (RGBA) of vertex", 0.0, False),
+    ):
+        outside = None if name not in attributes else first_outside(attributes[name], lo=lo, lo_open=lo_open)
+        if outside is not None:
+            value = np.atleast_1d(attributes[name][outside])
+            rule = "finite and > 0" if lo_open else "finite and ≥ 0"
+            fail(f"the {what} {outside} is {', '.join(f'{v:g}' for v in value)}; it must be {rule}")
 
     return {
         "points": xyz.astype(np.float64),

@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .._errors import SceneError
+from .._io import FORMATS
 from ._procedural import combed, furball, scalp
 from ._scene import PatchGeometry
 from ._strands import WIDTH_UNITS, Strands
@@ -14,7 +15,7 @@ from ._table import Table, given
 __all__ = ["read_hair", "read_patches", "HAIR_KEYS", "HAIR_FILE_SUFFIXES", "PROCEDURAL_SOURCES"]
 
 PROCEDURAL_SOURCES = ("furball", "scalp", "combed")
-HAIR_FILE_SUFFIXES = (".hair", ".tfx", ".ply")
+HAIR_FILE_SUFFIXES = tuple(FORMATS)  # every format hairjax/_io reads
 
 # Defaults that belong to the file format rather than to a dataclass: a scene's hair is
 # semi-transparent unless the file says otherwise, whatever its source.
@@ -79,12 +80,20 @@ def read_hair(table: Table, base_dir: Path) -> Strands:
     if is_file:
         strands = _load_hair_file(table, source, base_dir, alpha, width)
     else:
-        strands = _generate_hair(table, source, alpha, width)
+        try:
+            strands = _generate_hair(table, source, alpha, width)
+        except SceneError:
+            raise
+        except ValueError as e:  # e.g. a length that takes points beyond the coordinate bound
+            raise SceneError(f"{where}: the {source!r} hair: {e}") from e
 
     if scale is not None or translate is not None:
-        strands = strands.transformed(
-            1.0 if scale is None else scale, (0.0, 0.0, 0.0) if translate is None else translate
-        )
+        try:
+            strands = strands.transformed(
+                1.0 if scale is None else scale, (0.0, 0.0, 0.0) if translate is None else translate
+            )
+        except ValueError as e:  # a point moved beyond the coordinate bound (docs/scenes.md)
+            raise SceneError(f"{where}: after hair.scale and hair.translate, {e}") from e
     if color is not None:
         strands = strands.replace(color=color)  # Strands broadcasts it to every point.
     units = table.choice("width_units", WIDTH_UNITS)
@@ -159,7 +168,8 @@ def _generate_hair(table: Table, source: str, alpha: float, width: float) -> Str
 
 
 def _load_hair_file(table: Table, source: str, base_dir: Path, alpha: float, width: float) -> Strands:
-    """Read a .hair/.tfx/.ply file; a relative path is relative to the scene's directory."""
+    """Read a hair file (`HAIR_FILE_SUFFIXES`); a relative path is relative to the scene's
+    directory."""
     path = Path(source)
     if not path.is_absolute():
         path = base_dir / path
@@ -171,7 +181,7 @@ def _load_hair_file(table: Table, source: str, base_dir: Path, alpha: float, wid
             f"{source!r}; relative paths are resolved against the scene "
             "file's directory)"
         )
-    from .._io import load_hair  # Lazy: only file sources need the readers.
+    from .._io import load_hair  # at call time, so that tests can replace it
 
     try:
         return load_hair(path, alpha=alpha, width=width)

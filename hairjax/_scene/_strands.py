@@ -13,7 +13,18 @@ from typing import Any
 import numpy as np
 from jaxtyping import ArrayLike
 
-__all__ = ["Strands", "WIDTH_UNITS", "tangents", "unit_rows", "ArrayInput"]
+from .._constants import COORDINATE_BOUND
+
+__all__ = [
+    "Strands",
+    "WIDTH_UNITS",
+    "tangents",
+    "unit_rows",
+    "ArrayInput",
+    "distinct_strands",
+    "select_strands",
+    "first_outside",
+]
 
 # What `np.asarray` reads: an array (NumPy or JAX), a number, or a (nested) list or tuple.
 # (numpy.typing.ArrayLike means the same, but beartype, the tests' run-time checker, takes
@@ -29,14 +40,17 @@ class Strands:
 
     **Fields:**
 
-    - `points`: `float64[P, 3]`, all points, strand after strand.
+    - `points`: `float64[P, 3]`, all points, strand after strand; every coordinate finite
+      and within ±`COORDINATE_BOUND` (1e18, hairjax/_constants.py: float32 squares of
+      distances stay finite).
     - `offsets`: `int64[S + 1]`; strand `s` is `points[offsets[s]:offsets[s + 1]]`.
       Every strand has at least one point.
     - `alpha`: `float64[S]`, opacity a ∈ (0, 1] per strand.
     - `width`: `float64[S]`, ribbon width per strand (> 0), in `width_units`.
     - `width_units`: `"pixels"` (default: the ribbon is `width` pixels wide in every view)
       or `"world"` (`width` world units: w·f/D pixels at depth D, docs/model.md §5).
-    - `color`: optional `float64[P, 3]` per-point colour (multiplies the diffuse term).
+    - `color`: optional `float64[P, 3]` per-point colour, linear RGB, finite and ≥ 0
+      (multiplies the diffuse and ambient terms, docs/model.md §1, §8; above 1 is allowed).
     - `attributes`: other arrays a file carried, by name (e.g. `"thickness"`,
       `"transparency"`, `"strand_uv"`); kept for `hairjax info`, not used for shading.
     """
@@ -67,8 +81,7 @@ class Strands:
         offsets = np.asarray(offsets, dtype=np.int64)
         if points.ndim != 2 or points.shape[1] != 3:
             raise ValueError(f"points must have shape [P, 3], got {points.shape}")
-        if not np.all(np.isfinite(points)):
-            raise ValueError("points contain NaN or infinite coordinates")
+        _check_points(points)
         if offsets.ndim != 1 or offsets.size < 1 or offsets[0] != 0 or offsets[-1] != len(points):
             raise ValueError("offsets must be [0, ..., P] with one entry per strand plus one")
         if np.any(np.diff(offsets) < 1):
@@ -82,8 +95,12 @@ class Strands:
             raise ValueError("width must be positive and finite")
         if color is not None:
             color = np.broadcast_to(np.asarray(color, dtype=np.float64), points.shape).copy()
-            if not np.all(np.isfinite(color)):
-                raise ValueError("color contains NaN or infinite values")
+            bad = first_outside(color, lo=0.0)
+            if bad is not None:
+                raise ValueError(
+                    f"the colour of point {bad} is {_vector(color[bad])}: colours are linear RGB, "
+                    "finite and ≥ 0"
+                )
         for name, value in (
             ("points", points),
             ("offsets", offsets),
@@ -131,6 +148,73 @@ class Strands:
     def transformed(self, scale: float = 1.0, translate=(0.0, 0.0, 0.0)) -> Strands:
         """Points scaled about the origin, then translated."""
         return self.replace(points=self.points * scale + np.asarray(translate, dtype=np.float64))
+
+
+def _vector(v) -> str:
+    return "(" + ", ".join(f"{x:.6g}" for x in v) + ")"
+
+
+def first_outside(values, lo: float = -np.inf, hi: float = np.inf, lo_open: bool = False) -> int | None:
+    """The index of the first item (row, for a 2-D array) of `values` with a value that is
+    not finite or lies outside [lo, hi] ((lo, hi] with `lo_open`), or None when all lie in."""
+    values = np.asarray(values, dtype=np.float64)
+    # Comparisons with NaN are False, so NaN counts as outside; ±inf fails isfinite.
+    inside = np.isfinite(values) & (values > lo if lo_open else values >= lo) & (values <= hi)
+    if values.ndim > 1:
+        inside = inside.all(axis=tuple(range(1, values.ndim)))
+    bad = np.flatnonzero(~inside)
+    return int(bad[0]) if bad.size else None
+
+
+def _check_points(points: np.ndarray) -> None:
+    bad = first_outside(points)
+    if bad is not None:
+        raise ValueError(f"point {bad} has a NaN or infinite coordinate: {_vector(points[bad])}")
+    bad = first_outside(points, -COORDINATE_BOUND, COORDINATE_BOUND)
+    if bad is not None:
+        raise ValueError(
+            f"point {bad} = {_vector(points[bad])} lies beyond ±{COORDINATE_BOUND:g}, the bound on "
+            "coordinates that keeps the float32 projection finite (scale the hair down)"
+        )
+
+
+def distinct_strands(strands: Strands) -> np.ndarray:
+    """`bool[S]`: the strands with two distinct points, i.e. at least one segment of nonzero
+    length; the others (one point, or every point the same) draw nothing (docs/model.md §1)."""
+    points, offsets = strands.points, strands.offsets
+    if strands.num_strands == 0:
+        return np.zeros(0, dtype=bool)
+    # moves[k]: point k + 1 differs from point k, and both are in one strand.
+    moves = np.append(np.any(points[1:] != points[:-1], axis=1), False)
+    moves[offsets[1:] - 1] = False  # a strand's last point is not joined to the next strand's first
+    return np.add.reduceat(moves.astype(np.int64), offsets[:-1]) > 0
+
+
+def select_strands(strands: Strands, keep) -> Strands:
+    """The strands where `keep` (`bool[S]`) is true, with their points, colours and the
+    attributes that have one row per point or per strand (others are kept whole)."""
+    keep = np.asarray(keep, dtype=bool)
+    counts = np.diff(strands.offsets)
+    point_keep = np.repeat(keep, counts)
+    offsets = np.concatenate([[0], np.cumsum(counts[keep])])
+    attributes = {}
+    for name, value in strands.attributes.items():
+        value = np.asarray(value)
+        if value.ndim and len(value) == strands.num_points:
+            value = value[point_keep]
+        elif value.ndim and len(value) == strands.num_strands:
+            value = value[keep]
+        attributes[name] = value
+    color = None if strands.color is None else strands.color[point_keep]
+    return Strands(
+        strands.points[point_keep],
+        offsets,
+        strands.alpha[keep],
+        strands.width[keep],
+        color,
+        attributes,
+        strands.width_units,
+    )
 
 
 def tangents(points: np.ndarray, offsets: np.ndarray) -> np.ndarray:

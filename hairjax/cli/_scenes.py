@@ -8,8 +8,9 @@ scene file's own checks (`load_scene(path, overrides)`), so a typo names the key
 allowed ones; an error about a key the command line set names the option (`--set
 shading.kd=-1: …`, `--size 0x5: …`), not the file. Setting `shading.model`,
 `shadows.method` or `ordering.method` drops the file's keys the new choice does not read,
-with a warning naming them. A hair file (.hair, .tfx, .ply) given where a scene is
-expected is framed automatically (`[camera] frame = "auto"`, docs/scenes.md).
+with a warning naming them. A hair file (any suffix of hairjax/_io's `FORMATS`) given where a
+scene is expected is framed automatically (`[camera] frame = "auto"`, docs/scenes.md);
+any other suffix but .toml is an unknown file type.
 """
 
 from __future__ import annotations
@@ -136,6 +137,13 @@ def load_cli_scene(args: argparse.Namespace, path: Path | None):
     from .._scene._file import load_scene
 
     path = scene_path(path)
+    if path.suffix and path.suffix.lower() not in (".toml",) + HAIR_FILE_SUFFIXES:
+        from .._errors import SceneError
+
+        known = ", ".join(HAIR_FILE_SUFFIXES)
+        raise SceneError(
+            f"{path}: unknown file type {path.suffix!r} (known: .toml scenes; hair files {known})"
+        )
     with options_blamed(path, scene_origins(args)):
         overrides = scene_overrides(args, path)
         if path.suffix.lower() in HAIR_FILE_SUFFIXES:

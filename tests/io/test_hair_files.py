@@ -203,10 +203,10 @@ def write(tmp_path, name, data) -> Path:
 # Ragged strands with values exact in float32: 3, 1 and 4 points.
 RAGGED = [
     np.array([[0.0, 0.0, 0.0], [0.5, 1.0, -1.5], [1.0, 2.25, -3.0]]),
-    np.array([[-4.0, 8.0, 16.0]]),
-    np.array([[1.0, 1.0, 1.0], [1.0, 1.0, 2.0], [1.0, 2.0, 2.0], [2.0, 2.0, 2.0]]),
+    np.array([[-4.0, 8.0, 16.0], [-4.0, 8.0, 17.0]]),
+    np.array([[1.0, 1.0, 1.0], [1.0, 1.0, 2.0], [1.0, 2.0, 2.0]]),
 ]
-RAGGED_OFFSETS = [0, 3, 4, 8]
+RAGGED_OFFSETS = [0, 3, 5, 8]
 RAGGED_POINTS = np.concatenate(RAGGED)
 
 
@@ -298,7 +298,7 @@ def test_tfx4_immovable_roots():
 
 
 def test_hair_round_trip_ragged(tmp_path):
-    thickness = np.arange(8) * 0.25
+    thickness = (np.arange(8) + 1) * 0.25
     transparency = np.linspace(0, 1, 8).astype(np.float32)
     color = np.arange(24).reshape(8, 3) / 32
     path = write(
@@ -328,13 +328,13 @@ def test_hair_default_segments(tmp_path):
     assert strands.color is None and strands.attributes == {}
 
 
-def test_signalling_nan_in_attributes_is_kept(tmp_path):
-    """NaN bits in an attribute are data, not an error, and cast without a warning."""
+def test_signalling_nan_in_attributes(tmp_path):
+    """NaN bits cast without a warning: in a ranged attribute (thickness) they are refused
+    naming the point, in another (TressFX's strand UVs) they are data and kept."""
     data = hair_bytes(RAGGED, thickness=np.ones(8))
     thickness_at = 128 + 6 + 8 * 12
-    strands = load_hair(write(tmp_path, "snan.hair", _patch(data, thickness_at + 4, SNAN)))
-    assert np.isnan(strands.attributes["thickness"][1])
-    assert np.array_equal(np.delete(strands.attributes["thickness"], 1), np.ones(7))
+    with pytest.raises(HairFormatError, match=r"snan\.hair: the thickness of point 1 is nan"):
+        load_hair(write(tmp_path, "snan.hair", _patch(data, thickness_at + 4, SNAN)))
     tfx = tfx4_bytes(TWO_BY_FOUR_W, arrays={1: SNAN * 4})
     strands = load_hair(write(tmp_path, "snan.tfx", tfx))
     assert np.isnan(strands.attributes["strand_uv"]).all()
@@ -458,7 +458,7 @@ MALFORMED = [
     (
         "hair-point-count",
         "a.hair",
-        GOOD_HAIR[:132] + struct.pack("<H", 2) + GOOD_HAIR[134:],
+        GOOD_HAIR[:132] + struct.pack("<H", 3) + GOOD_HAIR[134:],
         "sum over strands",
     ),
     (
@@ -604,7 +604,7 @@ MALFORMED = [
     (
         "ply-point-count",
         "a.ply",
-        ply_bytes(RAGGED, edges=False)[:-2] + struct.pack("<H", 2),
+        ply_bytes(RAGGED, edges=False)[:-2] + struct.pack("<H", 3),
         "nsegs",
     ),
     ("ply-absurd-counts", "a.ply", ply_bytes(RAGGED, counts=(4_000_000_000, 3, 5)), "need"),
@@ -689,7 +689,8 @@ def test_a_directory_is_not_a_hair_file(tmp_path):
 
 def test_unknown_suffix_and_missing_file(tmp_path):
     path = write(tmp_path, "hair.obj", b"v 0 0 0\n")
-    with pytest.raises(HairFormatError, match=r"hair\.obj.*unknown hair file type"):
+    known = r"\(known: \.hair, \.tfx, \.ply, \.data, \.usd, \.usda, \.usdc, \.usdz\)"
+    with pytest.raises(HairFormatError, match=rf"hair\.obj: unknown file type '\.obj' {known}$"):
         load_hair(path)
     with pytest.raises(HairFormatError, match=r"missing\.hair.*cannot read"):
         load_hair(tmp_path / "missing.hair")
@@ -811,7 +812,8 @@ def test_info_shows_the_tressfx_version(name, version):
 @pytest.mark.parametrize("version, text", [(4.1, "4.1"), (4.0, "4.0"), (3.5, "3.5"), (4.25, "4.25")])
 def test_tressfx_version_as_written(tmp_path, version, text):
     path = tmp_path / "v.tfx"
-    path.write_bytes(tfx4_bytes(np.zeros((1, 2, 4))) if version >= 4 else tfx3_bytes(np.zeros((1, 2, 3))))
+    strand = np.arange(8.0).reshape(1, 2, 4)  # two distinct points
+    path.write_bytes(tfx4_bytes(strand) if version >= 4 else tfx3_bytes(strand[..., :3]))
     data = bytearray(path.read_bytes())
     data[:4] = struct.pack("<f", version)
     path.write_bytes(bytes(data))

@@ -483,7 +483,11 @@ ERROR_CASES = [
     (
         "source-unknown",
         '[hair]\nsource = "furbal"\n',
-        ["hair.source must be 'furball', 'scalp', 'combed', or a path to a .hair/.tfx/.ply file", "'furbal'"],
+        [
+            "hair.source must be 'furball', 'scalp', 'combed', or a path to a "
+            ".hair/.tfx/.ply/.data/.usd/.usda/.usdc/.usdz file",
+            "'furbal'",
+        ],
     ),
     ("source-suffix", '[hair]\nsource = "head.obj"\n', ["hair.source must be", ".tfx"]),
     ("missing-file", '[hair]\nsource = "nope.tfx"\n', ["hair.source file not found", "nope.tfx"]),
