@@ -220,6 +220,16 @@ def build_parser() -> argparse.ArgumentParser:
         help="scene of the 2nd, 3rd, … --target, in order; targets without one use the first scene",
     )
     p.add_argument(
+        "--mask",
+        dest="masks",
+        action="append",
+        type=Path,
+        default=[],
+        help="weights of the --target at the same position, 0 (left out) to 1: the image's alpha, "
+        "or its first channel where it has none (docs/fitting.md, Masks); targets without one "
+        "count every pixel. Repeatable",
+    )
+    p.add_argument(
         "--holdout",
         action="append",
         type=Path,
