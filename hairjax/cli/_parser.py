@@ -200,6 +200,12 @@ def build_parser() -> argparse.ArgumentParser:
     p = command("compare", "render with JAX and GL and report their differences, pixel by pixel")
     p.add_argument("scene", nargs="?", type=Path, help=_SCENE_HELP + " (default: the built-in fur ball)")
     p.add_argument("--json", type=Path, help="also write the report as JSON")
+    p.add_argument(
+        "--diff",
+        type=Path,
+        help="also write the difference: .png blue inside the explained band, orange-red outside it "
+        "(README), .exr the signed GL − JAX",
+    )
     p.add_argument("--repeats", type=positive_int, default=3, help="timed runs per renderer (their median)")
 
     p = command("fit", "fit the shading parameters (Kd, Ks, shininess, κ, …) to target images")

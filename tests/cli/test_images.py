@@ -183,3 +183,46 @@ def test_an_rgba_target_fits_as_the_same_image_saved_rgb(scene_file, tmp_path):
     rgba = oiio_write(tmp_path / "rgba.png", encoded, "uint8")
     assert 0 < np.count_nonzero(encoded[..., 3] < 255)  # some pixels partly covered
     assert fitted(scene_file, tmp_path, rgb) == fitted(scene_file, tmp_path, rgba)
+
+
+# --------------------------------------------------------------------------- compare --diff
+
+
+def test_compare_writes_its_difference_and_a_verdict(gl, scene_file, tmp_path, capsys):
+    diff, report = tmp_path / "d.png", tmp_path / "c.json"
+    argv = ["compare", str(scene_file), "--repeats", "1", "--diff", str(diff), "--json", str(report)]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    verdict = [line for line in out.splitlines() if line.startswith("  verdict")]
+    assert len(verdict) == 1 and "within band" in verdict[0]
+    assert f"wrote {diff}" in out
+    data = json.loads(report.read_text())
+    assert data["outside_band"] == 0 and 0 <= data["band_share"] < 1
+    assert hj.read_image(diff).shape == (18, 24, 3)
+
+
+@pytest.mark.parametrize(
+    "name, message",
+    [("d.jpg", "(--diff): unsupported extension '.jpg'; use .exr or .png"), ("folder.png", "is a directory")],
+)
+def test_compare_checks_its_diff_path_before_work(scene_file, tmp_path, capsys, monkeypatch, name, message):
+    from hairjax import tools
+
+    monkeypatch.setattr(tools, "compare", lambda *a, **k: pytest.fail("compared before checking --diff"))
+    (tmp_path / "folder.png").mkdir()
+    argv = ["compare", str(scene_file), "--json", str(tmp_path / "c.json"), "--diff", str(tmp_path / name)]
+    assert main(argv) == 2
+    assert message in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["folder.png", "tiny.toml"]
+
+
+def test_compare_that_fails_leaves_no_diff(scene_file, tmp_path, capsys, monkeypatch):
+    from hairjax.tools import _compare
+
+    def broken(*args, **kwargs):
+        raise ValueError("the timings failed")
+
+    monkeypatch.setattr(_compare, "median_time", broken)  # after the diff is written
+    assert main(["compare", str(scene_file), "--diff", str(tmp_path / "d.png")]) == 2
+    assert "the timings failed" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["tiny.toml"]
