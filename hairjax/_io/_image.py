@@ -159,20 +159,24 @@ def _first_line(message: str) -> str:
 def _native_output_silenced() -> Iterator[None]:
     """File descriptors 1 and 2 pointed at the null device while the decoders run: libpng
     prints its errors to stderr itself, besides reporting them through OpenImageIO's
-    `geterror`, which `_decode` turns into the one message. Restored on exit."""
+    `geterror`, which `_decode` turns into the one message. Restored on exit; a
+    descriptor that is not open is left alone."""
     import ctypes
 
-    sys.stdout.flush()
-    sys.stderr.flush()
-    saved = [os.dup(1), os.dup(2)]
+    for stream in (sys.stdout, sys.stderr):
+        if stream is not None:
+            stream.flush()
+    saved: dict[int, int] = {}
     null = os.open(os.devnull, os.O_WRONLY)
     try:
-        os.dup2(null, 1)
-        os.dup2(null, 2)
+        for fd in (1, 2):
+            with contextlib.suppress(OSError):  # fires when the descriptor is closed
+                saved[fd] = os.dup(fd)
+                os.dup2(null, fd)
         yield
     finally:
         ctypes.CDLL(None).fflush(None)  # C stdio's buffers go to the null device, not later
-        os.dup2(saved[0], 1)
-        os.dup2(saved[1], 2)
-        for fd in (*saved, null):
-            os.close(fd)
+        for fd, copy in saved.items():
+            os.dup2(copy, fd)
+            os.close(copy)
+        os.close(null)

@@ -1,4 +1,5 @@
-"""A mask image as per-pixel weights of a fit's target (docs/fitting.md, "Masks").
+"""A mask image as per-pixel weights of a fit's target (docs/fitting.md, "Target images
+and masks").
 
 The rule: the weight is the mask's alpha channel where it has one (grey + alpha, RGBA)
 and that alpha is not 1 everywhere (a cut-out: the matte is its alpha), else its first

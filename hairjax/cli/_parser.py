@@ -232,8 +232,8 @@ def build_parser() -> argparse.ArgumentParser:
         type=Path,
         default=[],
         help="weights of the --target at the same position, 0 (left out) to 1: the image's alpha, "
-        "or its first channel where it has none (docs/fitting.md, Masks); targets without one "
-        "count every pixel. Repeatable",
+        "or its first channel where it has none (docs/fitting.md, Target images and masks); "
+        "targets without one count every pixel. Repeatable",
     )
     p.add_argument(
         "--holdout",

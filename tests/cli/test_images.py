@@ -1,7 +1,8 @@
 """Images on the command line: a damaged target, view input or mask is refused in one
 line naming the file (exit 2, nothing from the decoders on stdout or stderr); `fit --mask`
-weights a target's pixels (docs/fitting.md, "Masks"); an RGBA target fits as the same
-image saved RGB. Files are written by OpenImageIO's writers, the targets rendered here."""
+weights a target's pixels (docs/fitting.md, "Target images and masks"); an RGBA target
+fits as the same image saved RGB; `compare --diff` writes the renders' difference and a
+verdict. Files are written by OpenImageIO's writers, the targets rendered here."""
 
 from __future__ import annotations
 
