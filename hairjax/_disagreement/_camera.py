@@ -37,7 +37,17 @@ def end_band(xy0, xy1, z0, z1, width, w, h, perspective) -> tuple[Fragments, np.
     grow = rasterize(xy0 - delta * u, xy1 + delta * u, z0, z1, width, w, h, perspective)
     shrink = rasterize(xy0 + delta * u, xy1 - delta * u, z0, z1, width, w, h, perspective)
     key = lambda f: f.segment.astype(np.int64) * (w * h) + f.pixel  # noqa: E731
-    return grow, ~np.isin(key(grow), key(shrink))
+    return grow, ~_member(key(grow), key(shrink))
+
+
+def _member(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """`np.isin(a, b)` for int64 keys, by a sort of `b` and a binary search: 0.26 s where
+    `np.isin` took 5.8 s on the default scene's 5.5 M fragments (NumPy 2.4)."""
+    if b.size == 0:
+        return np.zeros(a.shape, bool)
+    ordered = np.sort(b)
+    at = np.minimum(np.searchsorted(ordered, a), ordered.size - 1)  # fires for keys past the last
+    return ordered[at] == a
 
 
 def segment_opacity(scene: Scene) -> np.ndarray:

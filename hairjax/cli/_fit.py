@@ -90,6 +90,23 @@ def _table(result, names, fittable) -> str:
     return "\n".join("  ".join(c.ljust(w) for c, w in zip(row, widths)) for row in [header, *rows])
 
 
+def _mask_weights(masks, target_paths, targets) -> list | None:
+    """Each --mask's weights (`read_mask`), paired with the --target at its position;
+    None for targets without one. ImageError naming both files when their sizes differ."""
+    from .._io._image import ImageError
+    from .._io._mask import read_mask
+
+    if not masks:
+        return None
+    weights: list = [None] * len(targets)
+    for k, (mask, target_path, target) in enumerate(zip(masks, target_paths, targets)):
+        weights[k] = read_mask(mask)
+        (mh, mw), (th, tw) = weights[k].shape, target.shape[:2]
+        if (mh, mw) != (th, tw):
+            raise ImageError(f"{mask}: the mask is {mw}x{mh} but its target {target_path} is {tw}x{th}")
+    return weights
+
+
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
@@ -108,10 +125,16 @@ def run(args: argparse.Namespace) -> int:
             f"{len(args.holdout_scenes)} --holdout-scene for {len(args.holdout)} --holdout targets: "
             "each --holdout-scene goes with one --holdout"
         )
+    if len(args.masks) > len(args.target):
+        raise FitError(
+            f"{len(args.masks)} --mask for {len(args.target)} --target: "
+            "each --mask goes with the --target at the same position"
+        )
     outputs = _outputs(args)
     check_outputs(outputs)
     # Everything is read and checked before any rendering starts.
     targets = [read_image(t) for t in args.target]
+    weights = _mask_weights(args.masks, args.target, targets)
     first = load_cli_scene(args, args.scene)
     check_free_space(_sizes(outputs, first))
     if args.save_scene is not None:  # a scene a file cannot describe is refused before the fit
@@ -148,6 +171,7 @@ def run(args: argparse.Namespace) -> int:
             fit=names,
             solver=args.solver,
             max_steps=args.max_steps,
+            weights=weights,
             progress=on_step,
             holdout=holdout,
         )

@@ -226,6 +226,12 @@ def build_parser() -> argparse.ArgumentParser:
     p = command("compare", "render with JAX and GL and report their differences, pixel by pixel")
     p.add_argument("scene", nargs="?", type=Path, help=_SCENE_HELP + " (default: the built-in fur ball)")
     p.add_argument("--json", type=Path, help="also write the report as JSON")
+    p.add_argument(
+        "--diff",
+        type=Path,
+        help="also write the difference: .png blue inside the explained band, orange-red outside it "
+        "(README), .exr the signed GL − JAX",
+    )
     p.add_argument("--repeats", type=positive_int, default=3, help="timed runs per renderer (their median)")
 
     p = command("fit", "fit the shading parameters (Kd, Ks, shininess, κ, …) to target images")
@@ -244,6 +250,16 @@ def build_parser() -> argparse.ArgumentParser:
         type=Path,
         default=[],
         help="scene of the 2nd, 3rd, … --target, in order; targets without one use the first scene",
+    )
+    p.add_argument(
+        "--mask",
+        dest="masks",
+        action="append",
+        type=Path,
+        default=[],
+        help="weights of the --target at the same position, 0 (left out) to 1: the image's alpha, "
+        "or its first channel where it has none (docs/fitting.md, Target images and masks); "
+        "targets without one count every pixel. Repeatable",
     )
     p.add_argument(
         "--holdout",

@@ -214,3 +214,190 @@ def test_writing_makes_the_folder_and_replaces_an_old_file(tmp_path):
     hj.write_image(target, np.full((2, 2, 3), 2.0))
     np.testing.assert_array_equal(hj.read_image(target), 2.0)
     assert os.listdir(target.parent) == ["a.exr"]  # no temporary left behind
+
+
+# --------------------------------------------------------------------------- reading each type
+#
+# The files below are written by OpenImageIO's writers from codes and values chosen here,
+# and the expected linear values follow from the standard's decoding written out by hand
+# (`linear_by_hand`), not from the reader under test.
+
+
+def linear_by_hand(encoded: np.ndarray) -> np.ndarray:
+    """IEC 61966-2-1's decoding of sRGB values in [0, 1], in float64."""
+    v = np.asarray(encoded, np.float64)
+    return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
+
+
+def oiio_write(path, data: np.ndarray, fmt: str, unassociated: bool = False):
+    """`data` `[H, W, C]` written by OpenImageIO's own writer for `path`'s type, in `fmt`.
+    `unassociated`: the colour channels are stored as given beside the alpha (OIIO's
+    writers otherwise divide colour by alpha, taking the data to be premultiplied)."""
+    h, w, c = data.shape
+    spec = oiio.ImageSpec(w, h, c, fmt)
+    if unassociated:
+        spec.attribute("oiio:UnassociatedAlpha", 1)
+    out = oiio.ImageOutput.create(str(path))
+    assert out is not None and out.open(str(path), spec), oiio.geterror()
+    assert out.write_image(np.ascontiguousarray(data)), out.geterror()
+    assert out.close()
+    return path
+
+
+def codes(shape, top: int, seed: int = 0) -> np.ndarray:
+    """Integer codes 0 … top, both ends included."""
+    rng = np.random.default_rng(seed)
+    c = rng.integers(0, top + 1, size=shape)
+    c.flat[0], c.flat[-1] = 0, top
+    return c.astype(np.uint8 if top == 255 else np.uint16)
+
+
+@pytest.mark.parametrize("name, top", [("a.png", 255), ("a.png", 65535), ("a.tif", 255), ("a.tif", 65535)])
+def test_integer_files_are_srgb_decoded(tmp_path, name, top):
+    c = codes((5, 7, 3), top)
+    path = oiio_write(tmp_path / name, c, "uint8" if top == 255 else "uint16")
+    back = hj.read_image(path)
+    assert back.dtype == np.float32 and back.shape == (5, 7, 3)
+    # float32 decoding of the float64 curve: a few float32 ulps of values ≤ 1.
+    np.testing.assert_allclose(back, linear_by_hand(c / top), rtol=1e-6, atol=1e-7)
+
+
+@pytest.mark.parametrize("name, fmt", [("a.exr", "half"), ("a.exr", "float"), ("a.tif", "float")])
+def test_float_files_are_linear_as_stored(tmp_path, name, fmt):
+    values = np.random.default_rng(3).uniform(-0.5, 4.0, (6, 4, 4)).astype(np.float32)
+    path = oiio_write(tmp_path / name, values, fmt)
+    expected = values.astype(np.float16).astype(np.float32) if fmt == "half" else values
+    back = hj.read_image(path)
+    assert back.dtype == np.float32
+    np.testing.assert_array_equal(back, expected)  # no curve, no alpha applied: bit for bit
+
+
+@pytest.mark.parametrize("name, top", [("a.png", 255), ("a.png", 65535), ("a.tif", 255)])
+def test_rgba_colour_reads_as_the_same_image_saved_rgb(tmp_path, name, top):
+    """An alpha channel changes nothing in the colour channels (OpenImageIO's default
+    would premultiply a PNG's or TIFF's colour by its alpha on read), and the alpha itself
+    is read as stored, not sRGB-decoded."""
+    fmt = "uint8" if top == 255 else "uint16"
+    rgb = codes((6, 8, 3), top, seed=1)
+    alpha = codes((6, 8, 1), top, seed=2)  # 0 (transparent) … top, and all between
+    plain = hj.read_image(oiio_write(tmp_path / f"rgb{name}", rgb, fmt))
+    with_alpha = hj.read_image(
+        oiio_write(tmp_path / f"rgba{name}", np.concatenate([rgb, alpha], -1), fmt, True)
+    )
+    assert with_alpha.shape == (6, 8, 4)
+    np.testing.assert_array_equal(with_alpha[..., :3], plain)
+    np.testing.assert_allclose(with_alpha[..., 3], alpha[..., 0] / top, rtol=1e-6)
+
+
+def test_rgba_png_stores_what_the_fixture_says(tmp_path):
+    """The fixture's RGBA PNG holds the colour codes as given: Pillow (another decoder,
+    which does not premultiply) reads them back, so the test above compares like with like."""
+    import io
+
+    from PIL import Image
+
+    rgba = np.concatenate([codes((3, 4, 3), 255, seed=5), codes((3, 4, 1), 255, seed=6)], -1)
+    path = oiio_write(tmp_path / "x.png", rgba, "uint8", True)
+    with Image.open(io.BytesIO(path.read_bytes())) as im:
+        np.testing.assert_array_equal(np.asarray(im.convert("RGBA")), rgba)
+
+
+def test_grey_and_alpha_decodes_the_grey_only(tmp_path):
+    c = codes((4, 5, 2), 255, seed=4)
+    back = hj.read_image(oiio_write(tmp_path / "ga.png", c, "uint8", True))
+    np.testing.assert_allclose(back[..., 0], linear_by_hand(c[..., 0] / 255), rtol=1e-6, atol=1e-7)
+    np.testing.assert_allclose(back[..., 1], c[..., 1] / 255, rtol=1e-6)
+
+
+def test_decode_srgb_false_reads_codes_as_stored(tmp_path):
+    c = codes((3, 3, 3), 65535, seed=7)
+    back = hj.read_image(oiio_write(tmp_path / "m.png", c, "uint16"), decode_srgb=False)
+    np.testing.assert_allclose(back, c / 65535, rtol=1e-6)
+
+
+# --------------------------------------------------------------------------- damaged files
+
+
+def damaged(tmp_path, kind: str):
+    """A file OpenImageIO wrote, then damaged: cut to two thirds (its last rows' chunks
+    missing), or with bytes of its pixel data overwritten."""
+    image = np.random.default_rng(8).uniform(0.0, 1.0, (64, 64, 3)).astype(np.float32)
+    if kind.endswith("exr"):
+        whole = oiio_write(tmp_path / "whole.exr", image, "half")
+    else:
+        whole = oiio_write(tmp_path / "whole.png", np.round(image * 255).astype(np.uint8), "uint8")
+    data = bytearray(whole.read_bytes())
+    if kind.startswith("truncated"):
+        data = data[: len(data) * 2 // 3]
+    else:  # corrupted: the middle of the pixel data zeroed
+        data[len(data) // 2 : len(data) // 2 + 64] = bytes(64)
+    path = tmp_path / f"{kind}{whole.suffix}"
+    path.write_bytes(bytes(data))
+    return path
+
+
+DAMAGED = ["truncated-exr", "truncated-png", "corrupted-exr", "corrupted-png"]
+
+
+@pytest.mark.parametrize("kind", DAMAGED)
+def test_a_damaged_file_is_refused_in_one_line_and_silently(tmp_path, capfd, kind):
+    """Read on main, a truncated EXR gave zeros for its missing rows (and OpenImageIO
+    printed "Some scanline chunks were missing or corrupted" to stdout at exit), a
+    truncated PNG its rows as decoded so far (and libpng wrote to stderr)."""
+    path = damaged(tmp_path, kind)
+    with pytest.raises(ImageError) as info:
+        hj.read_image(path)
+    message = str(info.value)
+    assert message.startswith(f"{path}: cannot read: ") and "\n" not in message
+    import gc
+
+    gc.collect()  # any object OIIO would print an unread error from, at its destruction
+    assert capfd.readouterr() == ("", "")
+
+
+@pytest.mark.parametrize("name, fmt", [("f.exr", "half"), ("f.png", "uint8"), ("f.tif", "uint16")])
+def test_corrupted_files_fuzzed_give_an_image_or_one_line(tmp_path, capfd, name, fmt):
+    """Seeded corruptions (cuts, flipped bytes, zeroed runs) of a whole file: each read
+    gives a float32 image of the file's shape or one ImageError line naming it, and no
+    decoder prints anything. (Neither format checksums all its data, so a flipped byte can
+    decode to other pixels; what must not happen is a crash, another exception or noise.)"""
+    rng = np.random.default_rng(11)
+    values = rng.uniform(0, 1, (16, 12, 3))
+    data = values.astype(np.float32) if fmt == "half" else np.round(values * 255).astype(np.uint8)
+    whole = bytearray(oiio_write(tmp_path / name, data, fmt).read_bytes())
+    path = tmp_path / f"fuzzed{os.path.splitext(name)[1]}"
+    outcomes = set()
+    for _ in range(40):
+        damaged_bytes = bytearray(whole)
+        kind = int(rng.integers(3))
+        at = int(rng.integers(len(whole)))
+        if kind == 0:
+            damaged_bytes = damaged_bytes[:at]
+        elif kind == 1:
+            damaged_bytes[at] ^= 1 << int(rng.integers(8))
+        else:
+            damaged_bytes[at : at + 16] = bytes(len(damaged_bytes[at : at + 16]))
+        path.write_bytes(bytes(damaged_bytes))
+        try:
+            image = hj.read_image(path)
+        except ImageError as err:
+            assert str(err).startswith(f"{path}: ") and "\n" not in str(err)
+            outcomes.add("refused")
+        else:
+            assert image.dtype == np.float32 and image.shape == (16, 12, 3)
+            outcomes.add("read")
+    assert "refused" in outcomes
+    assert capfd.readouterr() == ("", "")
+
+
+def test_reading_with_stdout_and_stderr_closed(tmp_path):
+    """A process whose descriptors 1 and 2 are closed still reads (nothing to silence)."""
+    import subprocess
+
+    path = oiio_write(tmp_path / "a.png", np.full((2, 2, 3), 128, np.uint8), "uint8")
+    code = (
+        "import os, sys, hairjax as hj; os.close(1); os.close(2); "
+        f"sys.exit(0 if hj.read_image({str(path)!r}).shape == (2, 2, 3) else 5)"
+    )
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    assert subprocess.run([sys.executable, "-c", code], env=env).returncode == 0

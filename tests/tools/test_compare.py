@@ -24,6 +24,9 @@ REPORT_KEYS = {
     "rmse",
     "psnr_db",
     "share_over_1e-4",
+    "band_share",
+    "differing",
+    "outside_band",
     "tau_max_abs",
     "jax_s",
     "gl_s",
@@ -77,6 +80,9 @@ def report_of(**changes) -> dict:
         "rmse": 0.0913,
         "psnr_db": 20.79,
         "share_over_1e-4": 0.2,
+        "band_share": 0.0125,
+        "differing": 38,
+        "outside_band": 0,
         "tau_max_abs": 3.25e-5,
         "jax_s": 0.5,
         "gl_s": 0.25,
@@ -98,9 +104,33 @@ def test_format_report_names_every_number():
         "reaching a strand point through the hair, 0 to 1; docs/model.md §7)",
         "  time, JAX (full)     0.500 s  (median of 3)",
         "  time, GL             0.250 s  (ratio JAX/GL 2.00)",
+        "  verdict              within band (all 38 pixels differing by > 1e-4 lie in it; "
+        "the band holds 1.25 % of pixels, docs/model.md §11)",
     ):
         assert line in lines, (line, lines)
-    assert len(lines) == 8
+    assert len(lines) == 9
+
+
+@pytest.mark.parametrize(
+    "differing, outside, text",
+    [
+        (
+            0,
+            0,
+            "within band (no pixel differs by > 1e-4; the band holds 1.25 % of pixels, docs/model.md §11)",
+        ),
+        (
+            5,
+            2,
+            "2 pixels (0.6944 %) differ by > 1e-4 outside the explained band "
+            "(the band holds 1.25 % of pixels, docs/model.md §11)",
+        ),
+    ],
+)
+def test_verdict_text(differing, outside, text):
+    report = report_of(differing=differing, outside_band=outside, size=[16, 18])  # 288 pixels
+    assert _compare.verdict_text(report) == text
+    assert f"  verdict              {text}" in format_report(report).splitlines()
 
 
 def test_format_report_without_omega_from_gl():
@@ -189,3 +219,75 @@ def test_compare_on_a_tiny_scene(gl, shadows):
         assert f"{report['tau_max_abs']:.3g}" in format_report(report)
     text = format_report(report)
     assert f"{report['rmse']:.3g}" in text and f"{report['psnr_db']:.1f} dB" in text
+
+
+# --------------------------------------------------------------------------- the band's verdict
+
+
+def test_band_verdict_counts_what_lies_outside_the_band(gl):
+    """GL's own image is within band on this scene; one pixel moved by 0.01 outside the
+    band is counted, one moved inside it is not."""
+    from hairjax.gl import render_gl
+
+    scene = small_furball_scene(strands=40, size=24)
+    jax_image = np.asarray(hj.render(scene))
+    gl_image = render_gl(scene).image
+    verdict, band = _compare.band_verdict(scene, gl_image, jax_image)
+    peak = float(jax_image[..., :3].max())
+    np.testing.assert_array_equal(band, hj.renderer_band(scene, colour_bound=peak))
+    differ = np.abs(gl_image - jax_image)[..., :3].max(axis=-1) > PIXEL_TOL
+    assert verdict == {
+        "band_share": float(band.mean()),
+        "differing": int(differ.sum()),
+        "outside_band": 0,
+    }
+    assert 0 < band.sum() < band.size  # the scene has a band, and pixels outside it
+    outside = tuple(np.argwhere(~band & ~differ)[0])
+    inside = tuple(np.argwhere(band & ~differ)[0])
+    moved = gl_image.copy()
+    moved[outside + (1,)] += 0.01
+    moved[inside + (2,)] -= 0.01
+    verdict, _ = _compare.band_verdict(scene, moved, jax_image)
+    assert verdict["differing"] == differ.sum() + 2 and verdict["outside_band"] == 1
+
+
+def test_difference_image_by_hand():
+    """Four pixels: agreeing (the JAX render's grey, dimmed), differing by 1e-2 inside the
+    band (blue), by 1 outside it (orange-red, full brightness), by 1e-3 outside it."""
+    jax_image = np.zeros((1, 4, 4))
+    jax_image[0, 0, :3] = 1.0  # white: grey code 0.35 · 255
+    gl_image = jax_image.copy()
+    gl_image[0, 1, 0] += 1e-2
+    gl_image[0, 2, 1] += 1.0
+    gl_image[0, 3, 2] -= 1e-3
+    band = np.array([[False, True, False, False]])
+    codes = _compare.difference_image(gl_image, jax_image, band)
+    assert codes.dtype == np.uint8 and codes.shape == (1, 4, 3)
+    # Brightness 0.4 + 0.6 · log10(d / 1e-4) / 4: d = 1e-2 → 0.7, d = 1 → 1, d = 1e-3 → 0.55.
+    expected = [
+        [0.35 * 255] * 3,
+        [0.7 * 255 * c for c in (0.25, 0.55, 1.0)],
+        [1.0 * 255 * c for c in (1.0, 0.35, 0.0)],
+        [0.55 * 255 * c for c in (1.0, 0.35, 0.0)],
+    ]
+    np.testing.assert_allclose(codes[0], np.round(expected), atol=1)  # rounding of float steps
+
+
+def test_write_difference_png_and_exr(tmp_path):
+    rng = np.random.default_rng(0)
+    jax_image = rng.uniform(0, 1, (3, 5, 4))
+    gl_image = jax_image + rng.normal(0, 1e-2, jax_image.shape)
+    band = rng.uniform(size=(3, 5)) < 0.5
+    png = _compare.write_difference(tmp_path / "d.png", gl_image, jax_image, band)
+    back = hj.read_image(png, decode_srgb=False)  # display codes as stored
+    np.testing.assert_allclose(back * 255, _compare.difference_image(gl_image, jax_image, band), atol=1e-3)
+    exr = _compare.write_difference(tmp_path / "d.exr", gl_image, jax_image, band)
+    np.testing.assert_array_equal(hj.read_image(exr), (gl_image - jax_image).astype(np.float32))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.exr", "d.png"]
+
+
+def test_compare_writes_its_diff(gl, tmp_path):
+    scene = small_furball_scene(strands=40, size=24)
+    report = compare(scene, repeats=1, diff=tmp_path / "d.png")
+    assert report["outside_band"] == 0 and "within band" in format_report(report)
+    assert hj.read_image(tmp_path / "d.png").shape == (24, 24, 3)
