@@ -19,6 +19,8 @@ import jax
 from jaxtyping import Array, Float
 
 from ._cache import forget
+from ._geometry._capacity import refuses_out_of_memory
+from ._geometry._estimate import check_capacity
 from ._geometry._setup import prepare
 from ._geometry._stage import geometry_stage
 from ._progress import Progress
@@ -28,6 +30,7 @@ from ._shading import shading_stage
 __all__ = ["render", "render_profiled"]
 
 
+@refuses_out_of_memory
 def render(
     scene: Scene, params=None, alpha: Float[Array, " S"] | None = None, *, order=None
 ) -> Float[Array, "H W 4"]:
@@ -48,10 +51,12 @@ def render(
             raise ValueError("a hair-patch scene takes neither `alpha` nor `order`")
         from ._patches import render_patches  # Lazy: only patch scenes need it
 
+        check_capacity(scene)  # the image, points and maps, before the patches' fragments
         return render_patches(scene, params)
     return shading_stage(geometry_stage(scene, alpha, order=order), params)
 
 
+@refuses_out_of_memory
 def render_profiled(scene: Scene, params=None, *, progress: Progress | None = None):
     """Render and time each stage (block-until-ready between stages).
 

@@ -48,6 +48,9 @@ __all__ = [
     "SETUP_PLACEMENT",
     "setup_on_device",
     "setup_placed",
+    "device_memory",
+    "candidate_size",
+    "candidate_bytes",
     "device_candidates",
     "rasterize_on_device",
     "group_on_device",
@@ -93,6 +96,23 @@ def _free_bytes() -> int | None:
     return int(stats["bytes_limit"]) - int(stats.get("bytes_in_use", 0))
 
 
+def device_memory() -> int | None:
+    """Free memory of JAX's default device (the host's on the CPU), or None if unknown."""
+    return _free_bytes()
+
+
+def candidate_size(dtype, depth: bool) -> int:
+    """Bytes per candidate of `device_candidates`: its fields, and a sort key and index."""
+    return 8 + (3 if depth else 2) * np.dtype(dtype).itemsize + 8
+
+
+def candidate_bytes(plan, depth: bool) -> int:
+    """Bytes `device_candidates` allocates for the raster `plan` (`_raster_plan`): every
+    candidate of its columns, padded to their bucket."""
+    c_pad = fragment_bucket(int(plan.columns.sum()) + 1)
+    return c_pad * plan.rows * candidate_size(plan.seg_data.dtype, depth)
+
+
 def device_candidates(
     xy0: np.ndarray,
     xy1: np.ndarray,
@@ -116,8 +136,8 @@ def device_candidates(
     labels = np.arange(n, dtype=np.int32) if labels is None else np.asarray(labels, np.int32)
     n_pad, c_pad = fragment_bucket(n + 1), fragment_bucket(total + 1)
     dtype = plan.seg_data.dtype
-    per_candidate = 8 + (3 if depth else 2) * dtype.itemsize + 8  # the fields, and a sort key and index
-    need, free = c_pad * plan.rows * per_candidate, _free_bytes()
+    need, per_candidate = candidate_bytes(plan, depth), candidate_size(dtype, depth)
+    free = _free_bytes()
     if free is not None and need > free:
         raise SceneTooLarge(
             f"the {image_width}x{image_height} raster of this scene has {total * plan.rows:,} candidate "

@@ -43,6 +43,7 @@ __all__ = [
     "Fragments",
     "rasterize",
     "rasterize_parts",
+    "count_fragments",
     "ribbon_coverage",
     "ribbon_widths",
     "PARALLEL_MIN",
@@ -215,14 +216,15 @@ def rasterize_parts(
         bool(perspective),
         depth,
     )
-    check_memory(raster, n, capacity, np.dtype(dtype), depth, image_width, image_height)
-    pixel, segment = np.empty(capacity, np.int32), np.empty(capacity, np.int32)
-    coverage, t = np.empty(capacity, dtype), np.empty(capacity, dtype)
-    depths = np.empty(capacity if depth else 0, dtype)
     if parts is None:
         parts = host_threads() if capacity >= PARALLEL_MIN else 1
     bounds = split_evenly(columns, parts)
-    starts = [int(seg_start[a]) for a in bounds]  # where each piece's share begins
+    # Where each piece's share begins (the last: the fields' length), `check_memory`'s.
+    starts = check_memory(raster, bounds, seg_start, np.dtype(dtype), depth, image_width, image_height)
+    size = starts[-1]
+    pixel, segment = np.empty(size, np.int32), np.empty(size, np.int32)
+    coverage, t = np.empty(size, dtype), np.empty(size, dtype)
+    depths = np.empty(size if depth else 0, dtype)
     fields = (pixel, segment, coverage, t, depths)
     shares = [[f[begin:end] if f.size else f for f in fields] for begin, end in zip(starts[:-1], starts[1:])]
     filled = in_parallel(
@@ -237,6 +239,40 @@ def rasterize_parts(
     ]
 
 
+def count_fragments(
+    xy0, xy1, z0, z1, width, image_width: int, image_height: int, perspective: bool, *, limit: int
+) -> int | None:
+    """The number of fragments `rasterize` (the same arguments) would give, counted by its
+    loop without writing them, on every core; None, without counting, where the loop would
+    visit more than `limit` candidates in the image (the count would take as long as a
+    raster of that many fragments). For the capacity estimate (`_estimate`)."""
+    plan = raster_plan(xy0, xy1, z0, z1, width, image_width, image_height)
+    x_major = plan.seg_data[:, 8] > 0
+    across = np.where(x_major, image_height, image_width) + 3  # the rows the loop visits
+    if int(np.sum(plan.columns * np.minimum(plan.rows, across))) > limit:
+        return None
+    n, dtype = plan.columns.shape[0], plan.seg_data.dtype
+    raster = functools.partial(
+        _kernels(np.dtype(dtype).name)[1],
+        plan.seg_data,
+        np.zeros(n, np.int32),
+        plan.lo,
+        plan.columns,
+        plan.rows,
+        image_width,
+        image_height,
+        bool(perspective),
+        False,
+    )
+    ints, floats = np.empty(0, np.int32), np.empty(0, dtype)  # not written when counting
+    bounds = split_evenly(plan.columns, host_threads())
+    tasks = [
+        functools.partial(raster, a, b, True, ints, ints, floats, floats, floats)
+        for a, b in zip(bounds[:-1], bounds[1:])
+    ]
+    return sum(in_parallel(tasks))
+
+
 @functools.cache
 def _kernels(dtype_name: str):
     """`(coverage, raster)` compiled by numba for floats of `dtype_name` (on first use;
@@ -244,6 +280,7 @@ def _kernels(dtype_name: str):
     to float64."""
     F = np.float32 if dtype_name == "float32" else np.float64
     zero, one, half_extent = F(0.0), F(1.0), F(PIXEL_HALF_EXTENT)
+    exact_limit = F(1 << 23)  # integers below it and their sums with a row index are exact
     # error_model numpy: a division by 0 gives inf, as in XLA, without a check per division.
     # contract: fused multiply-adds where LLVM finds them, as XLA's CPU kernels have.
     # no_type_check: the tests' jaxtyping hook would otherwise wrap them before numba.
@@ -292,7 +329,15 @@ def _kernels(dtype_name: str):
                 k = F(lo[i] + j)
                 b_line = b_origin + (k + half_extent - a_origin) * slope
                 row0 = np.floor(b_line - offset - half_extent) + one
-                for r in range(rows):
+                # Only the rows whose centres may lie in the image (one to spare each side):
+                # the rest would `continue` below, and a ribbon far wider than the image
+                # has millions of them. Where row0 is not exact in float32, all rows.
+                r_first, r_last = 0, rows
+                if abs(row0) < exact_limit:
+                    across = image_height if x_major else image_width
+                    r_first = max(0, int(-row0) - 1)
+                    r_last = min(rows, int(across - row0) + 2)
+                for r in range(r_first, r_last):
                     m = row0 + F(r)
                     px = k if x_major else m
                     py = m if x_major else k

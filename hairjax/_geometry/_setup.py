@@ -24,8 +24,9 @@ from .._errors import EmptyViewWarning
 from .._scene._scene import Scene
 from .._scene._strands import tangents, unit_rows
 from .._shading import PointInputs
-from ._capacity import fragment_bucket
+from ._capacity import fragment_bucket, refuses_out_of_memory
 from ._device_raster import device_candidates, group_on_device, setup_on_device
+from ._estimate import check_capacity
 from ._group import group_parts
 from ._host import release_heap, release_shared
 from ._occluder import occluder_hits, occluder_light_view, occluder_visibility
@@ -87,6 +88,7 @@ class GeometrySetup:
         return first
 
 
+@refuses_out_of_memory
 def prepare(scene: Scene, *, order=None) -> GeometrySetup:
     """The NumPy geometry set-up of `scene`, cached per scene object (`_cache`).
 
@@ -186,6 +188,7 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
 
     strands, cam = scene.strands, scene.camera
     points = strands.points
+    check_capacity(scene)  # the closed-form items, before anything is projected
     view, xy, depth, segments, order = visibility_order(scene, order)
     seg_strand = strands.strand_of_point[segments[:, 0]]
     lap("project+order")
@@ -210,6 +213,11 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
         view.focal,
         view.perspective,
     )
+    # Rasterised nearest segment first; each fragment names its segment's first point
+    # (the segment is that point and the next). Depth only for the occluder's depth test.
+    raster = (xy[s0], xy[s1], depth[s0], depth[s1], widths, cam.width, cam.height, True)
+    check_capacity(scene, raster)  # with the fragments, before the image's arrays and theirs
+    lap("capacity")
     hw = cam.width * cam.height
     light = scene.light
     light_rgb = np.asarray(light.color, dtype=np.float64)
@@ -234,9 +242,6 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
         backdrop[opaque] = 0.0  # the shading stage adds the occluder's colour (§13)
         lap("occluder")
 
-    # Rasterised nearest segment first; each fragment names its segment's first point
-    # (the segment is that point and the next). Depth only for the occluder's depth test.
-    raster = (xy[s0], xy[s1], depth[s0], depth[s1], widths, cam.width, cam.height, True)
     place = _fragments_on_device if setup_on_device() else _fragments_on_host
     drawn, padded, n_frags = place(raster, s0.astype(np.int32), hit_depth, lap)
     frag_pixel, frag_i0, frag_coverage, frag_t = padded

@@ -18,6 +18,7 @@ from .._composite import pixel_weights
 from .._scene._scene import Scene
 from .._shading import AbstractShadingModel
 from .._shading._streaks import streak_factors
+from ._capacity import refuses_out_of_memory
 from ._hidden import drawn_cutoff, keep_visible
 from ._host import release_heap, to_device
 from ._setup import prepare
@@ -78,6 +79,7 @@ def composite_weights(alpha, strand_of_point, frag_i0, frag_coverage, frag_pixel
     return weights, transmittance, alpha_channel, weights >= cutoff * frag_alpha
 
 
+@refuses_out_of_memory
 def geometry_stage(
     scene: Scene, alpha: Float[Array, " S"] | None = None, *, order=None, cutoff: float | None = None
 ) -> Geometry:

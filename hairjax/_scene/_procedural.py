@@ -7,6 +7,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from .._geometry._capacity import check_generated
 from ._strands import Strands
 
 __all__ = ["furball", "scalp", "combed"]
@@ -65,6 +66,7 @@ def furball(
     """
     if strands < 1 or points < 2:
         raise ValueError("furball needs at least 1 strand of at least 2 points")
+    check_generated(strands, points)
     rng = np.random.default_rng(seed)
     directions = _unit_vectors(rng, strands)
     seg = length / (points - 1) * rng.uniform(1 - length_jitter, 1 + length_jitter, strands)
@@ -92,6 +94,7 @@ def scalp(
     """
     if strands < 1 or points < 2:
         raise ValueError("scalp needs at least 1 strand of at least 2 points")
+    check_generated(strands, points)
     if not 0 < coverage <= 1:
         raise ValueError("coverage must be in (0, 1]")
     rng = np.random.default_rng(seed)
@@ -134,6 +137,7 @@ def combed(
     """
     if strands < 1 or points < 2 or layers < 1:
         raise ValueError("combed needs at least 1 strand of at least 2 points and 1 layer")
+    check_generated(strands, points)
     rng = np.random.default_rng(seed)
     layer = np.arange(strands) % layers
     rank = np.arange(strands) // layers  # position within its layer

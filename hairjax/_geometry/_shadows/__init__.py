@@ -22,6 +22,7 @@ from ._frame import LightFragments as LightFragments
 from ._frame import LightFrame as LightFrame
 from ._frame import light_fragments as light_fragments
 from ._frame import light_frame as light_frame
+from ._frame import light_raster as light_raster
 from ._frame import map_margin as map_margin
 from ._frame import with_receivers as with_receivers
 from ._none import NoShadows as NoShadows

@@ -38,6 +38,9 @@ class AbstractShadowMethod(abc.ABC):
 
     method: ClassVar[str]
     casts: ClassVar[bool] = True
+    # Whether its light raster runs as an XLA program where the set-up is placed on the
+    # device (`_device_raster`); the others rasterise on the host.
+    rasterizes_on_device: ClassVar[bool] = False
 
     @abc.abstractmethod
     def setup(
@@ -59,6 +62,17 @@ class AbstractShadowMethod(abc.ABC):
     @abc.abstractmethod
     def omega(self, setup, alpha: Float[Array, " S"]) -> Float[Array, " PQ"]:
         """Ω at every point of `setup` for per-strand opacity `alpha` (JAX)."""
+
+    def planned_maps(self) -> tuple[int, str]:
+        """The map cells its Ω accumulates (JAX floats; 0 for a method without maps) and
+        the scene keys that set their number, for the capacity estimate (docs/model.md §5)."""
+        return 0, ""
+
+    def point_lookups(self) -> int:
+        """How many texels each point's plan names (1, or the 3 × 3 filter's 9 where the
+        plan keeps one entry per texel): the per-point tables' width, for the capacity
+        estimate."""
+        return 1
 
     @property
     def resolution(self) -> int:

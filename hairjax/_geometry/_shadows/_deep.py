@@ -117,6 +117,16 @@ class DeepOpacityMaps(AbstractShadowMethod):
         object.__setattr__(self, "layer_spacing", float(spacing))
         object.__setattr__(self, "resolution", check_resolution(self.resolution))
 
+    def planned_maps(self) -> tuple[int, str]:
+        r = self.resolution  # boundaries 0 … K and the total, K + 2 maps
+        return (
+            self.layers + 2
+        ) * r * r, f"shadows.layers = {self.layers} layers of shadows.resolution = {r}²"
+
+    def point_lookups(self) -> int:
+        side = 2 * SHADOW_FILTER_RADIUS + 1  # `filter_texels`: one entry per texel of the filter
+        return side * side if self.lookup == "depth" else 1
+
     def depth_range(self, frame: LightFrame) -> float:
         """KΔ, the depth the K layers span behind z₀: K·`layer_spacing`, or by default the
         hair's light-depth extent D_N − D₀ (`frame.span`)."""

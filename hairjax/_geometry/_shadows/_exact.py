@@ -47,6 +47,9 @@ class ExactShadows(AbstractShadowMethod):
     def __post_init__(self):
         object.__setattr__(self, "resolution", check_resolution(self.resolution))
 
+    def point_lookups(self) -> int:
+        return (2 * SHADOW_FILTER_RADIUS + 1) ** 2  # `index`, `weight`: one per texel of the filter
+
     def setup(
         self,
         points,

@@ -16,7 +16,15 @@ from .._projection import View, light_view
 from .._raster import Arrays, Fragments, rasterize
 from .._raster_plan import ribbon_widths
 
-__all__ = ["LightFrame", "light_frame", "with_receivers", "map_margin", "LightFragments", "light_fragments"]
+__all__ = [
+    "LightFrame",
+    "light_frame",
+    "light_raster",
+    "with_receivers",
+    "map_margin",
+    "LightFragments",
+    "light_fragments",
+]
 
 
 def map_margin(width: np.ndarray) -> int:
@@ -127,6 +135,35 @@ class LightFragments:
     inside: np.ndarray
 
 
+def light_raster(points, segments, seg_strand, width, light, resolution: int, width_units: str = "pixels"):
+    """The light's frame and its raster's arguments (`rasterize`'s, in order): the
+    drawable segments' ends in the light's view and their ribbons' widths in texels
+    (the strand's width in pixels, or its world width seen from the light,
+    `ribbon_widths`). Shared by `light_fragments` and the capacity estimate."""
+    frame = light_frame(points, segments, width, light, resolution, width_units)
+    seg_ids = frame.drawable
+    s0, s1 = segments[seg_ids, 0], segments[seg_ids, 1]
+    widths = ribbon_widths(
+        width[seg_strand[seg_ids]],
+        width_units,
+        frame.depth[s0],
+        frame.depth[s1],
+        frame.view.focal,
+        frame.view.perspective,
+    )
+    xy, depth = frame.xy, frame.depth
+    return frame, (
+        xy[s0],
+        xy[s1],
+        depth[s0],
+        depth[s1],
+        widths,
+        resolution,
+        resolution,
+        frame.view.perspective,
+    )
+
+
 def light_fragments(
     points,
     segments,
@@ -148,19 +185,9 @@ def light_fragments(
     texture, §17). `on_device`: rasterise as an XLA program on JAX's default device
     (`_device_raster`): the fragments are then JAX arrays there, the per-point arrays
     NumPy still."""
-    frame = light_frame(points, segments, width, light, resolution, width_units)
+    frame, raster = light_raster(points, segments, seg_strand, width, light, resolution, width_units)
     seg_ids = frame.drawable
-    s0, s1 = segments[seg_ids, 0], segments[seg_ids, 1]
-    widths = ribbon_widths(
-        width[seg_strand[seg_ids]],
-        width_units,
-        frame.depth[s0],
-        frame.depth[s1],
-        frame.view.focal,
-        frame.view.perspective,
-    )
-    raster = (frame.xy[s0], frame.xy[s1], frame.depth[s0], frame.depth[s1], widths, resolution, resolution)
-    frags = (rasterize_on_device if on_device else rasterize)(*raster, frame.view.perspective)
+    frags = (rasterize_on_device if on_device else rasterize)(*raster)
     frame = with_receivers(frame, receivers)
     xy, seen = frame.xy, frame.seen
     # Clip fires for a light at the hair's centre (near ≈ 1e-303: xy ~1e300, no int64); outside stays outside.

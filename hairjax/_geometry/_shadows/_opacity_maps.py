@@ -68,6 +68,7 @@ class OpacityMaps(AbstractShadowMethod):
     maps: int = 64
     resolution: int = 256
     method = "opacity-maps"
+    rasterizes_on_device = True
 
     def __post_init__(self):
         n = self.maps
@@ -77,6 +78,10 @@ class OpacityMaps(AbstractShadowMethod):
             raise SceneError(f"shadows.maps must be an integer in [1, 65536], got {n!r}")
         object.__setattr__(self, "maps", int(n))
         object.__setattr__(self, "resolution", check_resolution(self.resolution))
+
+    def planned_maps(self) -> tuple[int, str]:
+        r = self.resolution
+        return (self.maps + 1) * r * r, f"shadows.maps = {self.maps} maps of shadows.resolution = {r}²"
 
     def setup(
         self,
@@ -106,7 +111,7 @@ class OpacityMaps(AbstractShadowMethod):
             receivers=receivers,
             segment_alpha=segment_alpha,
             width_units=width_units,
-            on_device=setup_on_device(),
+            on_device=self.rasterizes_on_device and setup_on_device(),
         )
         xp = jnp if isinstance(lf.frags.depths, jax.Array) else np  # where the light's fragments are
         # A fragment in [D_j, D_{j+1}) counts towards planes j + 1 … N (strictly nearer).

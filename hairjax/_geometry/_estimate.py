@@ -1,0 +1,238 @@
+"""The render's capacity estimate (docs/model.md §5, "Capacity"): the memory a render of a
+scene will hold, item by item, from the scene's own numbers, taken before any large array
+exists, and the refusal (`SceneTooLarge`) of a scene that needs more than is available.
+
+Two steps, both before the arrays they bound exist (`_setup` calls them):
+
+- `fixed_needs`, in closed form before anything is projected: the image's per-pixel
+  arrays (camera size), the per-point and per-segment arrays (strands and points, and
+  the 3 × 3 plans of the shadow methods that keep one), the opacity maps or deep layers
+  (maps or layers × the light's resolution²);
+- `fragment_needs`, once the camera's projection and draw order exist, before the image
+  and the fragments are allocated: the camera's and the light's fragments, bounded per
+  segment by the lattice points of its ribbon clipped to the raster
+  (`ribbon_pixel_bound`), and on an accelerator the raster's candidates (every one is
+  allocated there, `_device_raster`).
+
+Where those bounds exceed the memory but the exact count may not, the raster loop counts
+the fragments without writing them (`count_fragments`), unless that pass would visit
+more candidates than four times the fragments memory could hold (a ribbon far wider than
+its segment is long: then the bound is close to the count, area against area).
+On the CPU the host and JAX share one memory; on an accelerator JAX's arrays are counted
+against the device's free memory and NumPy's against the host's.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .._errors import SceneTooLarge
+from .._scene._scene import Scene
+from . import _capacity, _device_raster
+from ._capacity import fragment_bytes, memory_size
+from ._device_raster import candidate_bytes, setup_on_device
+from ._raster import count_fragments
+from ._raster_plan import raster_plan
+from ._shadows import MAX_MAP_CELLS, light_raster
+
+__all__ = ["Need", "fixed_needs", "fragment_needs", "check_capacity", "ribbon_pixel_bound"]
+
+# Bytes held at the render's peak, read off the code that allocates them (the JAX arrays
+# as floats of the working precision); against measured peaks: docs/model.md §5.
+PIXEL_HOST = 48  # backdrop (float64 RGB), opaque, the image read back and written (RGBA)
+PIXEL_FLOATS = 12  # transmittance, alpha, backdrop (3), opaque, the image (4), the composite's temporaries
+OCCLUDER_PIXEL = 128  # the occluder's ray hits: depth, normal and point (float64), and their temporaries
+POINT_HOST = 240  # projection, tangent, to-light, to-eye, colour (float64 and float copies), temporaries
+SEGMENT_HOST = 200  # segments, strand, order, both ends' positions and widths, the raster plan
+POINT_FLOATS = 16  # the Geometry's four 3-vectors, Ω, the shading's colours and temporaries
+LOOKUP_HOST = 40  # per point and texel of a 3 × 3 plan: texel, bounds (int64), weight, masks
+FRAGMENT_SORT = 8  # the grouping's permutation, beyond `fragment_bytes`
+FRAGMENT_FLOATS = 4  # the weights (on the CPU the rest share the set-up's arrays)
+LIGHT_FRAGMENT_HOST = 40  # the light raster's fields, strand, cell, sort key and order
+LIGHT_FRAGMENT_FLOATS = 4  # its alpha
+MAP_FLOATS = 8  # per map cell: the sums, their cumulative sum, the box filter's passes
+COUNT_VISITS = 4  # the counting pass visits at most this many candidates per fragment that fits
+
+
+@dataclasses.dataclass(frozen=True)
+class Need:
+    """One item of the estimate: `what` it is, the scene `keys` that set its size (with
+    their values), and its bytes on the host (NumPy) and in JAX's arrays."""
+
+    what: str
+    keys: str
+    host: int
+    jax: int
+
+
+def fixed_needs(scene: Scene) -> list[Need]:
+    """The items known in closed form from the scene's numbers (no projection): image,
+    points and segments, maps (module docstring)."""
+    cam, strands, shadows = scene.camera, scene.strands, scene.shadows
+    f = jnp.dtype(jnp.result_type(float)).itemsize
+    hw = cam.width * cam.height
+    pixel_host = PIXEL_HOST + (OCCLUDER_PIXEL if scene.occluder is not None else 0)
+    size_keys = f"camera.width x camera.height = {cam.width}x{cam.height} (--size)"
+    p, s = strands.num_points, strands.num_strands
+    lookups = shadows.point_lookups() if shadows.casts else 0
+    needs = [
+        Need("the image's per-pixel arrays", size_keys, hw * pixel_host, hw * PIXEL_FLOATS * f),
+        Need(
+            "the per-point and per-segment arrays",
+            f"hair.strands = {s:,} strands of {p:,} points in all (hair.points)",
+            p * (POINT_HOST + (LOOKUP_HOST * lookups if lookups > 1 else 0)) + (p - s) * SEGMENT_HOST,
+            p * POINT_FLOATS * f,
+        ),
+    ]
+    cells, keys = shadows.planned_maps() if shadows.casts else (0, "")
+    if cells:
+        needs.append(Need("the shadow maps", keys, 0, cells * MAP_FLOATS * f))
+    return needs
+
+
+def ribbon_pixel_bound(xy0, xy1, width, image_width: int, image_height: int) -> np.ndarray:
+    """Per segment, an upper bound on the pixel centres its ribbon covers (`[E]` float64;
+    `rasterize`'s arguments, `width` `[E]` or `[E, 2]`).
+
+    A covered centre lies within the segment's [0, L) and within (w + 1)/2 of its line
+    (§5's coverage is 0 beyond), w the wider end: in a rectangle of L × (w + 1), and in the
+    image. The unit boxes around the lattice points of a convex set K are disjoint and lie
+    in K ⊕ [−½, ½]², so there are at most area(K) + extent_x(K) + extent_y(K) + 1 of them;
+    K's area is at most the rectangle's, the image's, and either side times the image's
+    extent across it, and its extents at most the rectangle's bounding box clipped to the
+    image."""
+    xy0, xy1 = np.asarray(xy0, np.float64), np.asarray(xy1, np.float64)
+    width = np.asarray(width, np.float64)
+    width = width.max(axis=1) if width.ndim == 2 else np.broadcast_to(width, xy0.shape[:1])
+    delta = xy1 - xy0
+    length = np.hypot(delta[:, 0], delta[:, 1])
+    with np.errstate(invalid="ignore", divide="ignore"):  # length 0: no pixel, masked below
+        ux, uy = np.abs(delta[:, 0]) / length, np.abs(delta[:, 1]) / length
+    # A little beyond w + 1 and L: the loop's float32 may place a centre ulps inside.
+    across = width + 1.0 + 1e-3 * (1.0 + width)
+    along = length * (1.0 + 1e-6) + 1e-3
+    centre = 0.5 * (xy0 + xy1)
+    half_x, half_y = 0.5 * (along * ux + across * uy), 0.5 * (along * uy + across * ux)
+    span_x = np.minimum(centre[:, 0] + half_x, image_width) - np.maximum(centre[:, 0] - half_x, 0.0)
+    span_y = np.minimum(centre[:, 1] + half_y, image_height) - np.maximum(centre[:, 1] - half_y, 0.0)
+    area = np.minimum.reduce(
+        [
+            along * across,
+            along * (image_width * uy + image_height * ux),
+            across * (image_width * ux + image_height * uy),
+            np.maximum(span_x, 0.0) * np.maximum(span_y, 0.0),
+        ]
+    )
+    bound = area + np.maximum(span_x, 0.0) + np.maximum(span_y, 0.0) + 1.0
+    # Zero-length segments, and ribbons that miss the image, cover nothing.
+    return np.where((length > 0) & (span_x >= 0) & (span_y >= 0), np.ceil(bound), 0.0)
+
+
+def _fragments(raster, limit: int | None) -> tuple[int, bool]:
+    """(fragments, counted): the raster's bound, or its count where `limit` allows."""
+    if limit is not None:
+        count = count_fragments(*raster, limit=limit)
+        if count is not None:
+            return count, True
+    return int(ribbon_pixel_bound(raster[0], raster[1], raster[4], raster[5], raster[6]).sum()), False
+
+
+def _width_keys(scene: Scene) -> str:
+    strands = scene.strands
+    widest = float(np.max(strands.width, initial=0.0))
+    return f"hair.width = {widest:g} ({strands.width_units}), {strands.num_strands:,} strands"
+
+
+def fragment_needs(scene: Scene, camera_raster, light, *, limit: int | None = None) -> list[Need]:
+    """The camera's and the light's fragments (module docstring): `camera_raster` and
+    `light` (`light_raster`'s, or None without shadows) are `rasterize`'s arguments;
+    bounded, or with a `limit` counted (`_fragments`)."""
+    cam = scene.camera
+    f = jnp.dtype(jnp.result_type(float)).itemsize
+    depth = scene.occluder is not None
+    on_device = setup_on_device()
+    count, counted = _fragments(camera_raster, limit)
+    keys = f"{_width_keys(scene)}, camera.width x camera.height = {cam.width}x{cam.height} (--size)"
+    what = f"the camera's {count:,} fragments" if counted else f"the camera's fragments (at most {count:,})"
+    per = fragment_bytes(f, depth) + FRAGMENT_SORT
+    needs = [Need(what, keys, 0 if on_device else count * per, count * FRAGMENT_FLOATS * f)]
+    if on_device:
+        plan = raster_plan(*camera_raster[:7])
+        needs.append(Need("the camera raster's candidates", keys, 0, candidate_bytes(plan, depth)))
+    if light is not None:
+        count, counted = _fragments(light, limit)
+        keys = f"shadows.resolution = {light[5]}, {_width_keys(scene)}"
+        what = f"the light's {count:,} fragments" if counted else f"the light's fragments (at most {count:,})"
+        light_on_device = on_device and scene.shadows.rasterizes_on_device
+        host = 0 if light_on_device else count * LIGHT_FRAGMENT_HOST
+        needs.append(Need(what, keys, host, count * LIGHT_FRAGMENT_FLOATS * f))
+        if light_on_device:
+            plan = raster_plan(*light[:7])
+            needs.append(Need("the light raster's candidates", keys, 0, candidate_bytes(plan, True)))
+    return needs
+
+
+def _pools(needs: list[Need]) -> list[tuple[str, int, int | None, list[int]]]:
+    """(where, total bytes, bytes available, each need's bytes there) per memory."""
+    if jax.default_backend() == "cpu":
+        each = [n.host + n.jax for n in needs]
+        return [("", sum(each), _capacity.available_memory(), each)]
+    host, device = [n.host for n in needs], [n.jax for n in needs]
+    return [
+        (" on the host", sum(host), _capacity.available_memory(), host),
+        (" on the device", sum(device), _device_raster.device_memory(), device),
+    ]
+
+
+def _over(needs: list[Need]) -> SceneTooLarge | None:
+    """The refusal of `needs` where they exceed a memory, naming the largest item there."""
+    for where, total, available, each in _pools(needs):
+        if available is None or total <= available:
+            continue
+        need, size = max(zip(needs, each), key=lambda pair: pair[1])
+        return SceneTooLarge(
+            f"{need.keys}: {need.what} need {memory_size(size)} of the {memory_size(total)} this "
+            f"render needs{where}; {memory_size(available)} of memory is available{where}"
+        )
+    return None
+
+
+def check_capacity(scene: Scene, camera_raster=None) -> None:
+    """Refuse (`SceneTooLarge`) a render of `scene` whose estimate exceeds the memory
+    available: the closed-form items (`fixed_needs`); with the camera's `camera_raster`
+    (`rasterize`'s arguments) also the fragments, bounded, then counted where the bound
+    is over (module docstring)."""
+    needs = fixed_needs(scene)
+    refusal = _over(needs)
+    if refusal is not None:
+        raise refusal
+    cells, keys = scene.shadows.planned_maps() if scene.shadows.casts else (0, "")
+    if cells > MAX_MAP_CELLS:
+        raise SceneTooLarge(f"{keys}: {cells:,} map cells exceed the {MAX_MAP_CELLS:,} the maps can index")
+    if camera_raster is None:
+        return
+    light = None
+    if scene.shadows.casts:
+        strands = scene.strands
+        segments = strands.segments()
+        _, light = light_raster(
+            strands.points,
+            segments,
+            strands.strand_of_point[segments[:, 0]],
+            strands.width,
+            scene.light,
+            scene.shadows.resolution,
+            strands.width_units,
+        )
+    bounded = needs + fragment_needs(scene, camera_raster, light)
+    if _over(bounded) is None:
+        return
+    available = _capacity.available_memory() or 0
+    limit = COUNT_VISITS * available // fragment_bytes(jnp.dtype(jnp.result_type(float)).itemsize, False)
+    refusal = _over(needs + fragment_needs(scene, camera_raster, light, limit=limit))
+    if refusal is not None:
+        raise refusal
