@@ -251,12 +251,14 @@ def child_main(argv) -> int:
         result.update(status="MemoryError" if oom else "error", error=f"{type(err).__name__}: {err}"[:2000])
     import jax
 
-    from .._geometry._device_raster import setup_on_device
+    from .._device import device_record
 
     result["wall_s"] = time.perf_counter() - start
     result["peak_rss_kib"] = _peak_rss_kib()
-    result["jax_backend"] = jax.default_backend()
-    result["setup_placement"] = "device" if setup_on_device() else "host"  # docs/model.md §5
+    device = device_record()
+    result["jax_backend"] = device["jax_platform"]
+    result["jax_device_kind"] = device["jax_device_kind"]
+    result["setup_placement"] = device["setup"]  # docs/model.md §5
     result["jax_devices"] = [str(d) for d in jax.devices()]
     result["x64"] = bool(jax.config.jax_enable_x64)  # type: ignore[attr-defined]  # jax declares its options at run time
     write_json_strict(Path(out_path), result)
