@@ -75,6 +75,10 @@ def _machine_info(results: list[dict]) -> dict:
     kind = next((r.get("jax_device_kind") for r in results if r.get("jax_device_kind")), None)
     devices = next((r.get("jax_devices") for r in results if r.get("jax_devices")), None)
     placement = next((r.get("setup_placement") for r in results if r.get("setup_placement")), None)
+    gl = next((r["gl"] for r in results if r.get("gl", {}).get("status") == "ok"), None)
+    renderer = (
+        {} if gl is None else {"gl_renderer": gl.get("gl_renderer"), "gl_version": gl.get("gl_version")}
+    )
     return {
         "platform": platform.platform(),
         "machine": platform.machine(),
@@ -88,6 +92,7 @@ def _machine_info(results: list[dict]) -> dict:
         "jax_device_kind": kind,
         "jax_devices": devices,
         "setup_placement": placement,
+        **renderer,
     }
 
 
@@ -116,18 +121,13 @@ def _targets_met(cfg: dict, r: dict) -> dict:
 
 def _header(backend: str, repeats: int, machine: dict, results: list[dict]) -> str:
     """The table's header: the machine, JAX's build and device (its kind, e.g. an NVIDIA
-    card's name, and where the set-up ran) and, where GL was measured, its renderer string.
-    Adds the GL renderer to `machine`."""
+    card's name, and where the set-up ran) and, where GL was measured, its renderer string."""
     dtype = next((r["dtype"] for r in results if r.get("dtype")), "?")
-    gl_info = next((r["gl"] for r in results if r.get("gl", {}).get("status") == "ok"), None)
-    if gl_info is not None:
-        machine["gl_renderer"] = gl_info.get("gl_renderer")
-        machine["gl_version"] = gl_info.get("gl_version")
     gl_line = ""
     if backend != "jax":
         gl_line = "\nGL: " + (
-            f"{gl_info['gl_renderer']} ({gl_info['gl_version']})"
-            if gl_info
+            f"{machine['gl_renderer']} ({machine['gl_version']})"
+            if "gl_renderer" in machine
             else next((r["gl"]["error"] for r in results if r.get("gl", {}).get("error")), "-")
         )
     devices = machine["jax_devices"] or []

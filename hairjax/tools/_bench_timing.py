@@ -41,13 +41,12 @@ def measure_gl(scene, repeats: int, progress) -> dict:
     """Time `render_gl(scene)`: one warm-up run (shader compilation), then `repeats`."""
     import numpy as np
 
-    from ..gl import GLUnavailable, get_context, render_gl
+    from ..gl import GLUnavailable, render_gl, renderer_info
 
     try:
-        ctx = get_context()
+        info = renderer_info()  # the driver's strings, as render's sidecar records them
     except GLUnavailable as err:
         return {"status": "unavailable", "error": f"GL unavailable: {err}"}
-    info = {"gl_renderer": ctx.info.get("GL_RENDERER"), "gl_version": ctx.info.get("GL_VERSION")}
     progress("GL warm-up run (compiles the shaders)")
     result = render_gl(scene)
     total: list[float] = []

@@ -107,7 +107,7 @@ def test_bench_reports_gl_unavailable(monkeypatch):
     def unavailable():
         raise hairjax.gl.GLUnavailable("no EGL here")
 
-    monkeypatch.setattr(hairjax.gl, "get_context", unavailable)
+    monkeypatch.setattr(hairjax.gl._context, "get_context", unavailable)  # what renderer_info asks
     r = measure_gl(None, 1, lambda msg: None)
     assert r == {"status": "unavailable", "error": "GL unavailable: no EGL here"}
     cfg = dict(strands=2000, size=128)
