@@ -3,7 +3,14 @@
 PY      ?= $(shell command -v python3.11 || command -v python3)
 VENV    := .venv
 BIN     := $(VENV)/bin
-STAMP   := $(VENV)/.installed
+# JAX's CUDA build on a machine with an NVIDIA GPU: `make run JAX_EXTRA=cuda` installs
+# pyproject's `cuda` extra (jax[cuda12]) on top (README, "On a GPU"). Its own stamp, so
+# adding it to a CPU install reinstalls; `make test` afterwards keeps it.
+JAX_EXTRA ?=
+ifneq ($(filter-out cuda,$(JAX_EXTRA)),)
+$(error JAX_EXTRA must be cuda or empty, got '$(JAX_EXTRA)')
+endif
+STAMP   := $(VENV)/.installed$(if $(JAX_EXTRA),-$(JAX_EXTRA))
 
 .PHONY: run test notebooks bench clean
 
@@ -32,10 +39,12 @@ system-packages:
 $(STAMP): pyproject.toml | $(BIN)/python system-packages
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[test,reference,usd]'  # reference: Mitsuba, usd: usd-core, so their tests run
+	$(if $(JAX_EXTRA),$(BIN)/python -m pip install --quiet -e '.[$(JAX_EXTRA)]')
 	$(BIN)/python -m ipykernel install --sys-prefix --name python3 >/dev/null  # the notebooks' kernelspec
 	touch $(STAMP)
 
 run: $(STAMP)
+	@$(BIN)/python -c 'import jax; d = jax.devices()[0]; print(f"JAX runs on {d.platform}: {d.device_kind}")'
 	$(BIN)/hairjax render -o out/default.exr --png out/default.png --profile
 
 # Each tool on its own line, so a failure names it; all before the (long) test run.

@@ -6,6 +6,10 @@ The notebooks run in a kernel started from this very interpreter (the test write
 `python3` spec elsewhere, e.g. one whose argv is a bare `python`, cannot pick another
 environment), with the notebook's folder as working directory and
 `HAIRJAX_NOTEBOOK_QUICK=1`, which the notebooks read to shrink their sizes.
+
+The outputs stored in the repository are a full run's, at the sizes each notebook's text
+gives: a notebook with a quick mode prints `QUICK_MARK` in it, and no stored output may
+hold it (re-run one in full with nbclient, without HAIRJAX_NOTEBOOK_QUICK, to store it).
 """
 
 from __future__ import annotations
@@ -54,6 +58,60 @@ def kernel_env(tmp_path, monkeypatch):
 
 def test_there_are_notebooks():
     assert NOTEBOOKS, "notebooks/ holds no .ipynb"
+
+
+QUICK_VARIABLE = "HAIRJAX_NOTEBOOK_QUICK"
+QUICK_MARK = "(quick mode)"  # what a notebook prints, in quick mode only
+
+
+def _cell_texts(nb) -> list[str]:
+    """The text of every code cell's outputs: streams, and the plain-text and Markdown
+    forms of displayed results."""
+    texts = []
+    for cell in nb.cells:
+        if cell.cell_type != "code":
+            continue
+        for out in cell.get("outputs", []):
+            texts.append(out.get("text", ""))
+            data = out.get("data", {})
+            texts += [data.get(kind, "") for kind in ("text/plain", "text/markdown")]
+    return [t if isinstance(t, str) else "".join(t) for t in texts]
+
+
+def quick_mode_problems(nb) -> list[str]:
+    """Why `nb`'s stored outputs may not be a full run's: it has a quick mode but never
+    says so when in it, or a stored output says it ran in it."""
+    source = "\n".join(cell.source for cell in nb.cells if cell.cell_type == "code")
+    if QUICK_VARIABLE not in source:
+        return []
+    problems = []
+    if QUICK_MARK not in source:
+        problems.append(f"reads {QUICK_VARIABLE} but never prints {QUICK_MARK!r} in quick mode")
+    if any(QUICK_MARK in text for text in _cell_texts(nb)):
+        problems.append(f"its stored outputs are a quick-mode run (they print {QUICK_MARK!r})")
+    return problems
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
+def test_notebook_stored_from_a_full_run(path):
+    """Fast, executes nothing: the stored outputs are not a quick-mode run's."""
+    assert not quick_mode_problems(nbformat.read(path, as_version=4))
+
+
+def test_quick_mode_outputs_are_found():
+    """The check above can fail: a notebook that says it ran quick, and one that could not say."""
+    cell = nbformat.v4.new_code_cell
+    marked = cell('QUICK = os.environ.get("HAIRJAX_NOTEBOOK_QUICK") == "1"\nprint(" (quick mode)" * QUICK)')
+    quick = nbformat.v4.new_notebook(cells=[marked])
+    assert not quick_mode_problems(quick)
+    marked.outputs = [nbformat.v4.new_output("stream", name="stdout", text="images 128x128 (quick mode)\n")]
+    assert quick_mode_problems(quick) == [
+        "its stored outputs are a quick-mode run (they print '(quick mode)')"
+    ]
+    silent = nbformat.v4.new_notebook(cells=[cell('QUICK = os.environ.get("HAIRJAX_NOTEBOOK_QUICK")')])
+    assert quick_mode_problems(silent) == [
+        "reads HAIRJAX_NOTEBOOK_QUICK but never prints '(quick mode)' in quick mode"
+    ]
 
 
 # Stored outputs are small PNGs: a notebook over this is carrying full-size figures.
@@ -113,3 +171,7 @@ def test_notebook_runs(path, kernel_env):
         if out.get("output_type") == "error"
     ]
     assert not errors
+    # The suite's run is a quick one, and says so: what keeps such outputs from being stored.
+    assert QUICK_VARIABLE not in "".join(c.source for c in nb.cells) or any(
+        QUICK_MARK in text for text in _cell_texts(nb)
+    ), f"{path.name} ran in quick mode without printing {QUICK_MARK!r}"

@@ -196,8 +196,15 @@ def build_parser() -> argparse.ArgumentParser:
         "-o",
         "--output",
         type=Path,
-        default=Path("out/reference.exr"),
-        help="output image, .exr (linear float, alpha = coverage) or .png (8-bit sRGB)",
+        help="output image, .exr (linear float, alpha = coverage) or .png (8-bit sRGB) "
+        "(default: out/reference.exr)",
+    )
+    p.add_argument("--png", type=Path, help="also write an 8-bit sRGB PNG here (alone: only the PNG)")
+    p.add_argument(
+        "--no-sidecar",
+        dest="sidecar",
+        action="store_false",
+        help="do not write IMAGE.json (the scene as resolved, melanin, spp, seed, versions, time)",
     )
     p.add_argument("--spp", type=positive_int, help="samples per pixel (default: reference.spp, 64)")
     p.add_argument(

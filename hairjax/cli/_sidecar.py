@@ -1,9 +1,12 @@
-"""The JSON record `hairjax render` writes beside an image: what made it.
+"""The JSON records `hairjax render` and `hairjax reference` write beside an image: what made it.
 
 The scene as resolved (every dataclass field, defaults included, after --set), the
-shading model's parameters, the command line, the versions of hairjax and its numerical
-dependencies, and the time of each stage. Arrays of more than a few numbers (the strands'
-points) are summarised by shape and range, so the record stays small and readable.
+command line, the versions of hairjax and its numerical dependencies, and the time of
+each stage. `render`'s adds the shading model's parameters and the device it ran on (JAX's
+platform and device kind, where the set-up ran, and for `--backend gl` the GL renderer
+string); `reference`'s adds the fibres' pigments and the path tracer's samples, seed and
+depth, and Mitsuba's version. Arrays of more than a few numbers (the strands' points) are
+summarised by shape and range, so the record stays small and readable.
 """
 
 from __future__ import annotations
@@ -16,10 +19,11 @@ from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
 
-__all__ = ["render_record", "jsonable", "versions"]
+__all__ = ["render_record", "reference_record", "jsonable", "versions"]
 
 _SMALL = 16  # arrays up to this many numbers are written out in full
 _VERSIONED = ("hairjax", "jax", "jaxlib", "numpy", "equinox", "optimistix", "moderngl", "OpenImageIO")
+_REFERENCE_VERSIONED = ("mitsuba", "drjit")  # the [reference] extra
 
 
 def jsonable(value: Any) -> Any:
@@ -56,14 +60,45 @@ def jsonable(value: Any) -> Any:
     return summary
 
 
-def versions() -> dict[str, str]:
+def versions(names: tuple[str, ...] = _VERSIONED) -> dict[str, str]:
+    """Python's version and each distribution's in `names`."""
     out = {"python": platform.python_version()}
-    for name in _VERSIONED:
+    for name in names:
         try:
             out[name] = version(name)
         except PackageNotFoundError:  # an optional dependency that is not installed
             out[name] = "not installed"
     return out
+
+
+def _made(scene, scene_file: Path, overrides: dict[str, Any], images: list[Path]) -> dict:
+    """What every record holds: the command, the time, the scene file with its overrides,
+    the images and the scene as resolved."""
+    return {
+        "command": ["hairjax", *sys.argv[1:]],
+        "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        "scene_file": str(scene_file),
+        "overrides": jsonable(overrides),
+        "image": {
+            "files": [p.name for p in images],
+            "width": scene.camera.width,
+            "height": scene.camera.height,
+        },
+        "scene": jsonable(scene),
+    }
+
+
+def _device(backend: str) -> dict[str, str]:
+    """Where the render ran: JAX's devices (`_device.device_record`), and for GL the
+    renderer string of the context `render_gl` used."""
+    from .._device import device_record
+
+    device = device_record()
+    if backend == "gl":
+        from ..gl import renderer_info
+
+        device |= renderer_info()
+    return device
 
 
 def render_record(
@@ -73,14 +108,10 @@ def render_record(
     --seed, --size) and rendered by `backend` in `timings` (seconds by stage)."""
     import numpy as np
 
-    image = {"files": [p.name for p in images], "width": scene.camera.width, "height": scene.camera.height}
     return {
-        "command": ["hairjax", *sys.argv[1:]],
-        "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
-        "scene_file": str(scene_file),
-        "overrides": jsonable(overrides),
+        **_made(scene, scene_file, overrides, images),
         "backend": backend,
-        "image": image,
+        "device": _device(backend),
         "shading": {
             "model": type(scene.shading).__name__,
             "params": {
@@ -88,7 +119,33 @@ def render_record(
                 for f in dataclasses.fields(scene.params)
             },
         },
-        "scene": jsonable(scene),
         "timings_s": {k: round(float(v), 6) for k, v in timings.items()},
         "versions": versions(),
+    }
+
+
+def reference_record(
+    scene, scene_file: Path, overrides: dict[str, Any], sampling: dict[str, int], seconds: float, images
+) -> dict:
+    """The sidecar of `hairjax reference`: `scene`'s reference settings as used (the
+    pigments, or `sigma_a` where the scene gives the absorption instead), `sampling` (the
+    spp the sampler took, the seed) and the path tracer's time."""
+    from .._reference._render import settings_of
+
+    settings = settings_of(scene)
+    return {
+        **_made(scene, scene_file, overrides, images),
+        "reference": {
+            "eumelanin": settings.eumelanin,
+            "pheomelanin": settings.pheomelanin,
+            "sigma_a": jsonable(settings.sigma_a),
+            "longitudinal_roughness": settings.longitudinal_roughness,
+            "azimuthal_roughness": settings.azimuthal_roughness,
+            "scale_tilt": settings.scale_tilt,
+            "eta": settings.eta,
+            "max_depth": settings.max_depth,
+            **sampling,
+        },
+        "timings_s": {"reference": round(float(seconds), 6)},
+        "versions": versions(_VERSIONED + _REFERENCE_VERSIONED),
     }

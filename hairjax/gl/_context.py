@@ -8,7 +8,15 @@ from __future__ import annotations
 
 import functools
 
-__all__ = ["GLUnavailable", "GLError", "get_context", "check", "release", "SYSTEM_PACKAGES"]
+__all__ = [
+    "GLUnavailable",
+    "GLError",
+    "get_context",
+    "renderer_info",
+    "check",
+    "release",
+    "SYSTEM_PACKAGES",
+]
 
 # What Debian needs for a headless EGL context (the Makefile installs them when missing).
 SYSTEM_PACKAGES = "libegl1 libgl1-mesa-dri"
@@ -50,6 +58,14 @@ def get_context():
         )
     check(ctx, "context creation")
     return ctx
+
+
+def renderer_info() -> dict[str, str]:
+    """The driver behind the context, as GL names it: `gl_renderer` (e.g. "llvmpipe (LLVM
+    15.0.6, 256 bits)" without a GPU, the card's name with its vendor's driver) and
+    `gl_version`. Raises `GLUnavailable` where there is no context."""
+    info = get_context().info
+    return {"gl_renderer": str(info.get("GL_RENDERER")), "gl_version": str(info.get("GL_VERSION"))}
 
 
 def check(ctx, stage: str) -> None:

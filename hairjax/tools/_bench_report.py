@@ -18,7 +18,56 @@ from ._bench_cases import (
     config_name,
 )
 
-__all__ = ["format_table", "write_json_strict"]
+__all__ = ["format_table", "write_json_strict", "verdict", "verdict_line", "missed_targets", "QUICK_NOTE"]
+
+# The targets' names in the table, by their key in `targets_met`.
+TARGET_LABELS = {
+    "shading_s": "shading stage",
+    "gradient_over_shading": "gradient / shading",
+    "full_render_s": "full render",
+    "ordering_msegments_per_s": "ordering",
+    "peak_rss": "peak RSS",
+    "jax_over_gl": "JAX / GL full render",
+    "jax_no_slower_than_gl": "JAX no slower than GL",
+}
+QUICK_NOTE = (
+    "targets not judged: --quick runs one small configuration to check that the benchmark "
+    "runs; the targets are set for the full configurations, where fixed costs (a call's "
+    "dispatch, the gradient's extra pass) no longer dominate the times (BENCHMARKS.md)"
+)
+
+
+def missed_targets(result: dict) -> list[str]:
+    """The targets `result` missed, by key, in the order they were judged."""
+    return [key for key, met in result.get("targets_met", {}).items() if not met]
+
+
+def verdict(result: dict, judged: bool) -> str:
+    """A configuration's status: its run's failure (`MemoryError`, `error`) if it failed;
+    else `ran` where the targets are not judged (--quick), `ok` where every target it has
+    was met, and `MISS (k of n)` where k of its n targets were missed."""
+    if result.get("status") != "ok":
+        return str(result.get("status", "?"))
+    if not judged:
+        return "ran"
+    missed, n = missed_targets(result), len(result.get("targets_met", {}))
+    return f"MISS ({len(missed)} of {n})" if missed else "ok"
+
+
+def verdict_line(configs: list[dict], results: list[dict], judged: bool) -> str:
+    """The line under the table: the targets missed, by configuration, or all met."""
+    if not judged:
+        return QUICK_NOTE
+    judged_results = [r for r in results if r.get("status") == "ok"]
+    total = sum(len(r.get("targets_met", {})) for r in judged_results)
+    missed = [
+        f"{TARGET_LABELS.get(key, key)} at {config_name(c)}"
+        for c, r in zip(configs, results)
+        for key in missed_targets(r)
+    ]
+    if not missed:
+        return f"targets: all {total} met"
+    return f"targets: {len(missed)} of {total} missed: " + "; ".join(missed)
 
 
 def _fmt_time(s) -> str:
@@ -192,7 +241,7 @@ def format_table(configs: list[dict], results: list[dict], header: str) -> str:
             f"<= {PEAK_RSS_TARGET_GIB:g} GiB at {config_name(_target_config())}",
         )
     )
-    rows.append(("status", [r.get("status", "?") for r in results], ""))
+    rows.append(("status", [r.get("verdict", r.get("status", "?")) for r in results], ""))
 
     head = ("stage", names, "target")
     widths = [max(len(head[0]), *(len(r[0]) for r in rows))]

@@ -41,13 +41,12 @@ def measure_gl(scene, repeats: int, progress) -> dict:
     """Time `render_gl(scene)`: one warm-up run (shader compilation), then `repeats`."""
     import numpy as np
 
-    from ..gl import GLUnavailable, get_context, render_gl
+    from ..gl import GLUnavailable, render_gl, renderer_info
 
     try:
-        ctx = get_context()
+        info = renderer_info()  # the driver's strings, as render's sidecar records them
     except GLUnavailable as err:
         return {"status": "unavailable", "error": f"GL unavailable: {err}"}
-    info = {"gl_renderer": ctx.info.get("GL_RENDERER"), "gl_version": ctx.info.get("GL_VERSION")}
     progress("GL warm-up run (compiles the shaders)")
     result = render_gl(scene)
     total: list[float] = []
@@ -251,12 +250,14 @@ def child_main(argv) -> int:
         result.update(status="MemoryError" if oom else "error", error=f"{type(err).__name__}: {err}"[:2000])
     import jax
 
-    from .._geometry._device_raster import setup_on_device
+    from .._device import device_record
 
     result["wall_s"] = time.perf_counter() - start
     result["peak_rss_kib"] = _peak_rss_kib()
-    result["jax_backend"] = jax.default_backend()
-    result["setup_placement"] = "device" if setup_on_device() else "host"  # docs/model.md §5
+    device = device_record()
+    result["jax_backend"] = device["jax_platform"]
+    result["jax_device_kind"] = device["jax_device_kind"]
+    result["setup_placement"] = device["setup"]  # docs/model.md §5
     result["jax_devices"] = [str(d) for d in jax.devices()]
     result["x64"] = bool(jax.config.jax_enable_x64)  # type: ignore[attr-defined]  # jax declares its options at run time
     write_json_strict(Path(out_path), result)

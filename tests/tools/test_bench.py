@@ -1,5 +1,7 @@
 """Smoke tests of `hairjax bench --quick` (JAX, and `--backend both`): it runs, and its
-JSON holds every figure.
+JSON holds every figure; the status row and the line under the table follow the
+targets' verdicts (and a quick run judges none); the header names JAX's device and GL's
+renderer.
 
 No timing thresholds: the targets are printed by the benchmark, not asserted here.
 """
@@ -8,13 +10,15 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import statistics
 
+import jax
 import pytest
 
 from hairjax.cli import main
 from hairjax.tools import GL_PASSES, STAGES
-from hairjax.tools._bench_report import format_table
+from hairjax.tools._bench_report import QUICK_NOTE, format_table, verdict, verdict_line
 from hairjax.tools._bench_timing import measure_gl
 
 
@@ -28,15 +32,26 @@ def test_bench_quick_writes_every_figure(tmp_path, capsys):
     assert status == 0
     printed = capsys.readouterr().out
     assert "shading stage" in printed and "ordering" in printed
+    # A quick run judges no target: no verdict in the table, a status that says it ran, and why.
+    assert not re.search(r"(ms|s|x|\d) (ok|MISS)\b", printed), printed  # a figure's mark, e.g. "2.7 ms ok"
+    (status,) = [line for line in printed.splitlines() if line.startswith("status ")]
+    assert status.split() == ["status", "ran"]
+    assert QUICK_NOTE in printed.splitlines()
+    kind = jax.devices()[0].device_kind
+    assert f"{jax.default_backend()}, float" in printed  # float32, or float64 under x64
+    assert f") on {len(jax.devices())} x {kind}, set-up on the " in printed
 
     data = json.loads(out.read_text())
     assert not list(tmp_path.glob(".b.json.*")), "the atomic write left a temporary file"
     assert data["repeats"] == 2
     for key in ("platform", "cpu_count", "jax_version", "jax_backend"):
         assert data["machine"][key], key
+    assert data["machine"]["jax_device_kind"] == kind and isinstance(kind, str)
+    assert data["targets_judged"] is False and data["targets_missed"] == []
 
     (config,) = data["configurations"]
     assert config["status"] == "ok", config["error"]
+    assert config["verdict"] == "ran" and config["targets_met"] == {}
     assert config["strands"] == 2000 and config["width"] == config["height"] == 128
     stages = config["stages"]
     assert set(STAGES) <= set(stages)
@@ -66,6 +81,9 @@ def test_bench_quick_both_backends(tmp_path, capsys):
         assert "GL unavailable:" in printed
         pytest.skip(gl["error"])
     assert gl["status"] == "ok", gl["error"]
+    renderer = data["machine"]["gl_renderer"]
+    assert isinstance(renderer, str) and renderer == gl["gl_renderer"]
+    assert f"GL: {renderer} ({gl['gl_version']})" in printed.splitlines()
     assert "GL full render" in printed and "JAX / GL full render" in printed
     assert "JAX no slower than GL" in printed
     assert _positive_finite(gl["full_render"]["median_s"])
@@ -89,7 +107,7 @@ def test_bench_reports_gl_unavailable(monkeypatch):
     def unavailable():
         raise hairjax.gl.GLUnavailable("no EGL here")
 
-    monkeypatch.setattr(hairjax.gl, "get_context", unavailable)
+    monkeypatch.setattr(hairjax.gl._context, "get_context", unavailable)  # what renderer_info asks
     r = measure_gl(None, 1, lambda msg: None)
     assert r == {"status": "unavailable", "error": "GL unavailable: no EGL here"}
     cfg = dict(strands=2000, size=128)
@@ -123,3 +141,30 @@ def test_the_device_targets_are_marked():
     table = format_table(configs, results, "header")
     (rss,) = [line for line in table.splitlines() if line.startswith("peak RSS")]
     assert "4.99 GiB MISS" in rss and "1.20 GiB MISS" not in rss and "1.20 GiB" in rss
+
+
+def _judged(met: dict) -> dict:
+    result = {"status": "ok", "targets_met": met}
+    return dict(result, verdict=verdict(result, judged=True))
+
+
+def test_the_status_follows_the_verdicts():
+    """A configuration that missed a target is not `ok`: its status counts the misses, and
+    the line under the table names each (configuration and target); all met is `ok`; a
+    run that failed keeps its failure; an unjudged (quick) run says it ran."""
+    small, big = dict(strands=20_000, size=512), dict(strands=100_000, size=1024)
+    missed = _judged({"shading_s": True, "gradient_over_shading": False, "full_render_s": False})
+    met = _judged({"shading_s": True, "peak_rss": True})
+    assert missed["verdict"] == "MISS (2 of 3)" and met["verdict"] == "ok"
+    assert verdict({"status": "MemoryError", "targets_met": {}}, judged=True) == "MemoryError"
+    assert verdict({"status": "ok", "targets_met": {}}, judged=False) == "ran"
+
+    table = format_table([small, big], [met, missed], "header")
+    (status,) = [line for line in table.splitlines() if line.startswith("status ")]
+    assert status.split() == ["status", "ok", "MISS", "(2", "of", "3)"]
+    line = verdict_line([small, big], [met, missed], judged=True)
+    assert line == (
+        "targets: 2 of 5 missed: gradient / shading at 100k @ 1024x1024; full render at 100k @ 1024x1024"
+    )
+    assert verdict_line([small, big], [met, met], judged=True) == "targets: all 4 met"
+    assert verdict_line([small], [met], judged=False) == QUICK_NOTE
