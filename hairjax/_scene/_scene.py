@@ -22,7 +22,7 @@ from ._camera import Camera
 from ._light import Light, rgb
 from ._occluder import Occluder
 from ._reference import ReferenceSettings
-from ._strands import Strands, distinct_strands
+from ._strands import Strands
 
 __all__ = ["PatchGeometry", "Scene"]
 
@@ -110,11 +110,6 @@ class Scene:
                 raise SceneError(
                     f"scene.{key} must be a {kind.__name__}, got {type(getattr(self, key)).__name__}"
                 )
-        if not distinct_strands(self.strands).any():
-            raise SceneError(
-                f"scene.strands: none of its {self.strands.num_strands} strands has two distinct "
-                "points (one point, or all points the same): nothing to draw"
-            )
         if self.streaks is not None and not isinstance(self.streaks, Streaks):
             raise SceneError("scene.streaks must be a Streaks or None")
         object.__setattr__(self, "background", rgb("background.color", self.background))

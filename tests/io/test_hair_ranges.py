@@ -7,14 +7,12 @@ from __future__ import annotations
 
 import math
 import struct
-import warnings
 
 import numpy as np
 import pytest
 
-import hairjax as hj
 from hairjax._constants import COORDINATE_BOUND
-from hairjax._errors import HairFormatError, MeshFormatError, SceneError
+from hairjax._errors import HairFormatError, MeshFormatError
 from hairjax._io import load_hair
 from hairjax._io._obj import load_obj
 from hairjax._scene._strands import Strands, distinct_strands, select_strands
@@ -222,14 +220,3 @@ def test_distinct_strands_by_hand():
     assert distinct_strands(strands).tolist() == [False, True, False, True]
     subset = select_strands(strands, [False, True, False, True])
     assert subset.offsets.tolist() == [0, 3, 5] and subset.points[3].tolist() == [1, 1, 1]
-
-
-def test_a_scene_without_drawable_strands_is_refused():
-    """Python-built strands keep their one-point strands (they draw nothing, docs/model.md
-    §1), but a scene with nothing to draw is refused rather than rendered transparent."""
-    lone = Strands.from_list([[[0, 0, 0]], [[1, 1, 1], [1, 1, 1]]])
-    with pytest.raises(SceneError, match=r"scene\.strands: none of its 2 strands has two distinct points"):
-        hj.Scene(lone)
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        hj.Scene(Strands.from_list([[[0, 0, 0]], [[0, 0, 0], [0, 1, 0]]]))  # one drawable: accepted
