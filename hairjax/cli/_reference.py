@@ -13,7 +13,7 @@ import sys
 import time
 from pathlib import Path
 
-from ._outputs import IMAGE_SUFFIXES, Output, check_outputs, written_together
+from ._outputs import IMAGE_SUFFIXES, Output, check_outputs
 
 __all__ = ["run"]
 
@@ -35,14 +35,12 @@ def _outputs(args: argparse.Namespace) -> tuple[list[Path], Path | None]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from .._io._files import write_json
-    from .._io._image import write_image
     from .._reference import reference_image
     from .._reference._mitsuba_scene import sample_count
     from .._reference._render import check_sampling, settings_of
     from .._reference._support import check_supported, import_mitsuba
-    from ._scenes import load_cli_scene, scene_overrides, scene_path
-    from ._sidecar import reference_record
+    from ._scenes import load_cli_scene, recorded_changes, scene_path
+    from ._sidecar import reference_record, write_image_and_record
 
     images, sidecar = _outputs(args)
     check_sampling(1 if args.spp is None else args.spp, args.sample_seed)  # before any work
@@ -60,15 +58,13 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     image = reference_image(scene, spp=spp, seed=args.sample_seed)
     seconds = time.perf_counter() - start
-    paths = images + ([sidecar] if sidecar is not None else [])
-    with written_together(paths) as temps:
-        for tmp in temps[: len(images)]:
-            write_image(tmp, image)
-        if sidecar is not None:
-            path = scene_path(args.scene)
-            sampling = {"spp": spp, "sample_seed": args.sample_seed}
-            record = reference_record(scene, path, scene_overrides(args, path), sampling, seconds, images)
-            write_json(temps[-1], record)
+
+    def record():
+        path = scene_path(args.scene)
+        sampling = {"spp": spp, "sample_seed": args.sample_seed}
+        return reference_record(scene, path, recorded_changes(args, path), sampling, seconds, images)
+
+    paths = write_image_and_record(image, images, sidecar, record)
     if not args.quiet:
         camera = scene.camera
         print(

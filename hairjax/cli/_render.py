@@ -13,7 +13,6 @@ from ._outputs import (
     check_free_space,
     check_outputs,
     image_bytes,
-    written_together,
 )
 
 __all__ = ["run"]
@@ -85,18 +84,13 @@ def run(args: argparse.Namespace) -> int:
     if not np.all(np.isfinite(image)):
         print("hairjax: warning: the image has non-finite pixels", file=sys.stderr)
 
-    from .._io._files import write_json
-    from .._io._image import write_image
-    from ._sidecar import render_record
+    from ._sidecar import render_record, write_image_and_record
 
-    paths = images + ([sidecar] if sidecar is not None else [])
-    with written_together(paths) as temps:
-        for tmp in temps[: len(images)]:
-            write_image(tmp, image)
-        if sidecar is not None:
-            path = scene_path(args.scene)
-            record = render_record(scene, path, recorded_changes(args, path), args.backend, timings, images)
-            write_json(temps[-1], record)
+    def record():
+        path = scene_path(args.scene)
+        return render_record(scene, path, recorded_changes(args, path), args.backend, timings, images)
+
+    paths = write_image_and_record(image, images, sidecar, record)
     if not args.quiet:
         for p in paths:
             print(f"wrote {p}")

@@ -19,7 +19,7 @@ from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
 
-__all__ = ["render_record", "reference_record", "jsonable", "versions"]
+__all__ = ["render_record", "reference_record", "jsonable", "versions", "write_image_and_record"]
 
 _SMALL = 16  # arrays up to this many numbers are written out in full
 _VERSIONED = ("hairjax", "jax", "jaxlib", "numpy", "equinox", "optimistix", "moderngl", "OpenImageIO")
@@ -149,3 +149,20 @@ def reference_record(
         "timings_s": {"reference": round(float(seconds), 6)},
         "versions": versions(_VERSIONED + _REFERENCE_VERSIONED),
     }
+
+
+def write_image_and_record(image, images: list[Path], sidecar: Path | None, record) -> list[Path]:
+    """Write `image` to every path of `images` and, unless `sidecar` is None, the JSON of
+    `record()` beside them, all together (`written_together`: the image renamed last).
+    `record` is called only once the image is written. Returns the paths written."""
+    from .._io._files import write_json
+    from .._io._image import write_image
+    from ._outputs import written_together
+
+    paths = images + ([sidecar] if sidecar is not None else [])
+    with written_together(paths) as temps:
+        for tmp in temps[: len(images)]:
+            write_image(tmp, image)
+        if sidecar is not None:
+            write_json(temps[-1], record())
+    return paths
