@@ -70,6 +70,8 @@ from ._shading import KajiyaKay as KajiyaKay
 from ._shading import KajiyaKayLookup as KajiyaKayLookup
 from ._shading import KajiyaKayMirror as KajiyaKayMirror
 from ._shading import LightParams as LightParams
+from ._shading import Marschner as Marschner
+from ._shading import MarschnerParams as MarschnerParams
 from ._shading import PointInputs as PointInputs
 from ._shading import Reflectance as Reflectance
 from ._shading import Scheuermann as Scheuermann

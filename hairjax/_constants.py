@@ -70,3 +70,21 @@ PATCH_OPAQUE_STRANDS = 0.5
 # 3 · (10 · 1e18)² = 3e38, still finite in float32; the perspective divide (§2) is by depths
 # kept ≥ near, so it adds no factor the bound must cover.
 COORDINATE_BOUND = 1e18
+
+# The hair fibre's index of refraction (docs/model.md §19): Marschner et al. 2003's and
+# Mitsuba's `hair` BSDF's default (amber, 1.55), over air taken as 1 (the reference
+# renders with ext_ior = 1, docs/reference.md).
+HAIR_ETA = 1.55
+
+# Absorption per unit fibre radius of one unit of each pigment, RGB (d'Eon et al. 2011, as
+# Mitsuba 3's `hair` BSDF defines σ_a = eumelanin·EUMELANIN + pheomelanin·PHEOMELANIN in
+# its RGB variants, src/bsdfs/hair.cpp).
+EUMELANIN_SIGMA_A = (0.419, 0.697, 1.37)
+PHEOMELANIN_SIGMA_A = (0.187, 0.4, 1.05)
+
+# Karis 2016's azimuthal approximations (docs/model.md §19): h_TT = cos(φ/2)(1 + a(0.6 −
+# 0.8 cos φ)) and N_TT ∝ exp(−3.65 cos φ − 3.98), as (0.6, 0.8, 3.65, 3.98); N_TRT ∝
+# exp(17 cos φ − 16.78), as (17, 16.78); the TRT lobe's offset h = √3/2.
+KARIS_TT = (0.6, 0.8, 3.65, 3.98)
+KARIS_TRT = (17.0, 16.78)
+HAIR_TRT_OFFSET = 0.8660254037844386

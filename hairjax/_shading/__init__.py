@@ -15,6 +15,8 @@ from ._kajiya_kay import seed_cone as seed_cone
 from ._kajiya_kay import specular_power as specular_power
 from ._light import LightParams as LightParams
 from ._lookup import KajiyaKayLookup as KajiyaKayLookup
+from ._marschner import Marschner as Marschner
+from ._marschner import MarschnerParams as MarschnerParams
 from ._mirror import KajiyaKayMirror as KajiyaKayMirror
 from ._mirror import mirror_cone as mirror_cone
 from ._model import AbstractShadingModel as AbstractShadingModel

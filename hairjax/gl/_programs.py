@@ -33,6 +33,10 @@ def constants_glsl() -> str:
             lines.append(f"const int {name} = {value};")
         elif isinstance(value, float):
             lines.append(f"const float {name} = {value!r};")
+        elif isinstance(value, tuple) and all(isinstance(x, float) for x in value):
+            items = ", ".join(repr(x) for x in value)
+            kind = "vec3" if len(value) == 3 else f"float[{len(value)}]"
+            lines.append(f"const {kind} {name} = {kind}({items});")
     # Each registered model's branch of the camera shader (`AbstractShadingModel.gl_id`).
     for name in shading_model_names():
         gl_id = shading_model_class(name).gl_id

@@ -1,0 +1,206 @@
+"""The `marschner` shading model: Karis's R/TT/TRT approximation of a Marschner-family
+fibre, coloured by absorption from melanin as Mitsuba 3's `hair` BSDF defines it
+(docs/model.md §19). The per-point lobes are in `_marschner_lobes.py`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import ClassVar
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, ArrayLike, Float
+
+from .._constants import EUMELANIN_SIGMA_A, PHEOMELANIN_SIGMA_A
+from .._errors import SceneError
+from ._marschner_lobes import marschner_lobes
+from ._model import (
+    AbstractShadingModel,
+    Reflectance,
+    RGBLike,
+    ShadingPoints,
+    check_params,
+    register_shading_model,
+    rgb_param,
+    rgb_uniform,
+    scalar_param,
+    values_repr,
+)
+from ._transforms import IDENTITY, LOG, LOGIT, SOFTPLUS
+
+__all__ = ["MarschnerParams", "Marschner", "absorption"]
+
+
+class MarschnerParams(eqx.Module):
+    """The differentiable parameters of the `marschner` model (a pytree of arrays).
+
+    **Fields:**
+    - `eumelanin`, `pheomelanin`: pigment concentrations ≥ 0 (Mitsuba's `hair` BSDF:
+      0.3 blonde, 1.3 brown, 8 black); `sigma_a`: RGB absorption per unit fibre radius
+      added to the pigments' (0 by default; a scene file that gives `sigma_a` and no
+      pigment means σ_a alone, as Mitsuba's `sigma_a`). The fibre's σ_a is `absorption(params)`.
+    - `longitudinal_roughness`: β_m in (0, 1], as Mitsuba's; `tilt`: the cuticle scales'
+      angle α in degrees (Mitsuba's `scale_tilt`, 2 by default).
+    - `weight_r`, `weight_tt`, `weight_trt`: RGB weights of the three lobes (1: the
+      physical fibre; other values are art direction); `ambient`: an RGB ambient light
+      term; `kappa`: κ in τ = exp(−κΩ) (§7).
+
+    Concrete values are checked at construction (`SceneError` naming the field)."""
+
+    eumelanin: Float[Array, ""]
+    pheomelanin: Float[Array, ""]
+    sigma_a: Float[Array, " 3"]
+    longitudinal_roughness: Float[Array, ""]
+    tilt: Float[Array, ""]
+    weight_r: Float[Array, " 3"]
+    weight_tt: Float[Array, " 3"]
+    weight_trt: Float[Array, " 3"]
+    ambient: Float[Array, " 3"]
+    kappa: Float[Array, ""]
+
+    def __init__(
+        self,
+        eumelanin: ArrayLike = 1.3,
+        pheomelanin: ArrayLike = 0.2,
+        sigma_a: RGBLike = 0.0,
+        longitudinal_roughness: ArrayLike = 0.3,
+        tilt: ArrayLike = 2.0,
+        weight_r: RGBLike = 1.0,
+        weight_tt: RGBLike = 1.0,
+        weight_trt: RGBLike = 1.0,
+        ambient: RGBLike = 0.0,
+        kappa: ArrayLike = 1.0,
+    ):
+        self.eumelanin = scalar_param(eumelanin)
+        self.pheomelanin = scalar_param(pheomelanin)
+        self.sigma_a = rgb_param(sigma_a)
+        self.longitudinal_roughness = scalar_param(longitudinal_roughness)
+        self.tilt = scalar_param(tilt)
+        self.weight_r = rgb_param(weight_r)
+        self.weight_tt = rgb_param(weight_tt)
+        self.weight_trt = rgb_param(weight_trt)
+        self.ambient = rgb_param(ambient)
+        self.kappa = scalar_param(kappa)
+
+    def __check_init__(self):
+        check_params(
+            self,
+            colors=("sigma_a", "weight_r", "weight_tt", "weight_trt", "ambient"),
+            non_negative=("eumelanin", "pheomelanin", "kappa"),
+            positive=("longitudinal_roughness",),
+            finite=("tilt",),
+        )
+        beta = self.longitudinal_roughness
+        if not isinstance(beta, jax.core.Tracer) and float(np.asarray(beta)) > 1.0:
+            raise SceneError(f"shading.longitudinal_roughness must be in (0, 1], got {float(beta):g}")
+
+    def __repr__(self) -> str:
+        return values_repr(self)
+
+
+def absorption(params: MarschnerParams) -> Float[Array, " 3"]:
+    """The fibre's σ_a per unit radius: eumelanin·σ_eu + pheomelanin·σ_pheo + sigma_a
+    (Mitsuba 3's `hair` BSDF in RGB, d'Eon et al. 2011's pigment coefficients)."""
+    eu = jnp.asarray(EUMELANIN_SIGMA_A, dtype=params.sigma_a.dtype)
+    pheo = jnp.asarray(PHEOMELANIN_SIGMA_A, dtype=params.sigma_a.dtype)
+    return params.eumelanin * eu + params.pheomelanin * pheo + params.sigma_a
+
+
+_LOBE_GAINS = ("weight_r", "weight_tt", "weight_trt")
+
+
+@register_shading_model
+class Marschner(AbstractShadingModel):
+    """Karis's R/TT/TRT approximation of a Marschner fibre (docs/model.md §19): the colour
+    at a point is ambient + τ·V·light·(w_R·R + w_TT·TT + w_TRT·TRT), each lobe π·M_p·N_p
+    with σ_a from melanin. The strands' own colour is not read (as in the reference: a
+    fibre's colour is its absorption)."""
+
+    params: MarschnerParams = eqx.field(default_factory=MarschnerParams)
+
+    name: ClassVar[str] = "marschner"
+    params_type: ClassVar[type] = MarschnerParams
+    table_keys: ClassVar[tuple[str, ...]] = (
+        "eumelanin",
+        "pheomelanin",
+        "sigma_a",
+        "longitudinal_roughness",
+        "tilt",
+        "weight_r",
+        "weight_tt",
+        "weight_trt",
+        "ambient",
+        "kappa",
+    )
+    fittable: ClassVar[tuple[str, ...]] = (
+        *_LOBE_GAINS,
+        "eumelanin",
+        "pheomelanin",
+        "longitudinal_roughness",
+        "tilt",
+        "kappa",
+    )
+    searched: ClassVar[Mapping] = {
+        "eumelanin": SOFTPLUS,
+        "pheomelanin": SOFTPLUS,
+        "sigma_a": LOG,
+        "longitudinal_roughness": LOGIT,
+        "tilt": IDENTITY,
+        "kappa": LOG,
+    }
+    gl_id: ClassVar[int | None] = None
+
+    def reflectance(self, points: ShadingPoints, params: MarschnerParams) -> Reflectance:
+        lobes = jax.vmap(marschner_lobes, in_axes=(0, 0, 0, None, None, None))(
+            points.tangent,
+            points.to_light,
+            points.to_eye,
+            absorption(params),
+            params.longitudinal_roughness,
+            params.tilt,
+        )
+        r, tt, trt = lobes
+        shape = points.base_color.shape
+        return Reflectance(
+            ambient={"ambient": jnp.ones(shape, points.base_color.dtype)},
+            lit={
+                "weight_r": jnp.broadcast_to(r[:, None], shape),
+                "weight_tt": tt,
+                "weight_trt": trt,
+            },
+        )
+
+    def gl_uniforms(self, params: MarschnerParams) -> dict:
+        return {
+            "shading.ambient": rgb_uniform(params.ambient),
+            "marschner.sigma_a": rgb_uniform(absorption(params)),
+            "marschner.weight_r": rgb_uniform(params.weight_r),
+            "marschner.weight_tt": rgb_uniform(params.weight_tt),
+            "marschner.weight_trt": rgb_uniform(params.weight_trt),
+            "marschner.longitudinal_roughness": float(params.longitudinal_roughness),
+            "marschner.tilt": float(params.tilt),
+        }
+
+    @classmethod
+    def from_table(cls, table) -> Marschner:
+        given = table.given(
+            eumelanin=table.number("eumelanin", lo=0),
+            pheomelanin=table.number("pheomelanin", lo=0),
+            sigma_a=table.rgb("sigma_a", scalar=True),
+            longitudinal_roughness=table.number("longitudinal_roughness", lo=0, hi=1, lo_open=True),
+            tilt=table.number("tilt"),
+            weight_r=table.rgb("weight_r", scalar=True),
+            weight_tt=table.rgb("weight_tt", scalar=True),
+            weight_trt=table.rgb("weight_trt", scalar=True),
+            ambient=table.rgb("ambient", scalar=True),
+            kappa=table.number("kappa", lo=0),
+        )
+        if "sigma_a" in given:
+            # σ_a given directly: the pigments add to it only where given too (0 otherwise,
+            # not the brown default), so `sigma_a` alone means the same as in Mitsuba.
+            given.setdefault("eumelanin", 0.0)
+            given.setdefault("pheomelanin", 0.0)
+        return cls(params=MarschnerParams(**given))
