@@ -16,6 +16,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .._constants import EUMELANIN_SIGMA_A, PHEOMELANIN_SIGMA_A
 from .._errors import SceneError
+from ._dual_scattering import dual_tables, dual_terms_batched
 from ._marschner_lobes import marschner_lobes
 from ._model import (
     AbstractShadingModel,
@@ -31,7 +32,7 @@ from ._model import (
 )
 from ._transforms import IDENTITY, LOG, LOGIT, SOFTPLUS
 
-__all__ = ["MarschnerParams", "Marschner", "absorption"]
+__all__ = ["MarschnerParams", "Marschner", "absorption", "MULTIPLE_SCATTERING"]
 
 
 class MarschnerParams(eqx.Module):
@@ -110,6 +111,9 @@ def absorption(params: MarschnerParams) -> Float[Array, " 3"]:
 
 
 _LOBE_GAINS = ("weight_r", "weight_tt", "weight_trt")
+# `multiple_scattering`: single scattering alone, or with Zinke et al. 2008's dual
+# scattering (docs/model.md §19, `_dual_scattering.py`).
+MULTIPLE_SCATTERING = ("none", "dual")
 
 
 @register_shading_model
@@ -117,9 +121,14 @@ class Marschner(AbstractShadingModel):
     """Karis's R/TT/TRT approximation of a Marschner fibre (docs/model.md §19): the colour
     at a point is ambient + τ·V·light·(w_R·R + w_TT·TT + w_TRT·TRT), each lobe π·M_p·N_p
     with σ_a from melanin. The strands' own colour is not read (as in the reference: a
-    fibre's colour is its absorption)."""
+    fibre's colour is its absorption).
+
+    `multiple_scattering` (static): "none", or "dual" for light scattered between fibres
+    (Zinke et al. 2008): the lobes' weights scale it too, so the colour stays linear in
+    them; its forward-scattered part is not shadowed by τ (`Reflectance.scattered`)."""
 
     params: MarschnerParams = eqx.field(default_factory=MarschnerParams)
+    multiple_scattering: str = eqx.field(static=True, default="none")
 
     name: ClassVar[str] = "marschner"
     params_type: ClassVar[type] = MarschnerParams
@@ -134,6 +143,7 @@ class Marschner(AbstractShadingModel):
         "weight_trt",
         "ambient",
         "kappa",
+        "multiple_scattering",
     )
     fittable: ClassVar[tuple[str, ...]] = (
         *_LOBE_GAINS,
@@ -153,24 +163,37 @@ class Marschner(AbstractShadingModel):
     }
     gl_id: ClassVar[int | None] = None
 
+    def __check_init__(self):
+        if self.multiple_scattering not in MULTIPLE_SCATTERING:
+            raise SceneError(
+                f"shading.multiple_scattering must be one of {', '.join(MULTIPLE_SCATTERING)}, "
+                f"got {self.multiple_scattering!r}"
+            )
+
     def reflectance(self, points: ShadingPoints, params: MarschnerParams) -> Reflectance:
+        sigma_a, beta, tilt = absorption(params), params.longitudinal_roughness, params.tilt
         lobes = jax.vmap(marschner_lobes, in_axes=(0, 0, 0, None, None, None))(
-            points.tangent,
-            points.to_light,
-            points.to_eye,
-            absorption(params),
-            params.longitudinal_roughness,
-            params.tilt,
+            points.tangent, points.to_light, points.to_eye, sigma_a, beta, tilt
         )
         r, tt, trt = lobes
         shape = points.base_color.shape
+        lit = {"weight_r": jnp.broadcast_to(r[:, None], shape), "weight_tt": tt, "weight_trt": trt}
+        ambient = {"ambient": jnp.ones(shape, points.base_color.dtype)}
+        if self.multiple_scattering == "none":
+            return Reflectance(ambient=ambient, lit=lit)
+        # n = κΩ fibres in front (docs/model.md §19): τ = e^{−κΩ} is the chance of crossing
+        # none when the crossings are Poisson with that mean; no shadows: none in front.
+        count = jnp.zeros(shape[:1], points.base_color.dtype)
+        if points.omega is not None:
+            count = params.kappa * points.omega
+        tables = dual_tables(sigma_a, beta, tilt)
+        direct, scattered = dual_terms_batched(
+            points.tangent, points.to_light, points.to_eye, count, tables, beta, tilt
+        )
         return Reflectance(
-            ambient={"ambient": jnp.ones(shape, points.base_color.dtype)},
-            lit={
-                "weight_r": jnp.broadcast_to(r[:, None], shape),
-                "weight_tt": tt,
-                "weight_trt": trt,
-            },
+            ambient=ambient,
+            lit={g: lit[g] + direct[:, i] for i, g in enumerate(_LOBE_GAINS)},
+            scattered={g: scattered[:, i] for i, g in enumerate(_LOBE_GAINS)},
         )
 
     def gl_uniforms(self, params: MarschnerParams) -> dict:
@@ -198,9 +221,13 @@ class Marschner(AbstractShadingModel):
             ambient=table.rgb("ambient", scalar=True),
             kappa=table.number("kappa", lo=0),
         )
+        scattering = table.given(multiple_scattering=table.choice("multiple_scattering", MULTIPLE_SCATTERING))
         if "sigma_a" in given:
             # σ_a given directly: the pigments add to it only where given too (0 otherwise,
             # not the brown default), so `sigma_a` alone means the same as in Mitsuba.
             given.setdefault("eumelanin", 0.0)
             given.setdefault("pheomelanin", 0.0)
-        return cls(params=MarschnerParams(**given))
+        return cls(params=MarschnerParams(**given), **scattering)
+
+    def table(self) -> dict:
+        return {**super().table(), "multiple_scattering": self.multiple_scattering}
