@@ -16,6 +16,7 @@ from hairjax._errors import SceneError
 from hairjax._shading._marschner import absorption
 from hairjax._shading._marschner_lobes import fresnel_dielectric, lobe_widths, marschner_lobes
 
+HAIR = '[hair]\nsource = "furball"\nstrands = 20\npoints = 4\n'
 T = jnp.array([0.0, 1.0, 0.0])  # the fibre along y: sin θ = y, φ measured in the x-z plane
 
 
@@ -127,8 +128,8 @@ def test_lobes_and_gradients_are_finite_at_the_extremes(dtype):
     """Every guard of _marschner_lobes fires somewhere in GRAZING × EXTREMES; the lobes and
     their gradients in σ_a, β_m, the tilt and the directions stay finite and ≥ 0."""
 
-    def total(t, l, v, sigma, beta, tilt):
-        return sum(jnp.sum(x) for x in marschner_lobes(t, l, v, sigma, beta, tilt))
+    def total(t, light, eye, sigma, beta, tilt):
+        return sum(jnp.sum(x) for x in marschner_lobes(t, light, eye, sigma, beta, tilt))
 
     cases = [(tl, pl, tv, pv, ex) for tl, pl, tv, pv in GRAZING for ex in EXTREMES]
     sigma = jnp.stack(
@@ -254,9 +255,7 @@ def test_scene_file_reads_and_writes_the_model(tmp_path):
             np.asarray(getattr(again.params, field.name)), np.asarray(getattr(scene.params, field.name))
         )
 
-    path.write_text(
-        '[hair]\nsource = "furball"\nstrands = 20\npoints = 4\n[shading]\nmodel = "marschner"\nsigma_a = [0.2, 0.3, 0.5]\n'
-    )
+    path.write_text(HAIR + '[shading]\nmodel = "marschner"\nsigma_a = [0.2, 0.3, 0.5]\n')
     sigma = hj.load_scene(path).params
     np.testing.assert_array_equal(np.asarray(absorption(sigma)), [0.2, 0.3, 0.5])
 
@@ -273,8 +272,6 @@ def test_scene_file_reads_and_writes_the_model(tmp_path):
 )
 def test_scene_file_refuses_bad_values_naming_the_key(tmp_path, line, key):
     path = tmp_path / "m.toml"
-    path.write_text(
-        f'[hair]\nsource = "furball"\nstrands = 20\npoints = 4\n[shading]\nmodel = "marschner"\n{line}\n'
-    )
+    path.write_text(HAIR + f'[shading]\nmodel = "marschner"\n{line}\n')
     with pytest.raises(SceneError, match=key):
         hj.load_scene(path)
