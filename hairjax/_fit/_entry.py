@@ -72,7 +72,8 @@ def fit(
       them): kd, ks, shininess, kappa for Kajiya-Kay; kd, primary_color, primary_exponent,
       primary_shift, secondary_color, secondary_exponent, secondary_shift, kappa for
       Scheuermann (docs/model.md §17); and, for any model and only where named: ambient
-      (a gain, solved for like Kd), the light's light_direction (a directional light's)
+      (a gain, solved for like Kd), a `searched` parameter the model leaves out of
+      `fittable`, the light's light_direction (a directional light's)
       and light_color (docs/fitting.md, "Fitting the light"), and alpha, one opacity for
       every strand, starting from the first scene's mean (docs/fitting.md, "Fitting the
       strands' opacity"); the rest stay at `init` and `light`.

@@ -303,8 +303,9 @@ def rgb_searched(cls: type[AbstractShadingModel], params) -> tuple[str, ...]:
 def fit_model(cls: type[AbstractShadingModel], rgb: tuple[str, ...] = ()) -> FitModel:
     """The fit of shading model class `cls` (one per class and `rgb`: a static part of the
     compiled steps). Its gains are solved for (`linear`), its `searched` parameters iterated
-    on, those in `rgb` (`rgb_searched`) channel by channel; the ambient gain is fitted where
-    named, never by default."""
+    on, those in `rgb` (`rgb_searched`) channel by channel. The model's `fittable` are fitted
+    by default; the ambient gain, and a searched parameter not among them (an RGB absorption
+    given besides melanin, say), only where named."""
     gains = tuple(n for n in cls.fittable if n not in cls.searched)
     all_gains = gains + (() if "ambient" in gains else ("ambient",))
     transforms = {**{n: SOFTPLUS for n in all_gains}, **dict(cls.searched)}
@@ -320,7 +321,7 @@ def fit_model(cls: type[AbstractShadingModel], rgb: tuple[str, ...] = ()) -> Fit
         label=cls.name,
         model_class=cls,
         params_type=cls.params_type,
-        fittable=cls.fittable + tuple(n for n in all_gains if n not in cls.fittable),
+        fittable=cls.fittable + tuple(n for n in (*all_gains, *cls.searched) if n not in cls.fittable),
         defaults=cls.fittable,
         colours=all_gains + tuple(rgb),
         transforms=transforms,

@@ -17,7 +17,7 @@ from helpers import small_furball_scene
 from jaxtyping import Array, Float
 
 import hairjax as hj
-from hairjax._fit import _shading_fit
+from hairjax._fit import _problem, _shading_fit
 from hairjax._shading._kajiya_kay import SHININESS_SCAN, kajiya_kay_terms, seed_cone, specular_power
 from hairjax._shading._mirror import mirror_cone
 from hairjax._shading._model import Plateau, rgb_param, scalar_param
@@ -95,6 +95,14 @@ def test_an_rgb_searched_parameter_fitted_as_one_grey_value(absorbing):
     assert sigma[0] == sigma[1] == sigma[2]
     np.testing.assert_allclose(sigma, 1.5, rtol=1e-3)  # noise-free recovery, as above
     assert isinstance(r.std_error["sigma"], float)
+
+
+def test_a_searched_parameter_outside_fittable_is_fitted_where_named():
+    """κ is searched but not among the toy's `fittable`: fitted where named, not by default
+    (as the ambient gain)."""
+    model = _shading_fit.fit_model(Absorbing, ("sigma",))
+    assert model.defaults == ("kd", "sigma") and set(model.fittable) == {"kd", "sigma", "kappa", "ambient"}
+    assert _problem.check_names(("kd", "kappa"), (), model) == ("kd", "kappa")
 
 
 def _image(terms, sigma, kd, kappa, plain):
