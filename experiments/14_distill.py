@@ -87,8 +87,8 @@ SCHEUERMANN_NAMES = (
     "secondary_shift",
     *SHARED_NAMES,
 )
-# Marschner (docs/model.md §19): the lobe weights are grey gains (in RGB they would take
-# the colour from the melanin, which is what the fit is to find), the rest searched.
+# Marschner (docs/model.md §19): the lobe weights are gains the model declares grey (in RGB
+# they would take the colour from the melanin, which is what the fit is to find).
 MARSCHNER_WEIGHTS = ("weight_r", "weight_tt", "weight_trt")
 MARSCHNER_NAMES = (
     *MARSCHNER_WEIGHTS,
@@ -104,8 +104,7 @@ FIT_NAMES = {
     "scheuermann": SCHEUERMANN_NAMES,
     "marschner": MARSCHNER_NAMES,
 }
-# Gains fitted as one grey value each.
-SCALAR = {"marschner": MARSCHNER_WEIGHTS}
+
 MODELS = tuple(FIT_NAMES)
 SHORT = {
     "kajiya-kay": "KK",
@@ -302,7 +301,6 @@ def fit_one(model: str, scenes: dict, refs: dict, max_steps: int) -> tuple[dict,
         [scenes[v] for v in train],
         [refs[v][0] for v in train],
         fit=FIT_NAMES[model],
-        scalar=SCALAR.get(model, ()),
         init=start,
         max_steps=max_steps,
         holdout=([scenes[v] for v in held], [refs[v][0] for v in held]),
@@ -394,7 +392,8 @@ RECOVERED = ("eumelanin", "pheomelanin", "longitudinal_roughness")
 def recovery_table(rows: list[dict]) -> str:
     """Per Marschner fit: the true pigments and β_m beside the fitted ones."""
     lines = [
-        "| asset | colour | model | eumelanin true / fitted | pheomelanin true / fitted | β_m true / fitted |",
+        "| asset | colour | model | eumelanin true / fitted | pheomelanin true / fitted "
+        "| β_m true / fitted |",
         "|---" * 6 + "|",
     ]
     for r in rows:

@@ -19,6 +19,7 @@ from .._errors import SceneError
 from ._marschner_lobes import Azimuthal, marschner_lobes
 from ._model import (
     AbstractShadingModel,
+    Plateau,
     Reflectance,
     RGBLike,
     ShadingPoints,
@@ -168,6 +169,29 @@ class Marschner(AbstractShadingModel):
         "azimuthal_roughness": LOGIT,
         "tilt": IDENTITY,
         "kappa": LOG,
+    }
+    # The lobe weights are fitted as one grey value each unless the caller says otherwise:
+    # in RGB they would take the colour from the absorption, which is what a fit is to find.
+    grey: ClassVar[tuple[str, ...]] = _LOBE_GAINS
+    # With the transmitted lobes' weight solved to 0 the pigments have no effect (R carries
+    # no colour): the fit then tries Mitsuba's example hair colours (blonde 0.3, brown 1.3,
+    # black 8; pheomelanin 0 to the red 1.2), and a small value where 0 is meant.
+    plateaus: ClassVar[tuple[Plateau, ...]] = (
+        Plateau("eumelanin", (0.01, 0.1, 0.3, 1.3, 3.0, 8.0), gain="weight_tt"),
+        Plateau("pheomelanin", (0.01, 0.2, 0.5, 1.2, 3.0), gain="weight_tt"),
+    )
+    # Slider ranges (hj.explore): Mitsuba's pigment examples and roughness range, a tilt
+    # of up to ±10° (human hair: 2–4°, Marschner et al. 2003), weights around 1.
+    ranges: ClassVar[Mapping[str, tuple[float, float]]] = {
+        "eumelanin": (0.0, 10.0),
+        "pheomelanin": (0.0, 5.0),
+        "sigma_a": (0.0, 10.0),
+        "longitudinal_roughness": (0.02, 1.0),
+        "azimuthal_roughness": (0.02, 1.0),
+        "tilt": (-10.0, 10.0),
+        "weight_r": (0.0, 4.0),
+        "weight_tt": (0.0, 4.0),
+        "weight_trt": (0.0, 4.0),
     }
     gl_id: ClassVar[int | None] = None
 
