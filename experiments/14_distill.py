@@ -87,13 +87,31 @@ SCHEUERMANN_NAMES = (
     "secondary_shift",
     *SHARED_NAMES,
 )
+# Marschner (docs/model.md §19): the lobe weights are gains the model declares grey (in RGB
+# they would take the colour from the melanin, which is what the fit is to find).
+MARSCHNER_WEIGHTS = ("weight_r", "weight_tt", "weight_trt")
+MARSCHNER_NAMES = (
+    *MARSCHNER_WEIGHTS,
+    "eumelanin",
+    "pheomelanin",
+    "longitudinal_roughness",
+    "tilt",
+    *SHARED_NAMES,
+)
 FIT_NAMES = {
     "kajiya-kay": KAJIYA_KAY_NAMES,
     "kajiya-kay-mirror": KAJIYA_KAY_NAMES,
     "scheuermann": SCHEUERMANN_NAMES,
+    "marschner": MARSCHNER_NAMES,
 }
+
 MODELS = tuple(FIT_NAMES)
-SHORT = {"kajiya-kay": "KK", "kajiya-kay-mirror": "KK mirror", "scheuermann": "Scheuermann"}
+SHORT = {
+    "kajiya-kay": "KK",
+    "kajiya-kay-mirror": "KK mirror",
+    "scheuermann": "Scheuermann",
+    "marschner": "Marschner",
+}
 # Where every fit starts (ambient 0: the reference has no ambient light).
 STARTS = {
     "kajiya-kay": dict(kd=0.3, ks=0.1, shininess=30.0, kappa=1.0, ambient=0.0),
@@ -106,6 +124,19 @@ STARTS = {
         secondary_color=0.1,
         secondary_exponent=20.0,
         secondary_shift=-0.1,
+        kappa=1.0,
+        ambient=0.0,
+    ),
+    # A mid brown, Mitsuba's default tilt and a middle roughness: far from every target's
+    # pigments (0.1–8) and β_m (0.2, 0.4), so a recovery is not the start.
+    "marschner": dict(
+        eumelanin=1.0,
+        pheomelanin=0.3,
+        longitudinal_roughness=0.3,
+        tilt=2.0,
+        weight_r=1.0,
+        weight_tt=1.0,
+        weight_trt=1.0,
         kappa=1.0,
         ambient=0.0,
     ),
@@ -216,6 +247,8 @@ def shading_model(model: str):
     if model == "scheuermann":
         maps = hj.ScheuermannMaps(shift_noise=0.0, mask_noise=0.0)
         return hj.Scheuermann(hj.ScheuermannParams(**start), maps)
+    if model == "marschner":
+        return hj.Marschner(hj.MarschnerParams(**start))
     kind = hj.KajiyaKayMirror if model == "kajiya-kay-mirror" else hj.KajiyaKay
     return kind(hj.ShadingParams(**start))
 
@@ -289,6 +322,7 @@ def fit_one(model: str, scenes: dict, refs: dict, max_steps: int) -> tuple[dict,
         termination=r.termination,
         undetermined=" ".join(r.undetermined),
         params="; ".join(f"{n} {_fmt(r.get(n), r.std_error.get(n))}" for n in FIT_NAMES[model]),
+        **{f"fit_{n}": float(np.asarray(r.get(n))) for n in RECOVERED if n in FIT_NAMES[model]},
         **{f"rmse_{v}": rmse([fitted[v]], [refs[v][0]]) for v in scenes},
         **{f"floor_{v}": rmse([refs[v][0]], [refs[v][1]]) for v in scenes},
     )
@@ -347,6 +381,28 @@ def view_table(rows: list[dict], models: list[str]) -> str:
                 ratio = float(np.median([r[f"rmse_{v.name}"] / r[f"floor_{v.name}"] for r in sel]))
                 cells.append(f"{err:.4f} ({ratio:.1f}×)")
             lines.append(f"| {SHORT[m]} | {hair} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+# What a Marschner fit recovers, against the reference's true values (the asset's
+# [reference] table: COLOURS' pigments, the β_m of the sweep).
+RECOVERED = ("eumelanin", "pheomelanin", "longitudinal_roughness")
+
+
+def recovery_table(rows: list[dict]) -> str:
+    """Per Marschner fit: the true pigments and β_m beside the fitted ones."""
+    lines = [
+        "| asset | colour | model | eumelanin true / fitted | pheomelanin true / fitted "
+        "| β_m true / fitted |",
+        "|---" * 6 + "|",
+    ]
+    for r in rows:
+        if not r["model"].startswith("marschner"):
+            continue
+        eu, pheo = COLOURS[r["colour"]]
+        truth = (eu, pheo, r["roughness"])
+        cells = [f"{t:g} / {r[f'fit_{n}']:.3g}" for t, n in zip(truth, RECOVERED)]
+        lines.append(f"| {r['asset']} | {r['colour']} | {SHORT[r['model']]} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
 
@@ -427,6 +483,7 @@ CSV_COLUMNS = (
     "termination",
     "undetermined",
     "params",
+    *(f"fit_{n}" for n in RECOVERED),
 )
 
 
@@ -568,6 +625,8 @@ def main(argv=None) -> int:
             summary_table(rows, models),
             "Per view, median over the sweep: the fitted view's RMSE (its ratio to that view's floor):",
             view_table(rows, models),
+            "Marschner's pigments and roughness, true (the reference's) against fitted:",
+            recovery_table(rows),
             "Every fit:",
             params_table(rows),
         ]

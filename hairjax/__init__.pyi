@@ -85,6 +85,7 @@ from ._shading import register_shading_model as register_shading_model
 from ._shading import shading_model_class as shading_model_class
 from ._shading import shading_stage as shading_stage
 from ._shading import transmittance as transmittance
+from ._shading._model import Plateau as Plateau
 from ._shading._model import check_params as check_params
 from ._shading._transforms import IDENTITY as IDENTITY
 from ._shading._transforms import LOG as LOG

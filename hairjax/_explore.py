@@ -30,6 +30,7 @@ from ._io._image import write_image
 from ._scene._light import Light
 from ._scene._scene import Scene
 from ._shading import shading_stage
+from ._shading._transforms import LOG
 
 if TYPE_CHECKING:
     import ipywidgets as widgets  # type: ignore[import-untyped]
@@ -37,9 +38,15 @@ if TYPE_CHECKING:
 __all__ = ["Explorer", "explore", "slider_range", "light_angles", "light_from_angles"]
 
 
-def slider_range(params: eqx.Module, name: str) -> tuple[str, float, float]:
-    """The kind and range of the slider for parameter `name` of `params`, from the
-    parameter class's own validity check (`check_params`), probed with 0 and −1:
+def slider_range(params: eqx.Module, name: str, model=None) -> tuple[str, float, float]:
+    """The kind and range of the slider for parameter `name` of `params`.
+
+    Where the shading `model` (a class or an instance) declares a range for `name`
+    (`AbstractShadingModel.ranges`), the slider spans it, widened to hold the current
+    value: logarithmic where the model searches `name` through `hj.LOG` (and the range is
+    positive), linear otherwise.
+    Elsewhere the range comes from the parameter class's own validity check
+    (`check_params`), probed with 0 and −1:
 
     - 0 refused (an exponent, p > 0): `"log"`, a logarithmic slider over the decades
       around the value, from one decade below to one above;
@@ -50,6 +57,15 @@ def slider_range(params: eqx.Module, name: str) -> tuple[str, float, float]:
     `"log"`, `low` and `high` are the powers of ten (the exponents, as `FloatLogSlider`
     takes them)."""
     value = float(np.max(np.asarray(getattr(params, name))))
+    declared = None if model is None else model.ranges.get(name)
+    if declared is not None:
+        low, high = min(declared[0], value), max(declared[1], value)
+        if model.searched.get(name) is LOG and declared[0] > 0:
+            # A value of 0 (a LOG parameter whose check allows it) has no place on a log
+            # slider: it keeps the declared low end, where the slider shows it.
+            low = declared[0] if value <= 0 else low
+            return "log", math.log10(low), math.log10(high)
+        return "linear", low, high
 
     def accepts(x: float) -> bool:
         fields = {f.name: getattr(params, f.name) for f in dataclasses.fields(params)}
@@ -120,7 +136,8 @@ class Explorer:
 
     An RGB parameter has one slider, its largest channel: moving it scales all three and
     keeps the scene's hue (Kd's hair colour stays brown as it brightens). Ranges come
-    from the parameter's validity check (`slider_range`). Setting a slider's `value`
+    from the model's declared `ranges`, else from the parameter's validity check
+    (`slider_range`). Setting a slider's `value`
     from Python updates the image at once, as dragging it does.
     """
 
@@ -146,7 +163,7 @@ class Explorer:
             top = float(np.max(channels))
             # Fires for a black RGB parameter: no hue to keep, the slider sets grey.
             self._hue[name] = None if channels.ndim == 0 else (channels / top if top > 0 else np.ones(3))
-            kind, low, high = slider_range(params, name)
+            kind, low, high = slider_range(params, name, scene.shading)
             common = dict(value=top, description=name, continuous_update=True, readout_format=".3g")
             if kind == "log":
                 slider = widgets.FloatLogSlider(base=10, min=low, max=high, step=0.01, **common)

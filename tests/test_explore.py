@@ -122,6 +122,18 @@ def test_slider_ranges_follow_the_parameter_checks():
     assert slider_range(scheuermann, "primary_shift") == ("linear", -1.0, 1.0)  # any finite shift
 
 
+def test_the_shininess_slider_spans_the_declared_range():
+    """Kajiya-Kay declares the shininess's range (0.5 … 10⁴, its plateau scan's): the slider
+    spans it, logarithmic as the fit's transform; κ, undeclared, keeps its check's slider."""
+    params = hj.ShadingParams(kd=(0.6, 0.4, 0.3), ks=0.4, shininess=30.0, kappa=0.8)
+    assert slider_range(params, "shininess", hj.KajiyaKay) == ("log", math.log10(0.5), 4.0)
+    assert slider_range(params, "kappa", hj.KajiyaKay) == ("linear", 0.0, pytest.approx(1.6))
+    panel = explore(small_furball_scene())
+    shininess = panel.sliders["shininess"]
+    assert isinstance(shininess, widgets.FloatLogSlider)
+    assert (shininess.min, shininess.max) == (math.log10(0.5), 4.0) and shininess.value == 20.0
+
+
 def test_scheuermann_scene_gets_its_own_sliders(counted):
     panel = explore(scheuermann_scene())
     fields = set(panel.sliders) - {"light_azimuth", "light_elevation"}

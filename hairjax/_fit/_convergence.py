@@ -71,24 +71,41 @@ def half_square(residuals: Callable, z, problem):
 
 
 def plateau_exit(residuals: Callable, z, problem, effect, loss: float, rtol: float, atol: float):
-    """From a stationary z on the model's plateau (`FitModel.plateau`: its exponent, e.g.
-    the shininess, without effect, ‖∂r/∂z_i‖ below NULL_RATIO of the largest column of J:
-    every solved gain is 0, e.g. Ks, or the highlight is a needle nowhere near a strand) —
-    so every exponent is stationary and the solver can never leave — the z with the
-    exponent of the plateau's scan whose loss is lowest, if it beats `loss` beyond the
-    tolerances; else None (also for a model without a plateau, when the gain is not solved
-    for, or the exponent not fitted). `problem`: a `_problem.Problem`."""
-    plateau = problem.model.plateau
-    if plateau is None or plateau.gain not in problem.linear or plateau.exponent not in problem.solved:
-        return None
-    before = problem.solved[: problem.solved.index(plateau.exponent)]
-    i = sum(entries(n, problem.model.colours, problem.scalar, problem.model.transforms) for n in before)
-    if not effect[i] <= NULL_RATIO * effect.max():
-        return None
-    candidates = [z.at[i].set(v) for v in plateau.scan]
-    losses = [float(half_square(residuals, c, problem)) for c in candidates]
-    best = int(np.nanargmin(losses))
-    return candidates[best] if losses[best] < loss - (rtol * loss + atol) else None
+    """From a stationary z on one of the model's plateaus (`FitModel.plateaus`: a fitted
+    parameter without effect, ‖∂r/∂z_i‖ below NULL_RATIO of the largest column of J in each
+    of its entries: e.g. Kajiya-Kay's shininess where Ks is solved to 0, or the highlight is
+    a needle nowhere near a strand) — so every value of it is stationary and the solver can
+    never leave — the z with the lowest loss over each such parameter's scan (taken through
+    the parameter's transform; an RGB parameter's entries all set to each value), the
+    plateaus tried in turn from the best z so far, if it beats `loss` beyond the tolerances;
+    else None (also where no plateau applies: its parameter not fitted, or its gain not
+    solved for). `problem`: a `_problem.Problem`."""
+    model = problem.model
+    best, best_loss = None, loss - (rtol * loss + atol)
+    for plateau in model.plateaus:
+        name = plateau.parameter
+        if name not in problem.solved or (plateau.gain is not None and plateau.gain not in problem.linear):
+            continue
+        before = problem.solved[: problem.solved.index(name)]
+        i = sum(entries(n, model.colours, problem.scalar, model.transforms) for n in before)
+        k = entries(name, model.colours, problem.scalar, model.transforms)
+        if not np.all(effect[i : i + k] <= NULL_RATIO * effect.max()):
+            continue
+        start = z if best is None else best
+        candidates = [start.at[i : i + k].set(v) for v in _scan_in_z(model.transforms[name], plateau.scan)]
+        losses = [float(half_square(residuals, c, problem)) for c in candidates]
+        found = int(np.nanargmin(losses))
+        if losses[found] < best_loss:
+            best, best_loss = candidates[found], losses[found]
+    return best
+
+
+def _scan_in_z(transform, scan) -> list[float]:
+    """A plateau's scan in the solver's space: the transform's inverse taken in float64
+    whatever the fit's precision, so a float32 fit starts from each value's nearest float32
+    (the inverse in float32 is an ulp off for some)."""
+    with jax.enable_x64(True):
+        return [float(transform.inverse(jnp.asarray(v, dtype=jnp.float64))) for v in scan]
 
 
 # The solver's init, step and terminate, compiled once per solver, fn and shapes. (Within

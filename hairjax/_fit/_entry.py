@@ -37,7 +37,7 @@ from ._problem import (
     target_arrays,
 )
 from ._result import FitError, FitResult
-from ._shading_fit import fit_model
+from ._shading_fit import fit_model, rgb_searched
 from ._solvers import make_solver
 from ._space import to_flat
 from ._uncertainty import standard_errors
@@ -54,7 +54,7 @@ def fit(
     *,
     masks=None,
     weights=None,
-    scalar: Sequence[str] = (),
+    scalar: Sequence[str] | None = None,
     max_steps: int = 100,
     light: LightParams | None = None,
     separable: bool = True,
@@ -72,7 +72,8 @@ def fit(
       them): kd, ks, shininess, kappa for Kajiya-Kay; kd, primary_color, primary_exponent,
       primary_shift, secondary_color, secondary_exponent, secondary_shift, kappa for
       Scheuermann (docs/model.md §17); and, for any model and only where named: ambient
-      (a gain, solved for like Kd), the light's light_direction (a directional light's)
+      (a gain, solved for like Kd), a `searched` parameter the model leaves out of
+      `fittable`, the light's light_direction (a directional light's)
       and light_color (docs/fitting.md, "Fitting the light"), and alpha, one opacity for
       every strand, starting from the first scene's mean (docs/fitting.md, "Fitting the
       strands' opacity"); the rest stay at `init` and `light`.
@@ -83,8 +84,11 @@ def fit(
       Given, or with a light name in `fit`, the image is the shading stage's with this
       light (Ω and V stay the scenes' light's).
     - `masks`, `weights`: optional per-target `[H, W]` pixel masks and weights.
-    - `scalar`: among the fitted gains (kd, ks; Scheuermann's colours) and light_color,
-      those fitted as one grey value instead of RGB.
+    - `scalar`: among the fitted RGB parameters (the gains: kd, ks; Scheuermann's colours;
+      an RGB searched parameter; light_color), those fitted as one grey value instead of
+      RGB. None (the default): the fitted gains among the model's `grey` (none for
+      Kajiya-Kay and Scheuermann); a sequence, `()` included, says it in full
+      (docs/fitting.md, "What a model declares").
     - `separable`: solve the fitted gains by non-negative linear least squares at every
       step (variable projection; the image is linear in them) so that the solver iterates
       on the model's searched parameters (shininess, κ, …) only; a fit of gains alone is
@@ -112,14 +116,14 @@ def fit(
     opacity = fit is not None and ALPHA in fit
     if opacity and lit:
         raise FitError(f"{ALPHA} is not fitted together with the light (light_direction, light_color)")
-    model = _model_of(scenes, lit, opacity)
-    names = check_names(model.defaults if fit is None else fit, scalar, model)
-    scalar = tuple(scalar)
+    init = scenes[0].params if init is None else init
+    model = _model_of(scenes, lit, opacity, init)
+    names = check_names(model.defaults if fit is None else fit, () if scalar is None else scalar, model)
+    scalar = tuple(n for n in model.grey if n in names) if scalar is None else tuple(scalar)
     double = jnp.result_type(float) == jnp.float64
     rtol = (1e-8 if double else 1e-5) if rtol is None else rtol
     atol = (1e-10 if double else 1e-7) if atol is None else atol
     opt, least_squares = make_solver(solver, rtol, atol)
-    init = scenes[0].params if init is None else init
     arrays = [target_arrays(s, t, m, w) for s, t, m, w in zip(scenes, target_list, mask_list, weight_list)]
     if not isinstance(init, model.params_type):
         raise FitError(
@@ -214,13 +218,15 @@ def fit(
     return dataclasses.replace(result, holdout_rmse=held_out_rmse(result, heldout))
 
 
-def _model_of(scenes, lit: bool, opacity: bool) -> FitModel:
+def _model_of(scenes, lit: bool, opacity: bool, init) -> FitModel:
     """The fit of the scenes' shading model (`fit_model`; with the light, `lit_fit_model`;
-    with the strands' opacity, `opacity_fit_model`); FitError where they differ."""
+    with the strands' opacity, `opacity_fit_model`), its RGB searched parameters those
+    that hold 3 values in `init`; FitError where the scenes' models differ."""
     classes: list[type[AbstractShadingModel]] = list(dict.fromkeys(type(s.shading) for s in scenes))
     if len(classes) > 1:
         raise FitError(
             "scenes of one fit share a shading model; got " + " and ".join(c.name for c in classes)
         )
     make = lit_fit_model if lit else opacity_fit_model if opacity else fit_model
-    return make(classes[0])  # a class: hashable, cached by identity
+    # A class and names: hashable, cached.
+    return make(classes[0], rgb_searched(classes[0], init))

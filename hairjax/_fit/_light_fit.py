@@ -89,12 +89,12 @@ def _prepare(gains, scene, lit: LitParams, names, target, sqrt_weight) -> Target
 
 
 @functools.cache
-def lit_fit_model(cls: type[AbstractShadingModel]) -> FitModel:
+def lit_fit_model(cls: type[AbstractShadingModel], rgb: tuple[str, ...] = ()) -> FitModel:
     """The fit of shading model class `cls` with the light: `fit_model(cls)`'s, whose
-    point is `LitParams` and whose names include LIGHT_NAMES (one per class, as
-    `fit_model`'s)."""
-    base = fit_model(cls)
-    gains = base.colours  # every gain, ambient included
+    point is `LitParams` and whose names include LIGHT_NAMES (one per class and `rgb`,
+    as `fit_model`'s)."""
+    base = fit_model(cls, rgb)
+    gains = base.linear  # every gain, ambient included
 
     def image(terms, lit):
         return image_of(gains, terms, lit.shading, lit_images(terms, lit), lit.light)
@@ -106,7 +106,7 @@ def lit_fit_model(cls: type[AbstractShadingModel]) -> FitModel:
     return dataclasses.replace(
         base,
         fittable=base.fittable + LIGHT_NAMES,
-        colours=gains + ("light_color",),
+        colours=base.colours + ("light_color",),
         transforms={**base.transforms, **LIGHT_TRANSFORMS},
         prepare=functools.partial(_prepare, gains),
         image=image,

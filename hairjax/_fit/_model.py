@@ -7,22 +7,11 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable, Mapping
 
+from .._shading._model import Plateau
 from ._lit import RelativeTransform
 from ._space import Transform
 
 __all__ = ["FitModel", "Plateau"]
-
-
-@dataclasses.dataclass(frozen=True)
-class Plateau:
-    """A stationary set the solver cannot leave (docs/fitting.md, "When a fit has
-    converged"): with every solved `gain` at 0 the `exponent` has no effect, so every value
-    of it is stationary. `scan`: the exponent's values in the solver's space that `fit`
-    tries there."""
-
-    gain: str
-    exponent: str
-    scan: tuple[float, ...]
 
 
 # Hashed by identity: it is a static part of the compiled steps, and each model has one.
@@ -34,8 +23,8 @@ class FitModel:
       `params_type`: its parameters' class (ShadingParams, ScheuermannParams).
     - `fittable`: the names `fit` takes; `defaults`: those it fits when none are named (the
       shading model's `fittable`: the ambient gain, the light and the strands' opacity are
-      fitted only where named); `colours`: the RGB ones,
-      which may also be fitted as one grey value; `transforms`: name → `Transform` from the
+      fitted only where named); `colours`: the RGB ones (gains, and RGB searched
+      parameters), which may also be fitted as one grey value; `transforms`: name → `Transform` from the
       solver's z (`_space.py`), or a `RelativeTransform` (the light's direction, `_lit.py`).
     - `prepare(scene, params, names, target, sqrt_weight) -> data`: per target, everything
       a step needs that no fitted parameter reaches (runs the geometry stage); `data` has
@@ -44,7 +33,10 @@ class FitModel:
     - `linear`: gains the image is linear in, solved for by variable projection
       (`_varpro.py`) with `gain_images(data, params) -> (fixed [HW, 3], ((gain,
       image [HW, 3]), ...))`, image = fixed + Σ gain⊙(its image); () for none.
-    - `plateau`: where a fit may stall with a parameter without effect (`Plateau`), or None.
+    - `plateaus`: where a fit may stall with a parameter without effect (the shading
+      model's `Plateau`s: the scans in the parameter's units, `_convergence.plateau_exit`
+      takes them through the parameter's transform).
+    - `grey`: the gains fitted as one grey value when the caller's `scalar` is None.
     """
 
     label: str
@@ -58,4 +50,5 @@ class FitModel:
     image: Callable
     linear: tuple[str, ...] = ()
     gain_images: Callable | None = None
-    plateau: Plateau | None = None
+    plateaus: tuple[Plateau, ...] = ()
+    grey: tuple[str, ...] = ()

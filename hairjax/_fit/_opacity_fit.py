@@ -133,11 +133,11 @@ def _prepare(gains, scene: Scene, point: OpacityParams, names, target, sqrt_weig
 
 
 @functools.cache
-def opacity_fit_model(cls: type[AbstractShadingModel]) -> FitModel:
+def opacity_fit_model(cls: type[AbstractShadingModel], rgb: tuple[str, ...] = ()) -> FitModel:
     """The fit of shading model class `cls` with the strands' opacity: `fit_model(cls)`'s,
-    whose point is `OpacityParams` and whose names include ALPHA (one per class)."""
-    base = fit_model(cls)
-    gains = base.colours  # every gain, ambient included
+    whose point is `OpacityParams` and whose names include ALPHA (one per class and `rgb`)."""
+    base = fit_model(cls, rgb)
+    gains = base.linear  # every gain, ambient included
 
     def images_at(d: OpacityTerms, point: OpacityParams):
         terms = at_alpha(d, point.alpha)

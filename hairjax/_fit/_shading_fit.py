@@ -39,7 +39,7 @@ from .._shading import AbstractShadingModel, occluder_colors, transmittance
 from .._shading._light import LightParams, lit_to_light
 from .._shading._stage import shading_points
 from ._dependence import dependence
-from ._model import FitModel, Plateau
+from ._model import FitModel
 from ._space import SOFTPLUS, with_values
 
 __all__ = [
@@ -50,13 +50,8 @@ __all__ = [
     "gain_images_plain",
     "target_image",
     "fixed_image",
-    "SHININESS_SCAN",
+    "rgb_searched",
 ]
-
-# Where `fit` looks for a lower loss when it stops on a model's plateau (a gain solved to 0,
-# its exponent without effect): the exponent on a log grid over the range we support,
-# 1.5× apart.
-SHININESS_SCAN = tuple(float(p) for p in np.geomspace(0.5, 1e4, 25))
 
 
 class TargetTerms(eqx.Module):
@@ -129,16 +124,33 @@ def gain_images_plain(terms: TargetTerms, params, reflectance=None, light=None) 
 
 
 def _searched_values(terms: TargetTerms, params) -> jax.Array:
+    """The fitted searched parameters' values, flat: one entry for a scalar, three for an
+    RGB parameter (its channels)."""
     return (
-        jnp.stack([jnp.reshape(getattr(params, n), ()) for n in terms.searched])
+        jnp.concatenate([jnp.ravel(getattr(params, n)) for n in terms.searched])
         if terms.searched
         else jnp.zeros(0, dtype=jnp.result_type(float))
     )
 
 
+def _offsets(terms: TargetTerms, params) -> list[tuple[str, int, int]]:
+    """(name, first entry, entries) of each fitted searched parameter in `_searched_values`."""
+    out, i = [], 0
+    for n in terms.searched:
+        k = int(jnp.size(getattr(params, n)))
+        out.append((n, i, k))
+        i += k
+    return out
+
+
+def _with_searched(terms: TargetTerms, params, values):
+    """`params` with the fitted searched parameters taken from the flat `values`."""
+    return with_values(params, {n: values[i : i + k] for n, i, k in _offsets(terms, params)}, ())
+
+
 @jax.custom_jvp
 def _gain_images(terms: TargetTerms, params, values) -> dict:
-    return gain_images_plain(terms, with_values(params, dict(zip(terms.searched, values)), ()))
+    return gain_images_plain(terms, _with_searched(terms, params, values))
 
 
 @_gain_images.defjvp
@@ -156,17 +168,18 @@ def _gain_images_jvp(primals, tangents):
     if terms.varying:
 
         def columns(v):
-            return _columns(terms, with_values(params, dict(zip(terms.searched, v)), ()), terms.varying)
+            return _columns(terms, _with_searched(terms, params, v), terms.varying)
 
         parts = [columns(values)]
-        layout = []  # (parameter index, gain index) of each derivative block after the values
-        if terms.searched:  # ∂(columns)/∂(each fitted searched parameter), per point
+        layout = []  # (entry of `values`, gain index) of each derivative block after the values
+        if terms.searched:  # ∂(columns)/∂(each entry of the fitted searched parameters), per point
             jac = jax.jacfwd(columns)(values)
-            for i, p in enumerate(terms.searched):
+            for p, first, size in _offsets(terms, params):
                 for j, g in enumerate(terms.varying):
                     if (g, p) in terms.pairs:
-                        parts.append(jac[:, 3 * j : 3 * j + 3, i])
-                        layout.append((i, j))
+                        for i in range(first, first + size):  # an RGB parameter's 3 channels
+                            parts.append(jac[:, 3 * j : 3 * j + 3, i])
+                            layout.append((i, j))
         stacked = composite(terms.geometry, jnp.concatenate(parts, axis=1))
         k = len(terms.varying)
         values_image, derivatives = stacked[:, : 3 * k], stacked[:, 3 * k :]
@@ -284,7 +297,7 @@ def _reaches(model: AbstractShadingModel, points, params, searched, direction: b
         r = model.reflectance(at, with_values(params, dict(zip(names, values)), ()))
         return r.ambient, r.lit, r.scattered
 
-    values = [jnp.reshape(getattr(params, n), ()) for n in names]
+    values = [jnp.asarray(getattr(params, n)) for n in names]  # a scalar's or RGB's own shape
     inputs = [*names, "light_direction"] if direction else names
     ambient, lit, scattered = dependence(terms_of, *values, *([points.to_light] if direction else []))
     reached = {n: {inputs[i] for i in d} for n, d in {**ambient, **lit}.items()}
@@ -293,18 +306,23 @@ def _reaches(model: AbstractShadingModel, points, params, searched, direction: b
     return reached, tuple(lit)
 
 
+def rgb_searched(cls: type[AbstractShadingModel], params) -> tuple[str, ...]:
+    """The searched parameters of `cls` that hold an RGB `[3]` value in `params` (each
+    takes three solver coordinates, or one fitted as a grey value)."""
+    # (An absent field, of a start of the wrong type that `fit` then refuses: not RGB.)
+    return tuple(n for n in cls.searched if np.ndim(getattr(params, n, 0.0)) == 1)
+
+
 @functools.cache
-def fit_model(cls: type[AbstractShadingModel]) -> FitModel:
-    """The fit of shading model class `cls` (one per class: a static part of the compiled
-    steps). Its gains are solved for (`linear`), its `searched` parameters iterated on; the
-    ambient gain is fitted where named, never by default."""
+def fit_model(cls: type[AbstractShadingModel], rgb: tuple[str, ...] = ()) -> FitModel:
+    """The fit of shading model class `cls` (one per class and `rgb`: a static part of the
+    compiled steps). Its gains are solved for (`linear`), its `searched` parameters iterated
+    on, those in `rgb` (`rgb_searched`) channel by channel. The model's `fittable` are fitted
+    by default; the ambient gain, and a searched parameter not among them (an RGB absorption
+    given besides melanin, say), only where named."""
     gains = tuple(n for n in cls.fittable if n not in cls.searched)
     all_gains = gains + (() if "ambient" in gains else ("ambient",))
     transforms = {**{n: SOFTPLUS for n in all_gains}, **dict(cls.searched)}
-    plateau = None
-    if cls.plateau is not None:
-        gain, exponent = cls.plateau
-        plateau = Plateau(gain=gain, exponent=exponent, scan=tuple(np.log(p) for p in SHININESS_SCAN))
 
     def image(terms, params):
         return image_of(all_gains, terms, params, gain_images(terms, params))
@@ -317,15 +335,16 @@ def fit_model(cls: type[AbstractShadingModel]) -> FitModel:
         label=cls.name,
         model_class=cls,
         params_type=cls.params_type,
-        fittable=cls.fittable + tuple(n for n in all_gains if n not in cls.fittable),
+        fittable=cls.fittable + tuple(n for n in (*all_gains, *cls.searched) if n not in cls.fittable),
         defaults=cls.fittable,
-        colours=all_gains,
+        colours=all_gains + tuple(rgb),
         transforms=transforms,
         prepare=functools.partial(prepare_terms, all_gains),
         image=image,
         linear=all_gains,
         gain_images=images,
-        plateau=plateau,
+        plateaus=tuple(cls.plateaus),
+        grey=tuple(cls.grey),
     )
 
 

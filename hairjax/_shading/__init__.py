@@ -20,6 +20,7 @@ from ._marschner import MarschnerParams as MarschnerParams
 from ._mirror import KajiyaKayMirror as KajiyaKayMirror
 from ._mirror import mirror_cone as mirror_cone
 from ._model import AbstractShadingModel as AbstractShadingModel
+from ._model import Plateau as Plateau
 from ._model import PointInputs as PointInputs
 from ._model import Reflectance as Reflectance
 from ._model import ShadingPoints as ShadingPoints

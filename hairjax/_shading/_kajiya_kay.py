@@ -14,12 +14,14 @@ from typing import ClassVar
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .._constants import SPECULAR_BASE_EPS
 from .._vectors import safe_norm
 from ._model import (
     AbstractShadingModel,
+    Plateau,
     Reflectance,
     RGBLike,
     ShadingPoints,
@@ -40,7 +42,15 @@ __all__ = [
     "kajiya_kay_terms",
     "specular_power",
     "read_kajiya_kay_params",
+    "SHININESS_RANGE",
+    "SHININESS_SCAN",
 ]
+
+# The shininess we support, and where `fit` looks for a lower loss when it stops with Ks
+# solved to 0 and the shininess without effect (docs/fitting.md, "When a fit has
+# converged"): that range on a log grid, 1.5× apart.
+SHININESS_RANGE = (0.5, 1e4)
+SHININESS_SCAN = tuple(float(p) for p in np.geomspace(*SHININESS_RANGE, 25))
 
 
 class ShadingParams(eqx.Module):
@@ -181,7 +191,9 @@ class KajiyaKay(AbstractShadingModel):
     table_keys: ClassVar[tuple[str, ...]] = ("kd", "ks", "shininess", "kappa", "ambient")
     fittable: ClassVar[tuple[str, ...]] = ("kd", "ks", "shininess", "kappa")
     searched: ClassVar[Mapping] = {"shininess": LOG, "kappa": LOG}
-    plateau: ClassVar[tuple[str, str] | None] = ("ks", "shininess")
+    # With Ks solved to 0 the shininess has no effect: a plateau the fit leaves by scanning it.
+    plateaus: ClassVar[tuple[Plateau, ...]] = (Plateau("shininess", SHININESS_SCAN, gain="ks"),)
+    ranges: ClassVar[Mapping[str, tuple[float, float]]] = {"shininess": SHININESS_RANGE}
     gl_id: ClassVar[int | None] = 0
     # The cone, as a class attribute (a function, not a field): the mirror model swaps it.
     cone: ClassVar[Cone] = staticmethod(seed_cone)

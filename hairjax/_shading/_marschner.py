@@ -17,9 +17,10 @@ from jaxtyping import Array, ArrayLike, Float
 from .._constants import EUMELANIN_SIGMA_A, PHEOMELANIN_SIGMA_A
 from .._errors import SceneError
 from ._dual_scattering import dual_tables, dual_terms_batched
-from ._marschner_lobes import marschner_lobes
+from ._marschner_lobes import Azimuthal, marschner_lobes
 from ._model import (
     AbstractShadingModel,
+    Plateau,
     Reflectance,
     RGBLike,
     ShadingPoints,
@@ -43,7 +44,9 @@ class MarschnerParams(eqx.Module):
       0.3 blonde, 1.3 brown, 8 black); `sigma_a`: RGB absorption per unit fibre radius
       added to the pigments' (0 by default; a scene file that gives `sigma_a` and no
       pigment means σ_a alone, as Mitsuba's `sigma_a`). The fibre's σ_a is `absorption(params)`.
-    - `longitudinal_roughness`: β_m in (0, 1], as Mitsuba's; `tilt`: the cuticle scales'
+    - `longitudinal_roughness`: β_m in (0, 1], as Mitsuba's; `azimuthal_roughness`: β_n in
+      (0, 1], as Mitsuba's, read by `azimuthal = "chiang"` only (Karis's azimuthal
+      approximations fix their own spread); `tilt`: the cuticle scales'
       angle α in degrees (Mitsuba's `scale_tilt`, 2 by default).
     - `weight_r`, `weight_tt`, `weight_trt`: RGB weights of the three lobes (1: the
       physical fibre; other values are art direction); `ambient`: an RGB ambient light
@@ -55,6 +58,7 @@ class MarschnerParams(eqx.Module):
     pheomelanin: Float[Array, ""]
     sigma_a: Float[Array, " 3"]
     longitudinal_roughness: Float[Array, ""]
+    azimuthal_roughness: Float[Array, ""]
     tilt: Float[Array, ""]
     weight_r: Float[Array, " 3"]
     weight_tt: Float[Array, " 3"]
@@ -68,6 +72,7 @@ class MarschnerParams(eqx.Module):
         pheomelanin: ArrayLike = 0.2,
         sigma_a: RGBLike = 0.0,
         longitudinal_roughness: ArrayLike = 0.3,
+        azimuthal_roughness: ArrayLike = 0.3,
         tilt: ArrayLike = 2.0,
         weight_r: RGBLike = 1.0,
         weight_tt: RGBLike = 1.0,
@@ -79,6 +84,7 @@ class MarschnerParams(eqx.Module):
         self.pheomelanin = scalar_param(pheomelanin)
         self.sigma_a = rgb_param(sigma_a)
         self.longitudinal_roughness = scalar_param(longitudinal_roughness)
+        self.azimuthal_roughness = scalar_param(azimuthal_roughness)
         self.tilt = scalar_param(tilt)
         self.weight_r = rgb_param(weight_r)
         self.weight_tt = rgb_param(weight_tt)
@@ -91,12 +97,13 @@ class MarschnerParams(eqx.Module):
             self,
             colors=("sigma_a", "weight_r", "weight_tt", "weight_trt", "ambient"),
             non_negative=("eumelanin", "pheomelanin", "kappa"),
-            positive=("longitudinal_roughness",),
+            positive=("longitudinal_roughness", "azimuthal_roughness"),
             finite=("tilt",),
         )
-        beta = self.longitudinal_roughness
-        if not isinstance(beta, jax.core.Tracer) and float(np.asarray(beta)) > 1.0:
-            raise SceneError(f"shading.longitudinal_roughness must be in (0, 1], got {float(beta):g}")
+        for name in ("longitudinal_roughness", "azimuthal_roughness"):
+            beta = getattr(self, name)
+            if not isinstance(beta, jax.core.Tracer) and float(np.asarray(beta)) > 1.0:
+                raise SceneError(f"shading.{name} must be in (0, 1], got {float(beta):g}")
 
     def __repr__(self) -> str:
         return values_repr(self)
@@ -114,6 +121,8 @@ _LOBE_GAINS = ("weight_r", "weight_tt", "weight_trt")
 # `multiple_scattering`: single scattering alone, or with Zinke et al. 2008's dual
 # scattering (docs/model.md §19, `_dual_scattering.py`).
 MULTIPLE_SCATTERING = ("none", "dual")
+# The ways N_p is computed (`Marschner.azimuthal`, docs/model.md §19).
+AZIMUTHAL = ("karis", "chiang")
 
 
 @register_shading_model
@@ -129,6 +138,10 @@ class Marschner(AbstractShadingModel):
 
     params: MarschnerParams = eqx.field(default_factory=MarschnerParams)
     multiple_scattering: str = eqx.field(static=True, default="none")
+    # How N_p is computed: "karis" (Karis 2016's closed forms) or "chiang" (Chiang et al.
+    # 2016's far field, `azimuthal_samples` quadrature nodes across the fibre).
+    azimuthal: str = eqx.field(static=True, default="karis")
+    azimuthal_samples: int = eqx.field(static=True, default=64)
 
     name: ClassVar[str] = "marschner"
     params_type: ClassVar[type] = MarschnerParams
@@ -137,6 +150,7 @@ class Marschner(AbstractShadingModel):
         "pheomelanin",
         "sigma_a",
         "longitudinal_roughness",
+        "azimuthal_roughness",
         "tilt",
         "weight_r",
         "weight_tt",
@@ -144,7 +158,11 @@ class Marschner(AbstractShadingModel):
         "ambient",
         "kappa",
         "multiple_scattering",
+        "azimuthal",
+        "azimuthal_samples",
     )
+    # azimuthal_roughness is fitted where named, with azimuthal = "chiang" (it reaches
+    # nothing with "karis").
     fittable: ClassVar[tuple[str, ...]] = (
         *_LOBE_GAINS,
         "eumelanin",
@@ -158,23 +176,59 @@ class Marschner(AbstractShadingModel):
         "pheomelanin": SOFTPLUS,
         "sigma_a": LOG,
         "longitudinal_roughness": LOGIT,
+        "azimuthal_roughness": LOGIT,
         "tilt": IDENTITY,
         "kappa": LOG,
+    }
+    # The lobe weights are fitted as one grey value each unless the caller says otherwise:
+    # in RGB they would take the colour from the absorption, which is what a fit is to find.
+    grey: ClassVar[tuple[str, ...]] = _LOBE_GAINS
+    # With the transmitted lobes' weight solved to 0 the pigments have no effect (R carries
+    # no colour): the fit then tries Mitsuba's example hair colours (blonde 0.3, brown 1.3,
+    # black 8; pheomelanin 0 to the red 1.2), and a small value where 0 is meant.
+    plateaus: ClassVar[tuple[Plateau, ...]] = (
+        Plateau("eumelanin", (0.01, 0.1, 0.3, 1.3, 3.0, 8.0), gain="weight_tt"),
+        Plateau("pheomelanin", (0.01, 0.2, 0.5, 1.2, 3.0), gain="weight_tt"),
+    )
+    # Slider ranges (hj.explore): Mitsuba's pigment examples and roughness range, a tilt
+    # of up to ±10° (human hair: 2–4°, Marschner et al. 2003), weights around 1.
+    ranges: ClassVar[Mapping[str, tuple[float, float]]] = {
+        "eumelanin": (0.0, 10.0),
+        "pheomelanin": (0.0, 5.0),
+        "sigma_a": (0.0, 10.0),
+        "longitudinal_roughness": (0.02, 1.0),
+        "azimuthal_roughness": (0.02, 1.0),
+        "tilt": (-10.0, 10.0),
+        "weight_r": (0.0, 4.0),
+        "weight_tt": (0.0, 4.0),
+        "weight_trt": (0.0, 4.0),
     }
     gl_id: ClassVar[int | None] = None
 
     def __check_init__(self):
+        if self.azimuthal not in AZIMUTHAL:
+            raise SceneError(
+                f"shading.azimuthal must be one of {', '.join(AZIMUTHAL)}, got {self.azimuthal!r}"
+            )
+        if not 2 <= self.azimuthal_samples <= 4096:
+            raise SceneError(f"shading.azimuthal_samples must be in [2, 4096], got {self.azimuthal_samples}")
         if self.multiple_scattering not in MULTIPLE_SCATTERING:
             raise SceneError(
                 f"shading.multiple_scattering must be one of {', '.join(MULTIPLE_SCATTERING)}, "
                 f"got {self.multiple_scattering!r}"
             )
+        if self.multiple_scattering == "dual" and self.azimuthal != "karis":
+            # The dual-scattering tables integrate Karis's azimuthal lobes (`azimuthal_lobes`).
+            raise SceneError('shading.multiple_scattering = "dual" needs shading.azimuthal = "karis"')
 
     def reflectance(self, points: ShadingPoints, params: MarschnerParams) -> Reflectance:
         sigma_a, beta, tilt = absorption(params), params.longitudinal_roughness, params.tilt
-        lobes = jax.vmap(marschner_lobes, in_axes=(0, 0, 0, None, None, None))(
-            points.tangent, points.to_light, points.to_eye, sigma_a, beta, tilt
-        )
+        azimuthal = None
+        if self.azimuthal == "chiang":
+            azimuthal = Azimuthal(params.azimuthal_roughness, self.azimuthal_samples)
+        lobes = jax.vmap(
+            lambda t, light, eye: marschner_lobes(t, light, eye, sigma_a, beta, tilt, azimuthal)
+        )(points.tangent, points.to_light, points.to_eye)
         r, tt, trt = lobes
         shape = points.base_color.shape
         lit = {"weight_r": jnp.broadcast_to(r[:, None], shape), "weight_tt": tt, "weight_trt": trt}
@@ -214,6 +268,7 @@ class Marschner(AbstractShadingModel):
             pheomelanin=table.number("pheomelanin", lo=0),
             sigma_a=table.rgb("sigma_a", scalar=True),
             longitudinal_roughness=table.number("longitudinal_roughness", lo=0, hi=1, lo_open=True),
+            azimuthal_roughness=table.number("azimuthal_roughness", lo=0, hi=1, lo_open=True),
             tilt=table.number("tilt"),
             weight_r=table.rgb("weight_r", scalar=True),
             weight_tt=table.rgb("weight_tt", scalar=True),
@@ -221,13 +276,22 @@ class Marschner(AbstractShadingModel):
             ambient=table.rgb("ambient", scalar=True),
             kappa=table.number("kappa", lo=0),
         )
-        scattering = table.given(multiple_scattering=table.choice("multiple_scattering", MULTIPLE_SCATTERING))
         if "sigma_a" in given:
             # σ_a given directly: the pigments add to it only where given too (0 otherwise,
             # not the brown default), so `sigma_a` alone means the same as in Mitsuba.
             given.setdefault("eumelanin", 0.0)
             given.setdefault("pheomelanin", 0.0)
-        return cls(params=MarschnerParams(**given), **scattering)
+        options = table.given(
+            azimuthal=table.choice("azimuthal", AZIMUTHAL),
+            azimuthal_samples=table.integer("azimuthal_samples", lo=2),
+            multiple_scattering=table.choice("multiple_scattering", MULTIPLE_SCATTERING),
+        )
+        return cls(params=MarschnerParams(**given), **options)
 
     def table(self) -> dict:
-        return {**super().table(), "multiple_scattering": self.multiple_scattering}
+        return {
+            **super().table(),
+            "azimuthal": self.azimuthal,
+            "azimuthal_samples": self.azimuthal_samples,
+            "multiple_scattering": self.multiple_scattering,
+        }

@@ -10,8 +10,12 @@ per-point inputs are made). It owns everything that differs between models:
   RGB gain (`Reflectance`): the shading stage applies light, shadow and streaks to the
   lit terms (`hairjax/_shading/_stage.py`) and the fit solves for the gains
   (`hairjax/_fit/`), so neither transcribes the model a second time;
-- `searched`: the parameters the colour is not linear in, with the transforms the fit
-  searches them through;
+- what the fit and `hj.explore` need to know of its parameters (docs/fitting.md, "What a
+  model declares"): `searched`, the parameters the colour is not linear in, with the
+  transforms the fit searches them through (a scalar or an RGB `[3]` value, three solver
+  coordinates); `plateaus`, where a fit may stall with a parameter without effect, and the
+  values it scans there (`Plateau`); `ranges`, each parameter's sensible range (the
+  slider's); `grey`, the gains fitted as one grey value unless the caller says otherwise;
 - its GL side: `gl_id` (the shader's branch), `gl_uniforms`, `gl_table`, `gl_attributes`;
 - its scene-file table: `table_keys` and `from_table`, and back: `table`.
 
@@ -45,6 +49,7 @@ __all__ = [
     "scalar_param",
     "rgb_uniform",
     "AbstractShadingModel",
+    "Plateau",
     "PointInputs",
     "ShadingPoints",
     "Reflectance",
@@ -76,6 +81,21 @@ def scalar_param(x) -> Float[Array, ""]:
 def rgb_uniform(v) -> tuple:
     """An RGB value as the three Python floats a GL vec3 uniform takes."""
     return tuple(float(x) for x in np.broadcast_to(np.asarray(v, dtype=np.float64), (3,)))
+
+
+@dataclasses.dataclass(frozen=True)
+class Plateau:
+    """A stationary set a fit cannot leave by stepping (docs/fitting.md, "When a fit has
+    converged"), as a model declares it: where `parameter` has no effect, every value of it
+    is stationary. `scan`: the values of `parameter`, in its own units (a shininess, not its
+    log), that the fit tries there, restarting from the best; `gain`: the gain that, solved
+    to 0, leaves `parameter` without effect (the scan is tried only where that gain is
+    solved for, so that each value tried gets its own gain), or None for a parameter that
+    can lose its effect on its own (a lobe shifted off every strand)."""
+
+    parameter: str
+    scan: tuple[float, ...]
+    gain: str | None = None
 
 
 class PointInputs(eqx.Module):
@@ -199,12 +219,19 @@ class AbstractShadingModel(eqx.Module):
     table_keys: ClassVar[tuple[str, ...]]
     # The parameters `fit` fits by default, and those among them that are RGB gains the
     # colour is linear in; `searched` maps each other fittable parameter to the transform
-    # the solver searches it through. `ambient` is a gain that is held unless named.
+    # the solver searches it through (a scalar, or an RGB `[3]` value: one solver
+    # coordinate per channel). `ambient` is a gain that is held unless named.
     fittable: ClassVar[tuple[str, ...]]
     searched: ClassVar[Mapping[str, Transform]]
-    # (gain, exponent): with the gain solved to 0 the exponent has no effect, a plateau the
-    # fit leaves by scanning the exponent (docs/fitting.md); None for none.
-    plateau: ClassVar[tuple[str, str] | None] = None
+    # Where a fit may stall with a parameter without effect, and what it scans there.
+    plateaus: ClassVar[tuple[Plateau, ...]] = ()
+    # A parameter's sensible range (low, high) in its own units: `hj.explore`'s slider
+    # (logarithmic where `searched` names LOG); a parameter without one gets the slider
+    # its validity check implies (`hairjax/_explore.py`, `slider_range`).
+    ranges: ClassVar[Mapping[str, tuple[float, float]]] = {}
+    # Gains `fit` fits as one grey value unless its `scalar=` names the grey ones itself
+    # (docs/fitting.md, "What a model declares").
+    grey: ClassVar[tuple[str, ...]] = ()
     # The camera shader's branch for this model (hairjax/gl/shaders/strand.vert), or None
     # where the model has no GL side (the GL renderer then refuses the scene).
     gl_id: ClassVar[int | None] = None

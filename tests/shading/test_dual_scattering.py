@@ -214,6 +214,9 @@ def test_scene_file_option(tmp_path):
         hj.load_scene(path)
     with pytest.raises(hj.SceneError, match="multiple_scattering"):
         Marschner(multiple_scattering="double")
+    # The tables integrate Karis's azimuthal lobes: Chiang's far field is refused with dual.
+    with pytest.raises(hj.SceneError, match='needs shading.azimuthal = "karis"'):
+        Marschner(multiple_scattering="dual", azimuthal="chiang")
 
 
 def test_the_fit_composites_the_scattered_light_as_the_renderer_does():

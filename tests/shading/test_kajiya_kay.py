@@ -196,3 +196,20 @@ def test_traced_parameters_are_not_checked():
     """Under a trace the values do not exist yet: construction must not touch them."""
     out = jax.jit(lambda p: ShadingParams(shininess=p).shininess)(-1.0)
     assert float(out) == -1.0
+
+
+def test_the_models_declare_the_shininess_plateau_and_range():
+    """Kajiya-Kay and its mirror and lookup variants declare one plateau, the shininess
+    where Ks is solved to 0, scanned at 25 values 1.5× apart from 0.5 to 10⁴ (the range
+    their sliders span); Scheuermann declares no plateau, no range; none a grey gain."""
+    import hairjax as hj
+
+    for model in (hj.KajiyaKay, hj.KajiyaKayMirror, hj.KajiyaKayLookup):
+        (plateau,) = model.plateaus
+        assert (plateau.parameter, plateau.gain) == ("shininess", "ks")
+        scan = np.asarray(plateau.scan)
+        assert len(scan) == 25 and scan[0] == 0.5 and scan[-1] == pytest.approx(1e4, rel=1e-12)
+        # (10⁴/0.5)^(1/24) = 1.51: "1.5× apart" (docs/fitting.md).
+        np.testing.assert_allclose(scan[1:] / scan[:-1], 20000 ** (1 / 24), rtol=1e-12)
+        assert model.ranges == {"shininess": (0.5, 1e4)} and model.grey == ()
+    assert hj.Scheuermann.plateaus == () and hj.Scheuermann.ranges == {} and hj.Scheuermann.grey == ()

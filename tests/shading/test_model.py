@@ -45,6 +45,7 @@ class Toy(hj.AbstractShadingModel):
     table_keys: ClassVar[tuple[str, ...]] = ("kd", "ambient", "power", "kappa")
     fittable: ClassVar[tuple[str, ...]] = ("kd", "power", "kappa")
     searched: ClassVar[dict] = {"power": hj.LOG, "kappa": hj.LOG}
+    ranges: ClassVar[dict] = {"power": (0.1, 100.0)}
 
     def reflectance(self, points, params):
         cos = jnp.sum(points.tangent * points.to_light, axis=1)
@@ -135,3 +136,15 @@ def test_unregistered_it_is_unknown(tmp_path):
     path.write_text('[hair]\nsource = "furball"\nstrands = 20\n[shading]\nmodel = "toy-test"\n')
     with pytest.raises(hj.SceneError, match="shading.model must be one of"):
         hj.load_scene(path)
+
+
+def test_its_declared_range_sets_the_slider(toy):
+    """`ranges` gives `hj.explore`'s slider: log where `searched` says LOG, widened to hold
+    the value; a parameter without one keeps the slider its check implies."""
+    from hairjax._explore import slider_range
+
+    assert slider_range(TRUE, "power", Toy) == ("log", -1.0, 2.0)  # 0.1 … 100
+    far = ToyParams(kd=0.5, power=1e3)
+    assert slider_range(far, "power", Toy(far)) == ("log", -1.0, 3.0)  # widened to 1000
+    # κ declares none: [0, max(1, 2κ)] from its check (κ ≥ 0), as without a model.
+    assert slider_range(TRUE, "kappa", Toy) == slider_range(TRUE, "kappa") == ("linear", 0.0, 3.0)
