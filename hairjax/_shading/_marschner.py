@@ -16,7 +16,7 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .._constants import EUMELANIN_SIGMA_A, PHEOMELANIN_SIGMA_A
 from .._errors import SceneError
-from ._marschner_lobes import marschner_lobes
+from ._marschner_lobes import lobe_widths, marschner_lobes
 from ._model import (
     AbstractShadingModel,
     Reflectance,
@@ -151,7 +151,7 @@ class Marschner(AbstractShadingModel):
         "tilt": IDENTITY,
         "kappa": LOG,
     }
-    gl_id: ClassVar[int | None] = None
+    gl_id: ClassVar[int | None] = 4
 
     def reflectance(self, points: ShadingPoints, params: MarschnerParams) -> Reflectance:
         lobes = jax.vmap(marschner_lobes, in_axes=(0, 0, 0, None, None, None))(
@@ -174,14 +174,17 @@ class Marschner(AbstractShadingModel):
         )
 
     def gl_uniforms(self, params: MarschnerParams) -> dict:
+        """The `Marschner` struct of model.glsl: what depends on the parameters alone is
+        computed here by the JAX functions the lobes use (σ_a, the Gaussians' widths, α in
+        radians), so GLSL repeats no formula of the parameters."""
         return {
             "shading.ambient": rgb_uniform(params.ambient),
             "marschner.sigma_a": rgb_uniform(absorption(params)),
+            "marschner.widths": rgb_uniform(lobe_widths(params.longitudinal_roughness)),
+            "marschner.tilt": float(jnp.deg2rad(params.tilt)),
             "marschner.weight_r": rgb_uniform(params.weight_r),
             "marschner.weight_tt": rgb_uniform(params.weight_tt),
             "marschner.weight_trt": rgb_uniform(params.weight_trt),
-            "marschner.longitudinal_roughness": float(params.longitudinal_roughness),
-            "marschner.tilt": float(params.tilt),
         }
 
     @classmethod

@@ -44,6 +44,12 @@ float safe_norm(vec3 x) {
     return sq > SAFE_NORM_EPS * SAFE_NORM_EPS ? sqrt(sq) : 0.0;
 }
 
+// x / ‖x‖, and 0 for x = 0 (a direction that does not exist contributes nothing).
+vec3 safe_normalize(vec3 x) {
+    float n = safe_norm(x);
+    return x / (n > 0.0 ? n : 1.0);  // fires for zero vectors: the result is 0
+}
+
 // log(1 + x) for x > −1, to a few ulps relative: GLSL has no log1p. Not the classic
 // log(u)·x/(u − 1), u = 1 + x (Goldberg 1991, Thm 4): it needs log(u) to ½ ulp, but GLSL
 // bounds log's error on [0.5, 2] only absolutely (2⁻²¹), and llvmpipe's log(u) just below 1
@@ -197,4 +203,106 @@ vec3 shade_scheuermann(Scheuermann s, vec3 T, vec3 N, vec3 L, vec3 V, float shif
     vec3 specular = s.primary_color * strand_specular(t1, H, s.primary_exponent)
                   + s.secondary_color * (mask * strand_specular(t2, H, s.secondary_exponent));
     return base * (s.ambient + tau * light_rgb * (diffuse + specular));
+}
+
+// §19 marschner: Karis's R/TT/TRT factorisation with Chiang et al. 2016's lobe variances
+// and tilt, as hairjax/_shading/_marschner_lobes.py, term by term. The host computes what
+// depends on the parameters alone (hairjax/_shading/_marschner.py, `gl_uniforms`).
+struct Marschner {
+    vec3 sigma_a;     // absorption(params): σ_a per unit fibre radius, from melanin
+    vec3 widths;      // lobe_widths(β_m): the Gaussians' standard deviations (R, TT, TRT)
+    float tilt;       // the scales' angle α, in radians
+    vec3 weight_r;
+    vec3 weight_tt;
+    vec3 weight_trt;
+};
+
+// Unpolarised Fresnel reflectance from air at cosine cos_i onto the fibre (index HAIR_ETA).
+float fresnel_dielectric(float cos_i) {
+    // Fires where cos_i rounds above 1 (unit vectors off by an ulp); 1 − cos² ≥ 0 then.
+    cos_i = clamp(cos_i, 0.0, 1.0);
+    // cos_t ≥ √(1 − 1/η²) > 0: no guard needed, and the denominators are ≥ η·cos_t > 0.
+    float cos_t = sqrt(1.0 - (1.0 - cos_i * cos_i) / (HAIR_ETA * HAIR_ETA));
+    float r_s = (cos_i - HAIR_ETA * cos_t) / (cos_i + HAIR_ETA * cos_t);
+    float r_p = (HAIR_ETA * cos_i - cos_t) / (HAIR_ETA * cos_i + cos_t);
+    return 0.5 * (r_s * r_s + r_p * r_p);
+}
+
+// √max(x, 0): fires at the end of a range (cos θ_d = 0, h = 1), where rounding may give x < 0.
+float safe_sqrt(float x) {
+    return x > 0.0 ? sqrt(x) : 0.0;
+}
+
+// Karis's M_p: the normal density g(std; x) (std > 0: β_m > 0 is checked on input).
+float lobe_gaussian(float std, float x) {
+    float z = x / std;
+    return exp(-0.5 * z * z) / (sqrt(2.0 * acos(-1.0)) * std);
+}
+
+// sin(θ + angle) from sin θ and cos θ (the scales' tilt).
+float tilted(float sin_t, float cos_t, float angle) {
+    return sin_t * cos(angle) + cos_t * sin(angle);
+}
+
+// e^{−σ_a·2 cos γ_t / cos θ_t}: absorption along the path through the fibre at offset h.
+vec3 fibre_transmittance(vec3 sigma_a, float h, float a, float cos_t) {
+    float cos_gamma_t = sqrt(1.0 - (h * a) * (h * a));  // h·a ≤ 1/η < 1
+    return exp(-sigma_a * (2.0 * cos_gamma_t / cos_t));
+}
+
+// (R, TT, TRT): π·M_p·N_p of each lobe at a point; R has no colour. Zero vectors (no
+// tangent, a point light at the point) give finite values; τ·light·… is 0 there through L.
+void marschner_lobes(Marschner m, vec3 T, vec3 L, vec3 V, out float r, out vec3 tt, out vec3 trt) {
+    float pi = acos(-1.0);
+    float sin_l = dot(T, L);
+    float sin_v = dot(T, V);
+    float cos_l = safe_norm(cross(T, L));
+    float cos_v = safe_norm(cross(T, V));
+    // cos θ_d = √((1 + cos(θ_V − θ_L))/2), without asin at ±1; the argument is 0 only for
+    // L and V along the fibre, opposite.
+    float cos_d = safe_sqrt(0.5 * (1.0 + cos_l * cos_v + sin_l * sin_v));
+    // φ from the projections on the normal plane; cos(φ/2) = ‖L̂p + V̂p‖/2, not √(½ + ½cos φ)
+    // (infinite derivative at φ = π). A projection is 0 for L or V along the fibre: then
+    // cos φ = 0 and cos(φ/2) = ½.
+    vec3 lp = safe_normalize(L - sin_l * T);
+    vec3 vp = safe_normalize(V - sin_v * T);
+    float cos_phi = dot(lp, vp);
+    float cos_half = 0.5 * safe_norm(lp + vp);
+
+    float m_r = lobe_gaussian(m.widths.x, sin_l + tilted(sin_v, cos_v, -2.0 * m.tilt));
+    float m_tt = lobe_gaussian(m.widths.y, sin_l + tilted(sin_v, cos_v, m.tilt));
+    float m_trt = lobe_gaussian(m.widths.z, sin_l + tilted(sin_v, cos_v, 4.0 * m.tilt));
+    float m_rest = lobe_gaussian(m.widths.z, sin_l + sin_v);
+
+    // a = 1/η' = cos θ_d / √(η² − sin²θ_d): no division by cos θ_d, 0 at grazing
+    // incidence; η² − sin²θ_d ≥ η² − 1 > 0.
+    float a = cos_d / sqrt(HAIR_ETA * HAIR_ETA - 1.0 + cos_d * cos_d);
+    // cos θ_t = √(1 − sin²θ_d/η²) ≥ √(1 − 1/η²) > 0.
+    float cos_t = sqrt(1.0 - (1.0 - cos_d * cos_d) / (HAIR_ETA * HAIR_ETA));
+
+    r = pi * m_r * 0.25 * cos_half * fresnel_dielectric(cos_d * cos_half);
+
+    float h_tt = cos_half * (1.0 + a * (KARIS_TT[0] - KARIS_TT[1] * cos_phi));
+    float f_tt = fresnel_dielectric(cos_d * safe_sqrt(1.0 - h_tt * h_tt));
+    float d_tt = exp(-KARIS_TT[2] * cos_phi - KARIS_TT[3]);
+    tt = pi * m_tt * (1.0 - f_tt) * (1.0 - f_tt) * fibre_transmittance(m.sigma_a, h_tt, a, cos_t) * d_tt;
+
+    float f_trt = fresnel_dielectric(cos_d * sqrt(1.0 - HAIR_TRT_OFFSET * HAIR_TRT_OFFSET));
+    vec3 t_trt = fibre_transmittance(m.sigma_a, HAIR_TRT_OFFSET, a, cos_t);
+    vec3 a_trt = (1.0 - f_trt) * (1.0 - f_trt) * f_trt * t_trt * t_trt;
+    float d_trt = exp(KARIS_TRT[0] * cos_phi - KARIS_TRT[1]);
+    vec3 series = 1.0 - f_trt * t_trt;
+    // Fires only where f·T → 1 (grazing and no absorption); the remainder is 0 there.
+    bvec3 ok = greaterThan(series, vec3(HAIR_SERIES_EPS));
+    vec3 a_rest = mix(vec3(0.0), a_trt * f_trt * t_trt / mix(vec3(1.0), series, ok), ok);
+    trt = pi * (m_trt * a_trt * d_trt + m_rest * a_rest / (2.0 * pi));
+}
+
+// §19: ambient + τ·light·(w_R·R + w_TT·TT + w_TRT·TRT) (hairjax/_shading/_stage.py's
+// composition; the strands' colour is not read).
+vec3 shade_marschner(Marschner m, vec3 ambient, vec3 T, vec3 L, vec3 V, vec3 light_rgb, float tau) {
+    float r;
+    vec3 tt, trt;
+    marschner_lobes(m, T, L, V, r, tt, trt);
+    return ambient + tau * light_rgb * (m.weight_r * r + m.weight_tt * tt + m.weight_trt * trt);
 }
