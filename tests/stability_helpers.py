@@ -519,3 +519,40 @@ def glsl_highlight(gl, t, light, eye, model: str, p: float) -> np.ndarray:
         model=hj.shading_model_class(model).gl_id,
         p=p,
     )
+
+
+def glsl_marschner_lobes(gl, t, light, eye, params: hj.MarschnerParams) -> np.ndarray:
+    """model.glsl's marschner_lobes on rows (T, L, V), with the uniforms the renderer sets
+    (`Marschner.gl_uniforms`): `[n, 7]` of (R, TT rgb, TRT rgb)."""
+    body = """
+    vec3 T = vec3(inp[9u * i], inp[9u * i + 1u], inp[9u * i + 2u]);
+    vec3 L = vec3(inp[9u * i + 3u], inp[9u * i + 4u], inp[9u * i + 5u]);
+    vec3 V = vec3(inp[9u * i + 6u], inp[9u * i + 7u], inp[9u * i + 8u]);
+    float r;
+    vec3 tt, trt;
+    marschner_lobes(marschner, T, L, V, r, tt, trt);
+    outp[7u * i] = r;
+    for (uint c = 0u; c < 3u; c++) {
+        outp[7u * i + 1u + c] = tt[c];
+        outp[7u * i + 4u + c] = trt[c];
+    }"""
+    uniforms = hj.Marschner(params).gl_uniforms(params)
+    values = {k: v for k, v in uniforms.items() if k.startswith("marschner.")}
+    rows = np.concatenate([t, light, eye], axis=1)
+    return run_glsl(gl, body, rows, 7, "uniform Marschner marschner;", **values)
+
+
+def jax_marschner_lobes(t, light, eye, params: hj.MarschnerParams) -> np.ndarray:
+    """The JAX model's lobes (hairjax/_shading/_marschner_lobes.py, float64) on rows
+    (T, L, V), as `[n, 7]` of (R, TT rgb, TRT rgb)."""
+    from hairjax._shading._marschner import absorption
+    from hairjax._shading._marschner_lobes import marschner_lobes
+
+    lobes = jax.vmap(marschner_lobes, in_axes=(0, 0, 0, None, None, None))(
+        *(jnp.asarray(x, jnp.float64) for x in (t, light, eye)),
+        absorption(params),
+        params.longitudinal_roughness,
+        params.tilt,
+    )
+    r, tt, trt = (np.asarray(x) for x in lobes)
+    return np.concatenate([r[:, None], tt, trt], axis=1)

@@ -41,7 +41,6 @@ __all__ = ["lobe_widths", "fresnel_dielectric", "marschner_lobes", "Lobes"]
 Lobes = tuple[Float[Array, ""], Float[Array, " 3"], Float[Array, " 3"]]
 
 
-
 def lobe_widths(beta_m: Float[Array, ""]) -> Float[Array, " 3"]:
     """The Gaussians' standard deviations (R, TT, TRT) from the longitudinal roughness β_m
     (Chiang et al. 2016's fit of d'Eon's variance: √v = 0.726 β + 0.812 β² + 3.7 β²⁰;

@@ -12,16 +12,12 @@ which is independent code (hairjax/_shading/_marschner_lobes.py; model.glsl's
 
 from __future__ import annotations
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 import pytest
 from helpers import MAX_BAND, PIXEL_TOL, render_gl_with_edited_shader, small_furball_scene, unexplained_pixels
-from stability_helpers import run_glsl
+from stability_helpers import glsl_marschner_lobes, jax_marschner_lobes
 
 import hairjax as hj
-from hairjax._shading._marschner import absorption
-from hairjax._shading._marschner_lobes import marschner_lobes
 
 FRONT = (-0.5, -0.7, -0.4)  # from above and in front of the camera's side
 BACK = (0.0, 0.0, 1.0)  # toward the camera (at z = 3.5): the hair is back-lit
@@ -105,38 +101,6 @@ def test_a_wrong_marschner_shader_fails_the_check(gl, geometries, edit):
     assert bad.size > 20, f"{edit}: only {bad.size} pixels caught"
 
 
-def glsl_lobes(gl, t, light, eye, params: hj.MarschnerParams) -> np.ndarray:
-    """model.glsl's marschner_lobes on rows (T, L, V), with the uniforms the renderer sets
-    (`Marschner.gl_uniforms`): `[n, 7]` of (R, TT rgb, TRT rgb)."""
-    body = """
-    vec3 T = vec3(inp[9u * i], inp[9u * i + 1u], inp[9u * i + 2u]);
-    vec3 L = vec3(inp[9u * i + 3u], inp[9u * i + 4u], inp[9u * i + 5u]);
-    vec3 V = vec3(inp[9u * i + 6u], inp[9u * i + 7u], inp[9u * i + 8u]);
-    float r;
-    vec3 tt, trt;
-    marschner_lobes(marschner, T, L, V, r, tt, trt);
-    outp[7u * i] = r;
-    for (uint c = 0u; c < 3u; c++) {
-        outp[7u * i + 1u + c] = tt[c];
-        outp[7u * i + 4u + c] = trt[c];
-    }"""
-    uniforms = hj.Marschner(params).gl_uniforms(params)
-    values = {k: v for k, v in uniforms.items() if k.startswith("marschner.")}
-    return run_glsl(gl, body, np.concatenate([t, light, eye], axis=1), 7, "uniform Marschner marschner;", **values)
-
-
-def jax_lobes(t, light, eye, params: hj.MarschnerParams) -> np.ndarray:
-    """The JAX model's lobes (float64) on the same rows, as `[n, 7]`."""
-    lobes = jax.vmap(marschner_lobes, in_axes=(0, 0, 0, None, None, None))(
-        *(jnp.asarray(x, jnp.float64) for x in (t, light, eye)),
-        absorption(params),
-        params.longitudinal_roughness,
-        params.tilt,
-    )
-    r, tt, trt = (np.asarray(x) for x in lobes)
-    return np.concatenate([r[:, None], tt, trt], axis=1)
-
-
 def unit_rows(n: int, seed: int) -> np.ndarray:
     v = np.random.default_rng(seed).normal(size=(n, 3))
     return (v / np.linalg.norm(v, axis=1, keepdims=True)).astype(np.float32)
@@ -149,16 +113,19 @@ def test_glsl_lobes_match_jax_at_points(gl, roughness, melanin):
     inputs, the scales tilted by 3°. Tolerance: 2e-5 of each lobe's largest value over the
     rows (measured ≤ 4e-6 on these cases, llvmpipe: float32's 6e-8 times the Gaussian's
     (x/std)² and the exponentials' arguments)."""
+
     def params_at(tilt):
-        return hj.MarschnerParams(eumelanin=melanin, pheomelanin=0.3, longitudinal_roughness=roughness, tilt=tilt)
+        return hj.MarschnerParams(
+            eumelanin=melanin, pheomelanin=0.3, longitudinal_roughness=roughness, tilt=tilt
+        )
 
     params = params_at(3.0)
     t, light, eye = unit_rows(2000, 1), unit_rows(2000, 2), unit_rows(2000, 3)
-    got = glsl_lobes(gl, t, light, eye, params)
-    want = jax_lobes(t, light, eye, params)
+    got = glsl_marschner_lobes(gl, t, light, eye, params)
+    want = jax_marschner_lobes(t, light, eye, params)
     scale = np.abs(want).max(axis=0)
     assert np.all(np.isfinite(got))
     assert np.all(np.abs(got - want) <= 2e-5 * scale), np.abs(got - want).max(axis=0) / scale
     # Not vacuous: the tilt flipped moves R by > 10 tolerances, even at roughness 1.
-    flipped = jax_lobes(t, light, eye, params_at(-3.0))
+    flipped = jax_marschner_lobes(t, light, eye, params_at(-3.0))
     assert np.abs(flipped - want)[:, 0].max() > 10 * 2e-5 * scale[0]
