@@ -7,6 +7,7 @@ one RGB gain), so a target's image is
     image = Σ_g g ⊙ K_g + T·backdrop + T·O(κ),
     K_g = composite(streak · A_g)               (ambient terms)
     K_g = composite(streak · light · τ · V · L_g)  (lit terms, τ = exp(−κΩ), §7, §13)
+          + composite(streak · light · V · S_g)     (scattered terms, §19, if any)
 
 with O(κ) the occluder's colour (§13, `occluder_colors`). The gains are solved for by
 variable projection (`_varpro.py`) and the solver iterates on the model's `searched`
@@ -92,6 +93,7 @@ def _columns(terms: TargetTerms, params, gains, reflectance=None, light=None) ->
     streak·A_g for an ambient term, streak·light·τ·V·L_g for a lit one. `reflectance`:
     the model's terms at `params`, if known; `light`: L from its direction, if any."""
     g = terms.geometry
+    scattered: dict = {}
     if reflectance is None and all(n in terms.bases for n in gains):
         # Only κ moves them: the terms are known.
         lit = {n: b for n, b in terms.bases.items() if n in terms.lit}
@@ -99,14 +101,21 @@ def _columns(terms: TargetTerms, params, gains, reflectance=None, light=None) ->
     else:
         if reflectance is None:
             reflectance = g.shading.reflectance(shading_points(g, light), params)
-        ambient, lit = reflectance.ambient, reflectance.lit
-    lit_scale = terms.light
+        ambient, lit, scattered = reflectance.ambient, reflectance.lit, reflectance.scattered
+    lit_scale = visible = terms.light
     if g.omega is not None:
         lit_scale = lit_scale * transmittance(params.kappa, g.omega)[:, None]
     if g.light_visibility is not None:
         lit_scale = lit_scale * g.light_visibility[:, None]
-    columns = [ambient[n] * terms.ambient_scale if n in ambient else lit[n] * lit_scale for n in gains]
-    return jnp.concatenate(columns, axis=1)
+        visible = visible * g.light_visibility[:, None]
+
+    def column(n):
+        if n in ambient:
+            return ambient[n] * terms.ambient_scale
+        # §19: scattered terms are lit without τ (the light came through the hair in front).
+        return lit[n] * lit_scale + (scattered[n] * visible if n in scattered else 0.0)
+
+    return jnp.concatenate([column(n) for n in gains], axis=1)
 
 
 def gain_images_plain(terms: TargetTerms, params, reflectance=None, light=None) -> dict:
@@ -220,9 +229,10 @@ def prepare_terms(
     light_scale = jnp.broadcast_to(streak, geom.tangent.shape) if white else geom.light_rgb[None, :] * streak
     points = shading_points(geom)
     reached, lit = _reaches(model, points, params, searched, direction)
+    # Gains whose terms κ reaches inside the model (§19's scattered light), not through τ only.
+    by_searched = {n: bool(p) for n, p in reached.items()}  # the light's direction too
     if "kappa" in searched and geom.omega is not None:  # τ moves every lit term
         reached = {n: p | ({"kappa"} if n in lit else set()) for n, p in reached.items()}
-    by_searched = {n: bool(p - {"kappa"}) for n, p in reached.items()}  # the light's direction too
     varying = tuple(n for n in gains if reached[n])
     pairs = tuple((n, p) for n in varying for p in searched if p in reached[n])
     fixed_terms = TargetTerms(
@@ -241,7 +251,8 @@ def prepare_terms(
     reflectance = model.reflectance(points, params)  # at the start: the fixed terms' values
     fixed = gain_images_plain(fixed_terms, params, reflectance) if fixed_terms.varying else {}
     bases = {}
-    if varying and not any(by_searched[n] for n in varying):
+    # Bases hold the lit terms alone: a model with scattered terms recomputes them.
+    if varying and not reflectance.scattered and not any(by_searched[n] for n in varying):
         bases = {n: {**reflectance.ambient, **reflectance.lit}[n] for n in varying}
     constant = full.transmittance[:, None] * full.backdrop
     return TargetTerms(
@@ -262,20 +273,23 @@ def prepare_terms(
 
 
 def _reaches(model: AbstractShadingModel, points, params, searched, direction: bool = False):
-    """({gain: the fitted searched parameters other than κ that reach its term}, the lit
-    gains), by `dependence` on the model's `reflectance` (κ enters through τ alone). With
-    `direction`, "light_direction" reaches the terms that L reaches."""
-    names = [n for n in searched if n != "kappa"]
+    """({gain: the fitted searched parameters that reach its term inside the model}, the
+    lit gains), by `dependence` on the model's `reflectance` (κ reaches a term there only
+    through light scattered between fibres, §19; τ's κ the caller adds). With `direction`,
+    "light_direction" reaches the terms that L reaches."""
+    names = list(searched)
 
     def terms_of(*values):
         at = points if not direction else eqx.tree_at(lambda p: p.to_light, points, values[-1])
         r = model.reflectance(at, with_values(params, dict(zip(names, values)), ()))
-        return r.ambient, r.lit
+        return r.ambient, r.lit, r.scattered
 
     values = [jnp.reshape(getattr(params, n), ()) for n in names]
     inputs = [*names, "light_direction"] if direction else names
-    ambient, lit = dependence(terms_of, *values, *([points.to_light] if direction else []))
+    ambient, lit, scattered = dependence(terms_of, *values, *([points.to_light] if direction else []))
     reached = {n: {inputs[i] for i in d} for n, d in {**ambient, **lit}.items()}
+    for n, d in scattered.items():
+        reached[n] = reached[n] | {inputs[i] for i in d}
     return reached, tuple(lit)
 
 

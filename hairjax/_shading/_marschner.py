@@ -16,7 +16,8 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .._constants import EUMELANIN_SIGMA_A, PHEOMELANIN_SIGMA_A
 from .._errors import SceneError
-from ._marschner_lobes import lobe_widths, marschner_lobes
+from ._dual_scattering import DENSITY_BACK, DENSITY_FORWARD, dual_tables, dual_terms_batched
+from ._marschner_lobes import TILT_MULTIPLES, lobe_widths, marschner_lobes
 from ._model import (
     AbstractShadingModel,
     Reflectance,
@@ -31,7 +32,7 @@ from ._model import (
 )
 from ._transforms import IDENTITY, LOG, LOGIT, SOFTPLUS
 
-__all__ = ["MarschnerParams", "Marschner", "absorption"]
+__all__ = ["MarschnerParams", "Marschner", "absorption", "MULTIPLE_SCATTERING"]
 
 
 class MarschnerParams(eqx.Module):
@@ -110,6 +111,9 @@ def absorption(params: MarschnerParams) -> Float[Array, " 3"]:
 
 
 _LOBE_GAINS = ("weight_r", "weight_tt", "weight_trt")
+# `multiple_scattering`: single scattering alone, or with Zinke et al. 2008's dual
+# scattering (docs/model.md §19, `_dual_scattering.py`).
+MULTIPLE_SCATTERING = ("none", "dual")
 
 
 @register_shading_model
@@ -117,9 +121,14 @@ class Marschner(AbstractShadingModel):
     """Karis's R/TT/TRT approximation of a Marschner fibre (docs/model.md §19): the colour
     at a point is ambient + τ·V·light·(w_R·R + w_TT·TT + w_TRT·TRT), each lobe π·M_p·N_p
     with σ_a from melanin. The strands' own colour is not read (as in the reference: a
-    fibre's colour is its absorption)."""
+    fibre's colour is its absorption).
+
+    `multiple_scattering` (static): "none", or "dual" for light scattered between fibres
+    (Zinke et al. 2008): the lobes' weights scale it too, so the colour stays linear in
+    them; its forward-scattered part is not shadowed by τ (`Reflectance.scattered`)."""
 
     params: MarschnerParams = eqx.field(default_factory=MarschnerParams)
+    multiple_scattering: str = eqx.field(static=True, default="none")
 
     name: ClassVar[str] = "marschner"
     params_type: ClassVar[type] = MarschnerParams
@@ -134,6 +143,7 @@ class Marschner(AbstractShadingModel):
         "weight_trt",
         "ambient",
         "kappa",
+        "multiple_scattering",
     )
     fittable: ClassVar[tuple[str, ...]] = (
         *_LOBE_GAINS,
@@ -153,39 +163,69 @@ class Marschner(AbstractShadingModel):
     }
     gl_id: ClassVar[int | None] = 4
 
+    def __check_init__(self):
+        if self.multiple_scattering not in MULTIPLE_SCATTERING:
+            raise SceneError(
+                f"shading.multiple_scattering must be one of {', '.join(MULTIPLE_SCATTERING)}, "
+                f"got {self.multiple_scattering!r}"
+            )
+
     def reflectance(self, points: ShadingPoints, params: MarschnerParams) -> Reflectance:
+        sigma_a, beta, tilt = absorption(params), params.longitudinal_roughness, params.tilt
         lobes = jax.vmap(marschner_lobes, in_axes=(0, 0, 0, None, None, None))(
-            points.tangent,
-            points.to_light,
-            points.to_eye,
-            absorption(params),
-            params.longitudinal_roughness,
-            params.tilt,
+            points.tangent, points.to_light, points.to_eye, sigma_a, beta, tilt
         )
         r, tt, trt = lobes
         shape = points.base_color.shape
+        lit = {"weight_r": jnp.broadcast_to(r[:, None], shape), "weight_tt": tt, "weight_trt": trt}
+        ambient = {"ambient": jnp.ones(shape, points.base_color.dtype)}
+        if self.multiple_scattering == "none":
+            return Reflectance(ambient=ambient, lit=lit)
+        # n = κΩ fibres in front (docs/model.md §19): τ = e^{−κΩ} is the chance of crossing
+        # none when the crossings are Poisson with that mean; no shadows: none in front.
+        count = jnp.zeros(shape[:1], points.base_color.dtype)
+        if points.omega is not None:
+            count = params.kappa * points.omega
+        tables = dual_tables(sigma_a, beta, tilt)
+        direct, scattered = dual_terms_batched(
+            points.tangent, points.to_light, points.to_eye, count, tables, beta, tilt
+        )
         return Reflectance(
-            ambient={"ambient": jnp.ones(shape, points.base_color.dtype)},
-            lit={
-                "weight_r": jnp.broadcast_to(r[:, None], shape),
-                "weight_tt": tt,
-                "weight_trt": trt,
-            },
+            ambient=ambient,
+            lit={g: lit[g] + direct[:, i] for i, g in enumerate(_LOBE_GAINS)},
+            scattered={g: scattered[:, i] for i, g in enumerate(_LOBE_GAINS)},
         )
 
     def gl_uniforms(self, params: MarschnerParams) -> dict:
         """The `Marschner` struct of model.glsl: what depends on the parameters alone is
-        computed here by the JAX functions the lobes use (σ_a, the Gaussians' widths, α in
-        radians), so GLSL repeats no formula of the parameters."""
+        computed here by the JAX functions the lobes use (σ_a, the Gaussians' widths, each
+        lobe's tilt kα in radians), so GLSL repeats no formula of the parameters."""
+        tilts = np.asarray(TILT_MULTIPLES) * np.deg2rad(float(params.tilt))
         return {
             "shading.ambient": rgb_uniform(params.ambient),
             "marschner.sigma_a": rgb_uniform(absorption(params)),
             "marschner.widths": rgb_uniform(lobe_widths(params.longitudinal_roughness)),
-            "marschner.tilt": float(jnp.deg2rad(params.tilt)),
+            "marschner.tilts": tuple(float(t) for t in tilts),
             "marschner.weight_r": rgb_uniform(params.weight_r),
             "marschner.weight_tt": rgb_uniform(params.weight_tt),
             "marschner.weight_trt": rgb_uniform(params.weight_trt),
+            "marschner.dual": self.multiple_scattering == "dual",
+            "marschner.density_forward": DENSITY_FORWARD,
+            "marschner.density_back": DENSITY_BACK,
         }
+
+    def gl_table(self, params: MarschnerParams) -> np.ndarray | None:
+        """Dual scattering's tables (`dual_tables`, computed by the JAX code) as the
+        `[rows, J, 3]` texels model.glsl's dual_terms reads (None without dual scattering):
+        rows ā_f, β̄_f², A_b, Δ_b, σ_b, the shares of R, TT, TRT, then N^G_p at each cos φ
+        node k and lobe p (row 8 + 3k + p), columns the light's cos θ nodes."""
+        if self.multiple_scattering != "dual":
+            return None
+        t = dual_tables(absorption(params), params.longitudinal_roughness, params.tilt)
+        rows = [t.a_f, t.var_f, t.a_back, t.shift_back, t.std_back]
+        rows += [t.share_back[:, p] for p in range(3)]
+        rows += [t.n_g[:, k, p] for k in range(t.n_g.shape[1]) for p in range(3)]
+        return np.stack([np.asarray(r, dtype=np.float64) for r in rows])
 
     @classmethod
     def from_table(cls, table) -> Marschner:
@@ -201,9 +241,13 @@ class Marschner(AbstractShadingModel):
             ambient=table.rgb("ambient", scalar=True),
             kappa=table.number("kappa", lo=0),
         )
+        scattering = table.given(multiple_scattering=table.choice("multiple_scattering", MULTIPLE_SCATTERING))
         if "sigma_a" in given:
             # σ_a given directly: the pigments add to it only where given too (0 otherwise,
             # not the brown default), so `sigma_a` alone means the same as in Mitsuba.
             given.setdefault("eumelanin", 0.0)
             given.setdefault("pheomelanin", 0.0)
-        return cls(params=MarschnerParams(**given))
+        return cls(params=MarschnerParams(**given), **scattering)
+
+    def table(self) -> dict:
+        return {**super().table(), "multiple_scattering": self.multiple_scattering}

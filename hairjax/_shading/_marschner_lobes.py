@@ -30,13 +30,26 @@ cancels the rendering equation's cosine).
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from .._constants import HAIR_ETA, HAIR_SERIES_EPS, HAIR_TRT_OFFSET, KARIS_TRT, KARIS_TT
 from .._vectors import safe_norm, safe_normalize
 
-__all__ = ["lobe_widths", "fresnel_dielectric", "marschner_lobes", "Lobes"]
+__all__ = [
+    "lobe_widths",
+    "fresnel_dielectric",
+    "marschner_lobes",
+    "Lobes",
+    "FibreAngles",
+    "fibre_angles",
+    "longitudinal_arguments",
+    "azimuthal_lobes",
+    "gaussian",
+    "TILT_MULTIPLES",
+]
 
 Lobes = tuple[Float[Array, ""], Float[Array, " 3"], Float[Array, " 3"]]
 
@@ -69,7 +82,7 @@ def _safe_sqrt(x: Float[Array, "*s"]) -> Float[Array, "*s"]:
     return jnp.where(positive, jnp.sqrt(jnp.where(positive, x, 1.0)), 0.0)
 
 
-def _gaussian(std: Float[Array, ""], x: Float[Array, ""]) -> Float[Array, ""]:
+def gaussian(std: Float[Array, ""], x: Float[Array, ""]) -> Float[Array, ""]:
     """Karis's M_p: the normal density g(std; x) (std > 0: β_m > 0 is checked on input)."""
     return jnp.exp(-0.5 * (x / std) ** 2) / (jnp.sqrt(2.0 * jnp.pi) * std)
 
@@ -77,6 +90,86 @@ def _gaussian(std: Float[Array, ""], x: Float[Array, ""]) -> Float[Array, ""]:
 def _tilted(sin_t: Float[Array, ""], cos_t: Float[Array, ""], angle: Float[Array, ""]) -> Float[Array, ""]:
     """sin(θ + angle) from sin θ and cos θ (Mitsuba's reframe of the scales' tilt)."""
     return sin_t * jnp.cos(angle) + cos_t * jnp.sin(angle)
+
+
+class FibreAngles(NamedTuple):
+    """The angles every lobe reads at one point (module docstring's conventions)."""
+
+    sin_l: Float[Array, ""]
+    sin_v: Float[Array, ""]
+    cos_l: Float[Array, ""]
+    cos_v: Float[Array, ""]
+    cos_d: Float[Array, ""]
+    cos_phi: Float[Array, ""]
+    cos_half: Float[Array, ""]
+
+
+def fibre_angles(
+    tangent: Float[Array, " 3"], to_light: Float[Array, " 3"], to_eye: Float[Array, " 3"]
+) -> FibreAngles:
+    """sin θ and cos θ of L and V, cos θ_d, cos φ and cos(φ/2) at one point, every one
+    finite for zero vectors (§1) and for L or V along the fibre."""
+    sin_l, sin_v = jnp.dot(tangent, to_light), jnp.dot(tangent, to_eye)
+    cos_l, cos_v = safe_norm(jnp.cross(tangent, to_light)), safe_norm(jnp.cross(tangent, to_eye))
+    # cos θ_d = cos((θ_V − θ_L)/2) = √((1 + cos(θ_V − θ_L))/2), without asin at ±1; the
+    # argument is 0 only for L and V along the fibre, opposite (θ_V − θ_L = ±π).
+    cos_d = _safe_sqrt(0.5 * (1.0 + cos_l * cos_v + sin_l * sin_v))
+    # φ from the directions projected on the normal plane; cos(φ/2) = ‖L̂p + V̂p‖/2 needs no
+    # √(½ + ½cos φ), whose derivative is infinite at φ = π (back-lit). A projection is 0 for
+    # L or V along the fibre (θ = ±90°): then cos φ = 0 and cos(φ/2) = ½, finite.
+    lp = safe_normalize(to_light - sin_l * tangent)
+    vp = safe_normalize(to_eye - sin_v * tangent)
+    return FibreAngles(sin_l, sin_v, cos_l, cos_v, cos_d, jnp.dot(lp, vp), 0.5 * safe_norm(lp + vp))
+
+
+# The scales' tilt of each longitudinal lobe, as a multiple of α added to θ_V (R, TT, TRT;
+# the TRT remainder has none): Mitsuba's reframe.
+TILT_MULTIPLES = (-2.0, 1.0, 4.0, 0.0)
+
+
+def longitudinal_arguments(angles: FibreAngles, tilt: Float[Array, ""]) -> Float[Array, " 4"]:
+    """The arguments of M_R, M_TT, M_TRT and the remainder's M: sin θ_L + sin(θ_V + kα),
+    k from TILT_MULTIPLES, `tilt` α in degrees."""
+    alpha = jnp.deg2rad(tilt)
+    return jnp.stack([angles.sin_l + _tilted(angles.sin_v, angles.cos_v, k * alpha) for k in TILT_MULTIPLES])
+
+
+def azimuthal_lobes(
+    cos_d: Float[Array, ""],
+    cos_phi: Float[Array, ""],
+    cos_half: Float[Array, ""],
+    sigma_a: Float[Array, " 3"],
+) -> tuple[Float[Array, ""], Float[Array, " 3"], Float[Array, " 3"], Float[Array, " 3"]]:
+    """A_p·N_p of R, TT, TRT and of the TRT remainder (uniform, A_3+/(2π)) at θ_d and φ:
+    the azimuthal factors of Karis's approximations (module docstring), the lobes being
+    π·M_p·(A_p N_p). Their integral over φ ∈ (−π, π] is the lobe's share of the light the
+    fibre scatters (dual scattering's tables integrate them, `_dual_scattering.py`)."""
+    # a = 1/η' = cos θ_d / √(η² − sin²θ_d): no division by cos θ_d, which is 0 at grazing
+    # incidence; η² − sin²θ_d ≥ η² − 1 > 0.
+    a = cos_d / jnp.sqrt(HAIR_ETA**2 - 1.0 + cos_d * cos_d)
+    # cos θ_t = √(1 − sin²θ_d/η²) ≥ √(1 − 1/η²) > 0.
+    cos_t = jnp.sqrt(1.0 - (1.0 - cos_d * cos_d) / HAIR_ETA**2)
+
+    def transmittance(h):
+        cos_gamma_t = jnp.sqrt(1.0 - (h * a) ** 2)  # h·a ≤ 1/η < 1
+        return jnp.exp(-sigma_a * (2.0 * cos_gamma_t / cos_t))
+
+    n_r = 0.25 * cos_half * fresnel_dielectric(cos_d * cos_half)
+
+    h_tt = cos_half * (1.0 + a * (KARIS_TT[0] - KARIS_TT[1] * cos_phi))
+    f_tt = fresnel_dielectric(cos_d * _safe_sqrt(1.0 - h_tt * h_tt))
+    d_tt = jnp.exp(-KARIS_TT[2] * cos_phi - KARIS_TT[3])
+    n_tt = (1.0 - f_tt) ** 2 * transmittance(h_tt) * d_tt
+
+    f_trt = fresnel_dielectric(cos_d * jnp.sqrt(1.0 - HAIR_TRT_OFFSET**2))
+    t_trt = transmittance(jnp.asarray(HAIR_TRT_OFFSET))
+    a_trt = (1.0 - f_trt) ** 2 * f_trt * t_trt * t_trt
+    d_trt = jnp.exp(KARIS_TRT[0] * cos_phi - KARIS_TRT[1])
+    series = 1.0 - f_trt * t_trt
+    # Double-where: fires only where f·T → 1 (grazing and no absorption); the remainder is 0 there.
+    ok = series > HAIR_SERIES_EPS
+    a_rest = jnp.where(ok, a_trt * f_trt * t_trt / jnp.where(ok, series, 1.0), 0.0)
+    return n_r, n_tt, a_trt * d_trt, a_rest / (2.0 * jnp.pi)
 
 
 def marschner_lobes(
@@ -91,50 +184,10 @@ def marschner_lobes(
     reflection has no colour), TT and TRT RGB (absorbed by σ_a per unit fibre radius).
     `tilt` is the scales' angle α in degrees. Zero vectors (§1: no tangent, a point light
     at the point) give finite values; the shading stage's terms are 0 there through L."""
-    sin_l, sin_v = jnp.dot(tangent, to_light), jnp.dot(tangent, to_eye)
-    cos_l, cos_v = safe_norm(jnp.cross(tangent, to_light)), safe_norm(jnp.cross(tangent, to_eye))
-    # cos θ_d = cos((θ_V − θ_L)/2) = √((1 + cos(θ_V − θ_L))/2), without asin at ±1; the
-    # argument is 0 only for L and V along the fibre, opposite (θ_V − θ_L = ±π).
-    cos_d = _safe_sqrt(0.5 * (1.0 + cos_l * cos_v + sin_l * sin_v))
-    # φ from the directions projected on the normal plane; cos(φ/2) = ‖L̂p + V̂p‖/2 needs no
-    # √(½ + ½cos φ), whose derivative is infinite at φ = π (back-lit). A projection is 0 for
-    # L or V along the fibre (θ = ±90°): then cos φ = 0 and cos(φ/2) = ½, finite.
-    lp = safe_normalize(to_light - sin_l * tangent)
-    vp = safe_normalize(to_eye - sin_v * tangent)
-    cos_phi = jnp.dot(lp, vp)
-    cos_half = 0.5 * safe_norm(lp + vp)
-
+    angles = fibre_angles(tangent, to_light, to_eye)
     widths = lobe_widths(beta_m)
-    alpha = jnp.deg2rad(tilt)
-    m_r = _gaussian(widths[0], sin_l + _tilted(sin_v, cos_v, -2.0 * alpha))
-    m_tt = _gaussian(widths[1], sin_l + _tilted(sin_v, cos_v, alpha))
-    m_trt = _gaussian(widths[2], sin_l + _tilted(sin_v, cos_v, 4.0 * alpha))
-    m_rest = _gaussian(widths[2], sin_l + sin_v)
-
-    # a = 1/η' = cos θ_d / √(η² − sin²θ_d): no division by cos θ_d, which is 0 at grazing
-    # incidence; η² − sin²θ_d ≥ η² − 1 > 0.
-    a = cos_d / jnp.sqrt(HAIR_ETA**2 - 1.0 + cos_d * cos_d)
-    # cos θ_t = √(1 − sin²θ_d/η²) ≥ √(1 − 1/η²) > 0.
-    cos_t = jnp.sqrt(1.0 - (1.0 - cos_d * cos_d) / HAIR_ETA**2)
-
-    def transmittance(h):
-        cos_gamma_t = jnp.sqrt(1.0 - (h * a) ** 2)  # h·a ≤ 1/η < 1
-        return jnp.exp(-sigma_a * (2.0 * cos_gamma_t / cos_t))
-
-    r = jnp.pi * m_r * 0.25 * cos_half * fresnel_dielectric(cos_d * cos_half)
-
-    h_tt = cos_half * (1.0 + a * (KARIS_TT[0] - KARIS_TT[1] * cos_phi))
-    f_tt = fresnel_dielectric(cos_d * _safe_sqrt(1.0 - h_tt * h_tt))
-    d_tt = jnp.exp(-KARIS_TT[2] * cos_phi - KARIS_TT[3])
-    tt = jnp.pi * m_tt * (1.0 - f_tt) ** 2 * transmittance(h_tt) * d_tt
-
-    f_trt = fresnel_dielectric(cos_d * jnp.sqrt(1.0 - HAIR_TRT_OFFSET**2))
-    t_trt = transmittance(jnp.asarray(HAIR_TRT_OFFSET))
-    a_trt = (1.0 - f_trt) ** 2 * f_trt * t_trt * t_trt
-    d_trt = jnp.exp(KARIS_TRT[0] * cos_phi - KARIS_TRT[1])
-    series = 1.0 - f_trt * t_trt
-    # Double-where: fires only where f·T → 1 (grazing and no absorption); the remainder is 0 there.
-    ok = series > HAIR_SERIES_EPS
-    a_rest = jnp.where(ok, a_trt * f_trt * t_trt / jnp.where(ok, series, 1.0), 0.0)
-    trt = jnp.pi * (m_trt * a_trt * d_trt + m_rest * a_rest / (2.0 * jnp.pi))
-    return r, tt, trt
+    args = longitudinal_arguments(angles, tilt)
+    m_r, m_tt, m_trt = (gaussian(widths[i], args[i]) for i in range(3))
+    m_rest = gaussian(widths[2], args[3])
+    n_r, n_tt, n_trt, n_rest = azimuthal_lobes(angles.cos_d, angles.cos_phi, angles.cos_half, sigma_a)
+    return jnp.pi * m_r * n_r, jnp.pi * m_tt * n_tt, jnp.pi * (m_trt * n_trt + m_rest * n_rest)

@@ -94,14 +94,17 @@ class PointInputs(eqx.Module):
 class ShadingPoints(eqx.Module):
     """What every model reads at the strand points (JAX arrays, geometry only): unit
     tangent T, unit to-light L and to-eye V (0 where undefined, docs/model.md §1), the
-    per-point colour c (the strands' colour times the model's `color_factor`) and the
-    model's own `extra` inputs (`PointInputs.extra`, as JAX arrays)."""
+    per-point colour c (the strands' colour times the model's `color_factor`), the
+    model's own `extra` inputs (`PointInputs.extra`, as JAX arrays) and Ω, the opacity in
+    front of each point toward the light (§7; None where the scene has no shadows), which
+    a model that scatters light between fibres reads (§19)."""
 
     tangent: Float[Array, "P 3"]
     to_light: Float[Array, "P 3"]
     to_eye: Float[Array, "P 3"]
     base_color: Float[Array, "P 3"]
     extra: Any = None
+    omega: Float[Array, " P"] | None = None
 
 
 class Reflectance(eqx.Module):
@@ -110,12 +113,15 @@ class Reflectance(eqx.Module):
         Σ_g  params.g ⊙ ambient[g]  +  shade(Σ_g params.g ⊙ lit[g])
 
     where `shade` multiplies by the light's colour, τ = exp(−κΩ) (§7), the occluder's
-    visibility V (§13) — and the streak factor (§16) multiplies the whole. Each term is
-    `[P, 3]` and holds no gain itself, so the image is linear in every gain (docs/fitting.md:
-    variable projection)."""
+    visibility V (§13) — and the streak factor (§16) multiplies the whole. `scattered`
+    (empty but for light scattered between fibres, §19) adds Σ_g params.g ⊙ scattered[g]
+    lit by the light's colour and V but not τ: light that reached the point through the
+    hair in front, which τ counts as blocked. Each term is `[P, 3]` and holds no gain
+    itself, so the image is linear in every gain (docs/fitting.md: variable projection)."""
 
     ambient: dict[str, Float[Array, "P 3"]]
     lit: dict[str, Float[Array, "P 3"]]
+    scattered: dict[str, Float[Array, "P 3"]] = eqx.field(default_factory=dict)
 
 
 def check_params(
@@ -231,7 +237,8 @@ class AbstractShadingModel(eqx.Module):
         raise NotImplementedError(f"shading model {self.name!r} has no GL renderer")
 
     def gl_table(self, params) -> np.ndarray | None:
-        """A `[n, n, 2]` table the shader samples as `kajiya_kay_table`, or None."""
+        """A `[rows, columns, c]` table (c ≤ 4 components) the shader reads as its model's
+        sampler (`kajiya_kay_table`, `marschner_tables`, hairjax/gl/_shading.py), or None."""
         return None
 
     def gl_attributes(self, inputs: PointInputs) -> list[tuple[np.ndarray, str, str]]:

@@ -29,7 +29,15 @@ from ._transmittance import transmittance
 if TYPE_CHECKING:
     from .._geometry._stage import Geometry
 
-__all__ = ["shading_points", "light_factor", "combine", "point_colors", "occluder_colors", "shading_stage"]
+__all__ = [
+    "shading_points",
+    "light_factor",
+    "scattered_factor",
+    "combine",
+    "point_colors",
+    "occluder_colors",
+    "shading_stage",
+]
 
 
 def shading_points(geometry: Geometry, light: LightParams | None = None) -> ShadingPoints:
@@ -41,6 +49,7 @@ def shading_points(geometry: Geometry, light: LightParams | None = None) -> Shad
         to_eye=geometry.to_eye,
         base_color=geometry.base_color,
         extra=geometry.shading_inputs,
+        omega=geometry.omega,
     )
 
 
@@ -55,13 +64,28 @@ def light_factor(geometry: Geometry, kappa, light: LightParams | None = None) ->
     return factor
 
 
-def combine(reflectance: Reflectance, params, light: Float[Array, "P 3"]) -> Float[Array, "P 3"]:
-    """Σ_g params.g ⊙ ambient_g + light ⊙ Σ_g params.g ⊙ lit_g."""
+def scattered_factor(geometry: Geometry, light: LightParams | None = None) -> Float[Array, "P 3"]:
+    """light · V per point: what the scattered terms are multiplied by (§19: light that
+    came through the hair in front, so not τ)."""
+    factor = jnp.broadcast_to(light_rgb(geometry, light)[None, :], geometry.tangent.shape)
+    if geometry.light_visibility is not None:
+        factor = factor * geometry.light_visibility[:, None]
+    return factor
+
+
+def combine(
+    reflectance: Reflectance, params, light: Float[Array, "P 3"], scattered: Float[Array, "P 3"] | None = None
+) -> Float[Array, "P 3"]:
+    """Σ_g params.g ⊙ ambient_g + light ⊙ Σ_g params.g ⊙ lit_g (+ scattered ⊙ Σ_g params.g ⊙
+    scattered_g where the model has scattered terms)."""
 
     def weighted(terms: dict):
         return sum(getattr(params, g)[None, :] * term for g, term in terms.items())
 
-    return weighted(reflectance.ambient) + light * weighted(reflectance.lit)
+    colors = weighted(reflectance.ambient) + light * weighted(reflectance.lit)
+    if reflectance.scattered:
+        colors = colors + scattered * weighted(reflectance.scattered)
+    return colors
 
 
 def point_colors(geometry: Geometry, params, light: LightParams | None = None) -> Float[Array, "P 3"]:
@@ -73,10 +97,12 @@ def point_colors(geometry: Geometry, params, light: LightParams | None = None) -
         raise TypeError(
             f"shading model {model.name!r} takes {model.params_type.__name__}, got {type(params).__name__}"
         )
+    reflectance = model.reflectance(shading_points(geometry, light), params)
     colors = combine(
-        model.reflectance(shading_points(geometry, light), params),
+        reflectance,
         params,
         light_factor(geometry, params.kappa, light),
+        scattered_factor(geometry, light) if reflectance.scattered else None,
     )
     if geometry.streak is not None:  # §16: the streak texture modulates the whole colour
         colors = colors * geometry.streak[:, None]

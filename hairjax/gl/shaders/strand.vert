@@ -25,6 +25,7 @@ uniform vec3 light_vector; // −direction (directional) or the light's position
 uniform bool point_light;
 uniform vec3 eye;
 uniform sampler2D kajiya_kay_table;  // §14, bound for SHADING_KAJIYA_KAY_LOOKUP only
+uniform sampler2D marschner_tables;  // §19, bound for SHADING_MARSCHNER with dual scattering only
 uniform bool streaks;                 // §16
 uniform sampler2D streak_texture;     // (N_{k mod m}, P_k), k = 0 … m
 uniform int streak_texels;            // m
@@ -54,7 +55,8 @@ void main() {
             vout.color = shade_scheuermann(scheuermann, in_tangent, in_normal, L, V, in_maps.x,
                                            in_maps.y, in_color, light_rgb, tau);
         else if (shading.model == SHADING_MARSCHNER)
-            vout.color = shade_marschner(marschner, shading.ambient, in_tangent, L, V, light_rgb, tau);
+            vout.color = shade_marschner(marschner, marschner_tables, shading.ambient, in_tangent, L, V,
+                                         light_rgb, tau, in_visibility, shading.kappa * in_omega);
         else if (shading.model == SHADING_KAJIYA_KAY_LOOKUP)
             vout.color = shade_point_lookup(shading, kajiya_kay_table, in_tangent, L, V, in_color, light_rgb, tau);
         else
