@@ -23,6 +23,7 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jax.scipy.special import ndtr
 from jaxtyping import Array, Float
 
 from ._marschner_lobes import (
@@ -48,9 +49,9 @@ __all__ = [
 DENSITY_FORWARD = 0.7
 DENSITY_BACK = 0.7
 
-# The grids: the light's cos θ on [0, 1] and cos φ on [−1, 1] (uniform, so a point's cell is
-# found by arithmetic), and Gauss-Legendre nodes on each half of the azimuth.
-_N_THETA = 16
+# The grids: the light's sin θ and cos φ on [−1, 1] (uniform, so a point's cell is found by
+# arithmetic), and Gauss-Legendre nodes on each half of the azimuth.
+_N_THETA = 33
 _N_PHI = 17
 _N_QUAD = 32
 # Below this 1 − ā_f² the back-scatter's geometric series would diverge: ā_f → 1 only if
@@ -60,12 +61,12 @@ _MAX_FORWARD = 1.0 - 1e-4
 
 
 class DualTables(NamedTuple):
-    """Dual scattering's quantities on the grid of the light's cos θ (`[J, …]`), RGB last:
+    """Dual scattering's quantities on the grid of the light's sin θ (`[J, …]`), RGB last:
     `a_f`, `a_b` the average forward and backward attenuations ā_f, ā_b; `var_f` the
     forward lobes' average variance β̄_f² (x units); `a_back` A_b, `shift_back` Δ_b,
     `std_back` σ_b; `share_back` `[J, 3, 3]` each lobe's share a_b^p/ā_b of the backward
     attenuation (R, TT, TRT); `n_g` `[J, K, 3, 3]` the forward-scattered azimuthal
-    functions N^G_p on the (cos θ, cos φ) grid."""
+    functions N^G_p on the (sin θ, cos φ) grid."""
 
     a_f: Float[Array, "J 3"]
     a_b: Float[Array, "J 3"]
@@ -83,7 +84,8 @@ def _lobe_rows(cos_d, cos_phi, cos_half, sigma_a) -> Float[Array, "... 4 3"]:
         lambda d, c, h: jnp.stack([jnp.broadcast_to(x, (3,)) for x in azimuthal_lobes(d, c, h, sigma_a)]),
         signature="(),(),()->(4,3)",
     )
-    return fn(cos_d, cos_phi, cos_half)
+    shape = jnp.broadcast_shapes(jnp.shape(cos_d), jnp.shape(cos_phi), jnp.shape(cos_half))
+    return fn(*(jnp.broadcast_to(x, shape) for x in (cos_d, cos_phi, cos_half)))
 
 
 def _half_integrals(
@@ -135,20 +137,35 @@ def _back_scatter(a_f, a_b, shift_f, shift_b, var_f, var_b):
     return a_back, shift, 2.0 * std
 
 
+def _longitudinal_mass(sin_t: np.ndarray, widths, alpha) -> Float[Array, "J 4"]:
+    """Per lobe, the share of M_p's Gaussian inside the sphere: its argument
+    sin θ_L + sin(θ_V + kα) ≈ sin θ_L + sin θ_V + kα·cos θ_L near the specular cone spans
+    [sin θ_L − 1, sin θ_L + 1] + kα·cos θ_L as sin θ_V spans [−1, 1] (Karis's Gaussian is in
+    sin θ: at grazing light part of it falls outside, and the lobe loses that light)."""
+    cos_t = np.sqrt(1.0 - sin_t * sin_t)
+    k = np.asarray(TILT_MULTIPLES)
+    centre = jnp.asarray(sin_t[:, None]) + jnp.asarray(k[None, :] * cos_t[:, None]) * alpha  # [J, 4]
+    w = jnp.stack([widths[0], widths[1], widths[2], widths[2]])[None, :]
+    return ndtr((centre + 1.0) / w) - ndtr((centre - 1.0) / w)
+
+
+@jax.jit  # one compiled program where it is called outside a jit (its many small ops)
 def dual_tables(sigma_a: Float[Array, " 3"], beta_m: Float[Array, ""], tilt: Float[Array, ""]) -> DualTables:
-    """The tables from the model's lobes at σ_a, β_m and tilt α (degrees): per lobe p the
-    attenuations a_f^p, a_b^p at the light's inclination θ on the specular cone (θ_d = θ),
-    its shift α_p = −k_p·α·cos θ (x units: the peak of M_p, `TILT_MULTIPLES`) and width
-    β_p (`lobe_widths`); ā = Σ_p a^p and the a^p-weighted averages ᾱ, β̄² (Zinke et al.
-    2008, eqs. 12–13 and their backward twins), then A_b, Δ_b, σ_b (`_back_scatter`)."""
-    cos_t = jnp.linspace(0.0, 1.0, _N_THETA, dtype=sigma_a.dtype)
-    forward, backward = _half_integrals(cos_t, sigma_a)  # [J, 4, 3]
+    """The tables from the model's lobes at σ_a, β_m and tilt α (degrees), on the grid of
+    the light's sin θ: per lobe p the attenuations a_f^p, a_b^p (the half-azimuth integrals
+    at θ_d = θ, the specular cone, times the share of M_p inside the sphere), its shift
+    α_p = −k_p·α·cos θ (x units: the peak of M_p, `TILT_MULTIPLES`) and width β_p
+    (`lobe_widths`); ā = Σ_p a^p and the a^p-weighted averages ᾱ, β̄² (Zinke et al. 2008,
+    eqs. 12–13 and their backward twins), then A_b, Δ_b, σ_b (`_back_scatter`)."""
+    sin_t = np.linspace(-1.0, 1.0, _N_THETA)
+    cos_t = jnp.asarray(np.sqrt(1.0 - sin_t * sin_t), dtype=sigma_a.dtype)
     widths = lobe_widths(beta_m)
+    alpha = jnp.deg2rad(tilt)
+    mass = _longitudinal_mass(sin_t, widths, alpha)[:, :, None]
+    forward, backward = (mass * h for h in _half_integrals(cos_t, sigma_a))  # [J, 4, 3]
     var = jnp.stack([widths[0], widths[1], widths[2], widths[2]]) ** 2  # [4]
-    shift = (
-        -jnp.asarray(TILT_MULTIPLES, sigma_a.dtype)[None, :] * jnp.deg2rad(tilt) * cos_t[:, None]
-    )  # [J, 4]
-    # ā > 0: the R lobe's attenuation alone is (Fresnel ≥ 4.6 %) in each half.
+    shift = -jnp.asarray(TILT_MULTIPLES, sigma_a.dtype)[None, :] * alpha * cos_t[:, None]  # [J, 4]
+    # ā > 0: the R lobe's attenuation alone is (Fresnel ≥ 4.6 %, at least half of M_R inside).
     a_f, a_b = forward.sum(axis=1), backward.sum(axis=1)
     shift_f = jnp.einsum("jpc,jp->jc", forward, shift) / a_f
     shift_b = jnp.einsum("jpc,jp->jc", backward, shift) / a_b
@@ -164,8 +181,8 @@ def dual_tables(sigma_a: Float[Array, " 3"], beta_m: Float[Array, ""], tilt: Flo
 
 
 def _cell(x: Float[Array, ""], lo: float, n: int):
-    """Index and weight of x's cell on the uniform grid of n nodes on [lo, 1] (x clamped:
-    cos θ ∈ [0, 1] and cos φ ∈ [−1, 1] already, up to an ulp)."""
+    """Index and weight of x's cell on the uniform grid of n nodes on [lo, 1] (the clamp
+    fires only for sin θ or cos φ an ulp outside [−1, 1])."""
     t = jnp.clip((x - lo) / (1.0 - lo) * (n - 1), 0.0, n - 1.0)
     i = jnp.minimum(jnp.floor(t), n - 2.0)
     return i.astype(jnp.int32), t - i
@@ -192,7 +209,7 @@ def dual_terms(
     f_back is split over the lobes by their shares a_b^p/ā_b (the lobe of the last, backward
     event), so the lobe weights scale it too; with weights 1 the sum is Zinke's term."""
     angles = fibre_angles(tangent, to_light, to_eye)
-    i, w = _cell(angles.cos_l, 0.0, tables.a_f.shape[0])
+    i, w = _cell(angles.sin_l, -1.0, tables.a_f.shape[0])
 
     def at(table):
         return (1.0 - w) * table[i] + w * table[i + 1]

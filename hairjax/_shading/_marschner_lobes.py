@@ -82,8 +82,9 @@ def _safe_sqrt(x: Float[Array, "*s"]) -> Float[Array, "*s"]:
     return jnp.where(positive, jnp.sqrt(jnp.where(positive, x, 1.0)), 0.0)
 
 
-def gaussian(std: Float[Array, ""], x: Float[Array, ""]) -> Float[Array, ""]:
-    """Karis's M_p: the normal density g(std; x) (std > 0: β_m > 0 is checked on input)."""
+def gaussian(std: Array, x: Array) -> Array:
+    """Karis's M_p: the normal density g(std; x), elementwise with broadcasting (std > 0:
+    β_m > 0 is checked on input)."""
     return jnp.exp(-0.5 * (x / std) ** 2) / (jnp.sqrt(2.0 * jnp.pi) * std)
 
 
