@@ -218,7 +218,7 @@ class Marschner(AbstractShadingModel):
         """Dual scattering's tables (`dual_tables`, computed by the JAX code) as the
         `[rows, J, 3]` texels model.glsl's dual_terms reads (None without dual scattering):
         rows ā_f, β̄_f², A_b, Δ_b, σ_b, the shares of R, TT, TRT, then N^G_p at each cos φ
-        node k and lobe p (row 8 + 3k + p), columns the light's cos θ nodes."""
+        node k and lobe p (row 8 + 3k + p), columns the light's sin θ nodes."""
         if self.multiple_scattering != "dual":
             return None
         t = dual_tables(absorption(params), params.longitudinal_roughness, params.tilt)

@@ -23,32 +23,34 @@ FRONT = (-0.5, -0.7, -0.4)  # from above and in front of the camera's side
 BACK = (0.0, 0.0, 1.0)  # toward the camera (at z = 3.5): the hair is back-lit
 
 
-def scene(light, **params) -> hj.Scene:
+def scene(light, scattering="none", **params) -> hj.Scene:
     """200 strands at 64², shaded by `marschner` with the scales tilted by 3°."""
     base = small_furball_scene(strands=200, size=64)
     values = dict(pheomelanin=0.0, tilt=3.0, kappa=0.8, ambient=0.05) | params
-    return base.replace(shading=hj.Marschner(hj.MarschnerParams(**values)), light=hj.Light(direction=light))
+    model = hj.Marschner(hj.MarschnerParams(**values), multiple_scattering=scattering)
+    return base.replace(shading=model, light=hj.Light(direction=light))
 
 
 @pytest.fixture(scope="module")
 def geometries():
-    """The geometry stage per light, computed once (float64); the parameters do not enter it."""
+    """The geometry stage per light and `multiple_scattering` (the geometry holds the model
+    object), computed once (float64); the parameters do not enter it."""
     cache: dict = {}
 
-    def get(light):
-        if light not in cache:
-            cache[light] = hj.geometry_stage(scene(light))
-        return cache[light]
+    def get(light, scattering="none"):
+        if (light, scattering) not in cache:
+            cache[light, scattering] = hj.geometry_stage(scene(light, scattering))
+        return cache[light, scattering]
 
     return get
 
 
-def images(geometries, light, **params):
+def images(geometries, light, scattering="none", **params):
     """(scene, JAX image, GL image with JAX's Ω)."""
     from hairjax.gl import render_gl
 
-    s = scene(light, **params)
-    geometry = geometries(light)
+    s = scene(light, scattering, **params)
+    geometry = geometries(light, scattering)
     jax_image = np.asarray(hj.shading_stage(geometry, s.params))
     return s, jax_image, render_gl(s, omega=np.asarray(geometry.omega)).image
 
@@ -69,7 +71,7 @@ def test_gl_matches_jax(gl, geometries, light, melanin, roughness):
     assert jax_image[..., :3].max() > 5 * PIXEL_TOL
 
 
-# Each edit changes one term of model.glsl's marschner_lobes / shade_marschner.
+# Each edit changes one term of model.glsl's marschner_lobes / dual_terms / shade_marschner.
 WRONG = {
     "tilt sign (R)": ("tilted(sin_v, cos_v, -2.0 * m.tilt)", "tilted(sin_v, cos_v, 2.0 * m.tilt)"),
     "tilt sign (TT)": ("tilted(sin_v, cos_v, m.tilt)", "tilted(sin_v, cos_v, -m.tilt)"),
@@ -83,6 +85,19 @@ WRONG = {
         "fibre_transmittance(m.sigma_a, h_tt, a, cos_t)",
         "fibre_transmittance(vec3(0.0), h_tt, a, cos_t)",
     ),
+    "dual: scattered light shadowed by τ": (
+        "visibility * light_rgb * scattered_sum",
+        "tau * light_rgb * scattered_sum",
+    ),
+    "dual: no spread with the fibres in front": (
+        "vec3 var_s = count * dual_at(",
+        "vec3 var_s = 0.0 * dual_at(",
+    ),
+    "dual: Δ_b and σ_b rows swapped": ("const int DUAL_SHIFT_BACK = 3;", "const int DUAL_SHIFT_BACK = 4;"),
+    "dual: N^G at the next cos φ node": (
+        "dual_at(tables, DUAL_N_G + 3 * k + p",
+        "dual_at(tables, DUAL_N_G + 3 * (k + 1) + p",
+    ),
 }
 
 
@@ -90,15 +105,37 @@ WRONG = {
 def test_a_wrong_marschner_shader_fails_the_check(gl, geometries, edit):
     """Roughness 0.1 (widths 0.04 … 0.16 in sin θ) with the tilt 3° (shifts 0.05 … 0.2),
     lobe weights 0.8, 1, 0.5: every edit moves the image by far more than the band;
-    back-lit, TT and TRT both show."""
+    back-lit, TT and TRT both show. Dual scattering's edits with it on."""
     old, new = WRONG[edit]
     weights = dict(weight_r=0.8, weight_tt=1.0, weight_trt=0.5)
-    s, jax_image, gl_image = images(geometries, BACK, eumelanin=1.0, longitudinal_roughness=0.1, **weights)
+    scattering = "dual" if "dual" in edit else "none"
+    s, jax_image, gl_image = images(
+        geometries, BACK, scattering, eumelanin=1.0, longitudinal_roughness=0.1, **weights
+    )
     assert unexplained_pixels(s, gl_image, jax_image)[0].size == 0
-    geometry = geometries(BACK)
+    geometry = geometries(BACK, scattering)
     wrong = render_gl_with_edited_shader(s, np.asarray(geometry.omega), old, new)
     bad, _ = unexplained_pixels(s, wrong, jax_image)
     assert bad.size > 20, f"{edit}: only {bad.size} pixels caught"
+
+
+@pytest.mark.parametrize("light", [FRONT, BACK], ids=["front", "back"])
+@pytest.mark.parametrize(("melanin", "roughness"), [(0.0, 0.02), (8.0, 1.0), (1.3, 0.3)])
+def test_dual_scattering_gl_matches_jax(gl, geometries, light, melanin, roughness):
+    """multiple_scattering = "dual" (docs/model.md §19): GL (the tables computed by the JAX
+    code, interpolated in GLSL) equals JAX but in the band, at the extremes and a brown;
+    and the dual terms are in the image: it differs from single scattering's by > 10
+    tolerances but for black hair (measured 1.1e-4 for black rough hair: black fibres pass
+    little light on, and little is scattered between them)."""
+    values = dict(eumelanin=melanin, longitudinal_roughness=roughness, ambient=0.0)
+    s, jax_image, gl_image = images(geometries, light, "dual", **values)
+    assert np.all(np.isfinite(gl_image))
+    bad, band = unexplained_pixels(s, gl_image, jax_image)
+    assert bad.size == 0, f"{bad.size} pixels differ with no boundary nearby"
+    assert band.mean() <= MAX_BAND
+    if melanin < 8.0:  # black fibres pass little light on: dual adds ~1e-4 to rough black hair
+        _, single, _ = images(geometries, light, "none", **values)
+        assert np.abs(jax_image - single).max() > 10 * PIXEL_TOL
 
 
 def unit_rows(n: int, seed: int) -> np.ndarray:

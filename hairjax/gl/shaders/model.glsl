@@ -333,7 +333,7 @@ void marschner_lobes(Marschner m, vec3 T, vec3 L, vec3 V, out float r, out vec3 
 }
 
 // §19 dual scattering's tables (Marschner.gl_table packs them): texel (j, row) holds a
-// table's RGB at the light's j-th cos θ; rows: ā_f, β̄_f², A_b, Δ_b, σ_b, the shares
+// table's RGB at the light's j-th sin θ; rows: ā_f, β̄_f², A_b, Δ_b, σ_b, the shares
 // a_b^p/ā_b of R, TT, TRT, then N^G_p at the k-th cos φ in row DUAL_N_G + 3k + p.
 const int DUAL_A_F = 0;
 const int DUAL_VAR_F = 1;
@@ -344,7 +344,7 @@ const int DUAL_SHARE = 5;
 const int DUAL_N_G = 8;
 
 // Index and weight of x's cell on the uniform grid of n nodes on [lo, 1]; the clamp fires
-// only for x an ulp outside (cos θ ∈ [0, 1], cos φ ∈ [−1, 1]).
+// only for sin θ or cos φ an ulp outside [−1, 1].
 void grid_cell(float x, float lo, int n, out int i, out float w) {
     float t = clamp((x - lo) / (1.0 - lo) * float(n - 1), 0.0, float(n - 1));
     float fi = min(floor(t), float(n - 2));
@@ -352,7 +352,7 @@ void grid_cell(float x, float lo, int n, out int i, out float w) {
     w = t - fi;
 }
 
-// Row `row` of the tables, linear in the light's cos θ between columns i and i + 1.
+// Row `row` of the tables, linear in the light's sin θ between columns i and i + 1.
 vec3 dual_at(sampler2D tables, int row, int i, float w) {
     return (1.0 - w) * texelFetch(tables, ivec2(i, row), 0).rgb + w * texelFetch(tables, ivec2(i + 1, row), 0).rgb;
 }
@@ -367,7 +367,7 @@ void dual_terms(Marschner m, sampler2D tables, vec3 T, vec3 L, vec3 V, float cou
     ivec2 size = textureSize(tables, 0);
     int i, k;
     float w, v;
-    grid_cell(g.cos_l, 0.0, size.x, i, w);
+    grid_cell(g.sin_l, -1.0, size.x, i, w);
     grid_cell(g.cos_phi, -1.0, (size.y - DUAL_N_G) / 3, k, v);
     vec3 a_f = dual_at(tables, DUAL_A_F, i, w);
     vec3 var_s = count * dual_at(tables, DUAL_VAR_F, i, w);  // σ_f²
