@@ -73,16 +73,16 @@ def test_gl_matches_jax(gl, geometries, light, melanin, roughness):
 
 # Each edit changes one term of model.glsl's marschner_lobes / dual_terms / shade_marschner.
 WRONG = {
-    "tilt sign (R)": ("tilted(sin_v, cos_v, -2.0 * m.tilt)", "tilted(sin_v, cos_v, 2.0 * m.tilt)"),
-    "tilt sign (TT)": ("tilted(sin_v, cos_v, m.tilt)", "tilted(sin_v, cos_v, -m.tilt)"),
+    "tilt sign (R)": ("tilted(a.sin_v, a.cos_v, tilts.x)", "tilted(a.sin_v, a.cos_v, -tilts.x)"),
+    "tilt sign (TT)": ("tilted(a.sin_v, a.cos_v, tilts.y)", "tilted(a.sin_v, a.cos_v, -tilts.y)"),
     "TT and TRT weights swapped": (
-        "m.weight_tt * tt + m.weight_trt * trt",
-        "m.weight_tt * trt + m.weight_trt * tt",
+        "vec3[3](m.weight_r, m.weight_tt, m.weight_trt)",
+        "vec3[3](m.weight_r, m.weight_trt, m.weight_tt)",
     ),
     "TT and TRT Gaussians swapped": ("tt = pi * m_tt", "tt = pi * m_trt"),
-    "R and TRT widths swapped": ("lobe_gaussian(m.widths.x,", "lobe_gaussian(m.widths.z,"),
+    "R and TRT widths swapped": ("lobe_gaussian(vec3(m.widths.x),", "lobe_gaussian(vec3(m.widths.z),"),
     "no absorption in TT": (
-        "fibre_transmittance(m.sigma_a, h_tt, a, cos_t)",
+        "fibre_transmittance(sigma_a, h_tt, a, cos_t)",
         "fibre_transmittance(vec3(0.0), h_tt, a, cos_t)",
     ),
     "dual: scattered light shadowed by τ": (
