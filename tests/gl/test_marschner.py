@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from helpers import MAX_BAND, PIXEL_TOL, render_gl_with_edited_shader, small_furball_scene, unexplained_pixels
-from stability_helpers import glsl_marschner_lobes, jax_marschner_lobes
+from stability_helpers import glsl_dual_terms, glsl_marschner_lobes, jax_dual_terms, jax_marschner_lobes
 
 import hairjax as hj
 
@@ -166,3 +166,29 @@ def test_glsl_lobes_match_jax_at_points(gl, roughness, melanin):
     # Not vacuous: the tilt flipped moves R by > 10 tolerances, even at roughness 1.
     flipped = jax_marschner_lobes(t, light, eye, params_at(-3.0))
     assert np.abs(flipped - want)[:, 0].max() > 10 * 2e-5 * scale[0]
+
+
+@pytest.mark.parametrize(("melanin", "roughness"), [(0.0, 0.02), (8.0, 1.0), (1.3, 0.3)])
+def test_glsl_dual_terms_match_jax_at_points(gl, melanin, roughness):
+    """model.glsl's dual_terms (tables from `gl_table`, interpolated in GLSL) against JAX's
+    (float64) at 2000 random (T, L, V) with n ∈ [0, 20] fibres in front, plus L along the
+    fibre both ways with the light's sin θ an ulp beyond ±1 (grid_cell's clamp). Tolerance:
+    2e-5 of each term's largest value over the rows plus 1e-7 of the largest overall
+    (measured ≤ 1.3e-5 of the term's peak where that is above 1e-7 of the largest; the
+    tables are rounded to float32, and the Gaussians err as in
+    test_glsl_lobes_match_jax_at_points); n halved moves the terms by > 0.7 of their peak."""
+    params = hj.MarschnerParams(
+        eumelanin=melanin, pheomelanin=0.3, longitudinal_roughness=roughness, tilt=3.0
+    )
+    long = np.float32(1.0) + np.float32(2.0**-23)
+    x, y = np.array([[1.0, 0.0, 0.0]], np.float32), np.array([[0.0, 1.0, 0.0]], np.float32)
+    t = np.concatenate([unit_rows(2000, 1), x, x])
+    light = np.concatenate([unit_rows(2000, 2), x * long, -x * long])
+    eye = np.concatenate([unit_rows(2000, 3), y, y])
+    count = np.concatenate([np.random.default_rng(4).uniform(0.0, 20.0, 2000), [3.0, 3.0]]).astype(np.float32)
+    got = glsl_dual_terms(gl, t, light, eye, count, params)
+    want = jax_dual_terms(t, light, eye, count, params)
+    assert np.all(np.isfinite(got))
+    scale = np.abs(want).max(axis=0)
+    bound = 2e-5 * scale + 1e-7 * scale.max()
+    assert np.all(np.abs(got - want) <= bound), (np.abs(got - want) / scale).max(axis=0)

@@ -26,6 +26,7 @@ gl/_renderer.py (now gl/_camera_pass.py's camera_depth_far).
 | model.glsl: fresnel_dielectric clamp            | glsl_marschner_lobes                                  |
 | model.glsl: safe_sqrt (cos θ_d = 0)             | glsl_marschner_lobes                                  |
 | model.glsl: marschner_lobes series (f·T → 1)    | glsl_marschner_lobes                                  |
+| model.glsl: grid_cell clamp (sin θ beyond ±1)   | test_marschner: glsl_dual_terms_match_jax_at_points   |
 | model.glsl: slice_of clamp                      | geometry: test_all_points_at_one_depth[gl] (maps)     |
 | ribbon.geom: zero-length segments               | geometry: test_zero_length_segments_…_points[gl]      |
 | omega_maps.comp: outside the map, f clamp       | geometry: test_point_light_at_the_hairs_centre[gl]    |
@@ -41,7 +42,7 @@ gl/_renderer.py (now gl/_camera_pass.py's camera_depth_far).
 | gl/_camera_pass: camera_depth_far (fixed)       | test_gl_depth_test_keeps_its_resolution_…             |
 
 "geometry:" is tests/geometry/test_stability.py, "shading:" tests/shading/test_stability.py,
-"test_occluder::" tests/geometry/test_occluder.py.
+"test_occluder::" tests/geometry/test_occluder.py, "test_marschner:" tests/gl/test_marschner.py.
 """
 
 from __future__ import annotations
