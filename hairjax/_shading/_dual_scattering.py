@@ -44,8 +44,8 @@ __all__ = [
     "DENSITY_BACK",
 ]
 
-# Zinke et al. 2008, §4 (the density factors d_f, d_b of the forward and backward
-# scattering through a hair volume): 0.7, the value the paper uses for all its results.
+# Zinke et al. 2008's density factors d_f, d_b of the forward and backward scattering
+# through a hair volume: 0.7, the value the paper gives (Unity HDRP uses the same).
 DENSITY_FORWARD = 0.7
 DENSITY_BACK = 0.7
 
@@ -155,8 +155,9 @@ def dual_tables(sigma_a: Float[Array, " 3"], beta_m: Float[Array, ""], tilt: Flo
     the light's sin θ: per lobe p the attenuations a_f^p, a_b^p (the half-azimuth integrals
     at θ_d = θ, the specular cone, times the share of M_p inside the sphere), its shift
     α_p = −k_p·α·cos θ (x units: the peak of M_p, `TILT_MULTIPLES`) and width β_p
-    (`lobe_widths`); ā = Σ_p a^p and the a^p-weighted averages ᾱ, β̄² (Zinke et al. 2008,
-    eqs. 12–13 and their backward twins), then A_b, Δ_b, σ_b (`_back_scatter`)."""
+    (`lobe_widths`); ā = Σ_p a^p, and ᾱ, β̄² the lobes' shifts and variances weighted
+    by a^p (Zinke et al. 2008's average shifts and widths), then A_b, Δ_b, σ_b
+    (`_back_scatter`)."""
     sin_t = np.linspace(-1.0, 1.0, _N_THETA)
     cos_t = jnp.asarray(np.sqrt(1.0 - sin_t * sin_t), dtype=sigma_a.dtype)
     widths = lobe_widths(beta_m)

@@ -179,7 +179,7 @@ class Marschner(AbstractShadingModel):
         shape = points.base_color.shape
         lit = {"weight_r": jnp.broadcast_to(r[:, None], shape), "weight_tt": tt, "weight_trt": trt}
         ambient = {"ambient": jnp.ones(shape, points.base_color.dtype)}
-        if self.multiple_scattering == "none":
+        if self.multiple_scattering != "dual":
             return Reflectance(ambient=ambient, lit=lit)
         # n = κΩ fibres in front (docs/model.md §19): τ = e^{−κΩ} is the chance of crossing
         # none when the crossings are Poisson with that mean; no shadows: none in front.

@@ -1,11 +1,12 @@
 """The shading stage: point colours from the geometry stage and the shading parameters,
 and the image they composite to (docs/model.md §6, §8, §13).
 
-    colour = Σ_g params.g ⊙ ambient_g + light · τ · V · Σ_g params.g ⊙ lit_g   (× streak)
+    colour = Σ_g params.g ⊙ ambient_g + light · τ · V · Σ_g params.g ⊙ lit_g
+             + light · V · Σ_g params.g ⊙ scattered_g                          (× streak)
 
-with the model's `Reflectance` terms, τ = exp(−κΩ) (§7) and V the occluder's visibility
-(§13). Nothing here depends on which model shades: the model object in the geometry
-(`Geometry.shading`) supplies its terms.
+with the model's `Reflectance` terms (scattered: light scattered between fibres, §19),
+τ = exp(−κΩ) (§7) and V the occluder's visibility (§13). Nothing here depends on which
+model shades: the model object in the geometry (`Geometry.shading`) supplies its terms.
 
 Every function takes an optional `light` (`LightParams`, `_light.py`): its direction and
 colour replace the geometry's L, light colour and the occluder's Lambert term, and the

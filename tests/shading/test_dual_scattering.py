@@ -139,7 +139,7 @@ def test_scattered_light_is_lit_without_tau():
         shading=Marschner(params=params, multiple_scattering="dual")
     )
     geometry = hj.geometry_stage(scene)
-    assert geometry.omega is not None and float(jnp.max(geometry.omega)) > 1.0
+    assert geometry.omega is not None and float(jnp.max(geometry.omega)) > 0.3  # hair in front
     from hairjax._shading._stage import shading_points
 
     r = scene.shading.reflectance(shading_points(geometry), params)
