@@ -378,11 +378,11 @@ void dual_terms(Marschner m, sampler2D tables, vec3 T, vec3 L, vec3 V, float cou
     vec3 back = 2.0 * a_back * lobe_gaussian(std_back, x - shift_back);
     vec3 back_s = 2.0 * a_back * lobe_gaussian(sqrt(std_back * std_back + var_s), x - shift_back);
     vec4 args = longitudinal_arguments(g, m.tilts);
-    // e^{−n(1−ā_f)} − e^{−n} as the difference, not JAX's e^{−n}·expm1(n·ā_f): GLSL has no
-    // expm1, and e^{n·ā_f} overflows float32 for n·ā_f > 88 (Ω in the thousands deep in the
-    // hair), where e^{−n}·∞ is NaN. Both terms are ≤ 1 (ā_f < 1), so the difference errs by
-    // ≤ 2 ulp(1) absolute: < 10⁻⁶ of the light after the factors (the cross-check's is 10⁻⁴).
-    vec3 psi = m.density_forward * (exp(-count * (1.0 - a_f)) - exp(-count));
+    // e^{−n(1−ā_f)} − e^{−n} = e^{−n(1−ā_f)}·(1 − e^{−n·ā_f}), as JAX's: both factors ≤ 1
+    // (ā_f < 1), so no overflow deep in the hair (n in the thousands). GLSL has no expm1:
+    // 1 − e^{−x} errs by ≤ ulp(1) absolute, < 10⁻⁶ of the light after the factors (the
+    // cross-check's is 10⁻⁴).
+    vec3 psi = m.density_forward * exp(-count * (1.0 - a_f)) * (1.0 - exp(-count * a_f));
     float pi = acos(-1.0);
     for (int p = 0; p < 3; p++) {
         vec3 share = dual_at(tables, DUAL_SHARE + p, i, w);
