@@ -88,3 +88,7 @@ PHEOMELANIN_SIGMA_A = (0.187, 0.4, 1.05)
 KARIS_TT = (0.6, 0.8, 3.65, 3.98)
 KARIS_TRT = (17.0, 16.78)
 HAIR_TRT_OFFSET = 0.8660254037844386
+
+# Below this 1 − f·T the TRT remainder's geometric series (docs/model.md §19) is taken as
+# 0: f → 1 only at grazing incidence (cos → 0), where the remainder, ≤ (1 − f), is 0 already.
+HAIR_SERIES_EPS = 1e-12

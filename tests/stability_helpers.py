@@ -519,3 +519,87 @@ def glsl_highlight(gl, t, light, eye, model: str, p: float) -> np.ndarray:
         model=hj.shading_model_class(model).gl_id,
         p=p,
     )
+
+
+def glsl_marschner_lobes(gl, t, light, eye, params: hj.MarschnerParams) -> np.ndarray:
+    """model.glsl's marschner_lobes on rows (T, L, V), with the uniforms the renderer sets
+    (`Marschner.gl_uniforms`): `[n, 7]` of (R, TT rgb, TRT rgb)."""
+    body = """
+    vec3 T = vec3(inp[9u * i], inp[9u * i + 1u], inp[9u * i + 2u]);
+    vec3 L = vec3(inp[9u * i + 3u], inp[9u * i + 4u], inp[9u * i + 5u]);
+    vec3 V = vec3(inp[9u * i + 6u], inp[9u * i + 7u], inp[9u * i + 8u]);
+    float r;
+    vec3 tt, trt;
+    marschner_lobes(marschner, T, L, V, r, tt, trt);
+    outp[7u * i] = r;
+    for (uint c = 0u; c < 3u; c++) {
+        outp[7u * i + 1u + c] = tt[c];
+        outp[7u * i + 4u + c] = trt[c];
+    }"""
+    uniforms = hj.Marschner(params).gl_uniforms(params)
+    values = {k: v for k, v in uniforms.items() if k.startswith("marschner.")}
+    rows = np.concatenate([t, light, eye], axis=1)
+    return run_glsl(gl, body, rows, 7, "uniform Marschner marschner;", **values)
+
+
+def jax_marschner_lobes(t, light, eye, params: hj.MarschnerParams) -> np.ndarray:
+    """The JAX model's lobes (hairjax/_shading/_marschner_lobes.py, float64) on rows
+    (T, L, V), as `[n, 7]` of (R, TT rgb, TRT rgb)."""
+    from hairjax._shading._marschner import absorption
+    from hairjax._shading._marschner_lobes import marschner_lobes
+
+    lobes = jax.vmap(marschner_lobes, in_axes=(0, 0, 0, None, None, None))(
+        *(jnp.asarray(x, jnp.float64) for x in (t, light, eye)),
+        absorption(params),
+        params.longitudinal_roughness,
+        params.tilt,
+    )
+    r, tt, trt = (np.asarray(x) for x in lobes)
+    return np.concatenate([r[:, None], tt, trt], axis=1)
+
+
+def glsl_dual_terms(gl, t, light, eye, count, params: hj.MarschnerParams) -> np.ndarray:
+    """model.glsl's dual_terms on rows (T, L, V, n) with the renderer's uniforms and tables
+    texture (`Marschner.gl_uniforms`, `gl_table`): `[n, 18]`, direct then scattered, each
+    `[lobe (R, TT, TRT), RGB]` flattened."""
+    from hairjax.gl._context import release
+
+    model = hj.Marschner(params, multiple_scattering="dual")
+    table = np.ascontiguousarray(model.gl_table(params), dtype="f4")
+    texture = gl.texture((table.shape[1], table.shape[0]), 3, table.tobytes(), dtype="f4")
+    body = """
+    vec3 T = vec3(inp[10u * i], inp[10u * i + 1u], inp[10u * i + 2u]);
+    vec3 L = vec3(inp[10u * i + 3u], inp[10u * i + 4u], inp[10u * i + 5u]);
+    vec3 V = vec3(inp[10u * i + 6u], inp[10u * i + 7u], inp[10u * i + 8u]);
+    vec3 direct[3], scattered[3];
+    dual_terms(marschner, marschner_tables, T, L, V, inp[10u * i + 9u], direct, scattered);
+    for (uint p = 0u; p < 3u; p++) {
+        for (uint c = 0u; c < 3u; c++) {
+            outp[18u * i + 3u * p + c] = direct[p][c];
+            outp[18u * i + 9u + 3u * p + c] = scattered[p][c];
+        }
+    }"""
+    uniforms = model.gl_uniforms(params)
+    values = {k: v for k, v in uniforms.items() if k.startswith("marschner.")}
+    rows = np.concatenate([t, light, eye, np.asarray(count, np.float32)[:, None]], axis=1)
+    try:
+        texture.use(0)
+        declarations = "uniform Marschner marschner;\nuniform sampler2D marschner_tables;"
+        return run_glsl(gl, body, rows, 18, declarations, marschner_tables=0, **values)
+    finally:
+        release(gl, texture)
+
+
+def jax_dual_terms(t, light, eye, count, params: hj.MarschnerParams) -> np.ndarray:
+    """The JAX model's dual_terms (hairjax/_shading/_dual_scattering.py, float64) on the
+    same rows, as `[n, 18]` (direct then scattered, `[lobe, RGB]` flattened)."""
+    from hairjax._shading._dual_scattering import dual_tables, dual_terms_batched
+    from hairjax._shading._marschner import absorption
+
+    beta, tilt = params.longitudinal_roughness, params.tilt
+    tables = dual_tables(absorption(params), beta, tilt)
+    direct, scattered = dual_terms_batched(
+        *(jnp.asarray(x, jnp.float64) for x in (t, light, eye, count)), tables, beta, tilt
+    )
+    n = len(t)
+    return np.concatenate([np.asarray(direct).reshape(n, 9), np.asarray(scattered).reshape(n, 9)], axis=1)

@@ -236,8 +236,10 @@ def dual_terms(
     widths = lobe_widths(beta_m)
     args = longitudinal_arguments(angles, tilt)
     m_g = jnp.stack([gaussian(jnp.sqrt(widths[p] ** 2 + var_s), args[p]) for p in range(3)])  # [3, 3]
-    # e^{−n(1−ā_f)} − e^{−n} = e^{−n}·expm1(n·ā_f) ≥ 0, without cancellation at small n.
-    psi = DENSITY_FORWARD * jnp.exp(-count) * jnp.expm1(count * a_f)
+    # e^{−n(1−ā_f)} − e^{−n} = e^{−n(1−ā_f)}·(−expm1(−n·ā_f)) ≥ 0: no cancellation at small
+    # n, and both factors ≤ 1 (ā_f < 1), where e^{−n}·expm1(n·ā_f) overflowed to 0·∞ = NaN
+    # for n·ā_f > 88 in float32 (709 in float64): Ω runs to the thousands deep in the hair.
+    psi = DENSITY_FORWARD * jnp.exp(-count * (1.0 - a_f)) * -jnp.expm1(-count * a_f)
     direct = DENSITY_BACK * share * back[None, :]
     scattered = psi[None, :] * (jnp.pi * m_g * n_g + jnp.pi * DENSITY_BACK * share * back_s[None, :])
     return direct, scattered

@@ -16,8 +16,8 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .._constants import EUMELANIN_SIGMA_A, PHEOMELANIN_SIGMA_A
 from .._errors import SceneError
-from ._dual_scattering import dual_tables, dual_terms_batched
-from ._marschner_lobes import Azimuthal, marschner_lobes
+from ._dual_scattering import DENSITY_BACK, DENSITY_FORWARD, dual_tables, dual_terms_batched
+from ._marschner_lobes import TILT_MULTIPLES, Azimuthal, lobe_widths, marschner_lobes
 from ._model import (
     AbstractShadingModel,
     Plateau,
@@ -203,7 +203,7 @@ class Marschner(AbstractShadingModel):
         "weight_tt": (0.0, 4.0),
         "weight_trt": (0.0, 4.0),
     }
-    gl_id: ClassVar[int | None] = None
+    gl_id: ClassVar[int | None] = 4
 
     def __check_init__(self):
         if self.azimuthal not in AZIMUTHAL:
@@ -251,15 +251,35 @@ class Marschner(AbstractShadingModel):
         )
 
     def gl_uniforms(self, params: MarschnerParams) -> dict:
+        """The `Marschner` struct of model.glsl: what depends on the parameters alone is
+        computed here by the JAX functions the lobes use (σ_a, the Gaussians' widths, each
+        lobe's tilt kα in radians), so GLSL repeats no formula of the parameters."""
+        tilts = np.asarray(TILT_MULTIPLES) * np.deg2rad(float(params.tilt))
         return {
             "shading.ambient": rgb_uniform(params.ambient),
             "marschner.sigma_a": rgb_uniform(absorption(params)),
+            "marschner.widths": rgb_uniform(lobe_widths(params.longitudinal_roughness)),
+            "marschner.tilts": tuple(float(t) for t in tilts),
             "marschner.weight_r": rgb_uniform(params.weight_r),
             "marschner.weight_tt": rgb_uniform(params.weight_tt),
             "marschner.weight_trt": rgb_uniform(params.weight_trt),
-            "marschner.longitudinal_roughness": float(params.longitudinal_roughness),
-            "marschner.tilt": float(params.tilt),
+            "marschner.dual": self.multiple_scattering == "dual",
+            "marschner.density_forward": DENSITY_FORWARD,
+            "marschner.density_back": DENSITY_BACK,
         }
+
+    def gl_table(self, params: MarschnerParams) -> np.ndarray | None:
+        """Dual scattering's tables (`dual_tables`, computed by the JAX code) as the
+        `[rows, J, 3]` texels model.glsl's dual_terms reads (None without dual scattering):
+        rows ā_f, β̄_f², A_b, Δ_b, σ_b, the shares of R, TT, TRT, then N^G_p at each cos φ
+        node k and lobe p (row 8 + 3k + p), columns the light's sin θ nodes."""
+        if self.multiple_scattering != "dual":
+            return None
+        t = dual_tables(absorption(params), params.longitudinal_roughness, params.tilt)
+        rows = [t.a_f, t.var_f, t.a_back, t.shift_back, t.std_back]
+        rows += [t.share_back[:, p] for p in range(3)]
+        rows += [t.n_g[:, k, p] for k in range(t.n_g.shape[1]) for p in range(3)]
+        return np.stack([np.asarray(r, dtype=np.float64) for r in rows])
 
     @classmethod
     def from_table(cls, table) -> Marschner:

@@ -35,7 +35,7 @@ from typing import NamedTuple
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from .._constants import HAIR_ETA, HAIR_TRT_OFFSET, KARIS_TRT, KARIS_TT
+from .._constants import HAIR_ETA, HAIR_SERIES_EPS, HAIR_TRT_OFFSET, KARIS_TRT, KARIS_TT
 from .._vectors import safe_norm, safe_normalize
 
 __all__ = [
@@ -55,10 +55,6 @@ __all__ = [
 ]
 
 Lobes = tuple[Float[Array, ""], Float[Array, " 3"], Float[Array, " 3"]]
-
-# Below this 1 − f·T the TRT remainder's geometric series is taken as 0: f → 1 only at
-# grazing incidence (cos → 0), where the remainder, ≤ (1 − f), is 0 already.
-_SERIES_EPS = 1e-12
 
 
 def lobe_widths(beta_m: Float[Array, ""]) -> Float[Array, " 3"]:
@@ -181,7 +177,7 @@ def azimuthal_lobes(
     d_trt = jnp.exp(KARIS_TRT[0] * cos_phi - KARIS_TRT[1])
     series = 1.0 - f_trt * t_trt
     # Double-where: fires only where f·T → 1 (grazing and no absorption); the remainder is 0 there.
-    ok = series > _SERIES_EPS
+    ok = series > HAIR_SERIES_EPS
     a_rest = jnp.where(ok, a_trt * f_trt * t_trt / jnp.where(ok, series, 1.0), 0.0)
     return n_r, n_tt, a_trt * d_trt, a_rest / (2.0 * jnp.pi)
 

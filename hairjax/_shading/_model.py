@@ -264,7 +264,8 @@ class AbstractShadingModel(eqx.Module):
         raise NotImplementedError(f"shading model {self.name!r} has no GL renderer")
 
     def gl_table(self, params) -> np.ndarray | None:
-        """A `[n, n, 2]` table the shader samples as `kajiya_kay_table`, or None."""
+        """A `[rows, columns, c]` table (c ≤ 4 components) the shader reads as its model's
+        sampler (`kajiya_kay_table`, `marschner_tables`, hairjax/gl/_shading.py), or None."""
         return None
 
     def gl_attributes(self, inputs: PointInputs) -> list[tuple[np.ndarray, str, str]]:

@@ -52,15 +52,18 @@ def shading_uniforms(scene: Scene, params) -> dict:
 
 
 def lookup_texture(ctx, scene: Scene, params):
-    """§14: the model's table (`gl_table`, built by the JAX code) as an RG32F texture
-    sampled with LINEAR filtering and CLAMP_TO_EDGE; None for models without one."""
+    """The model's table (`gl_table`, built by the JAX code, `[rows, columns, c]`) as a
+    float32 texture of c components, LINEAR filtering and CLAMP_TO_EDGE: §14's Kajiya-Kay
+    table (sampled) or §19's dual-scattering tables (read with texelFetch); None for
+    models without one."""
     import moderngl
 
     table = scene.shading.gl_table(params)
     if table is None:
         return None
-    n = table.shape[0]
-    tex = ctx.texture((n, n), 2, np.ascontiguousarray(table, dtype="f4").tobytes(), dtype="f4")
+    rows, columns, components = table.shape
+    data = np.ascontiguousarray(table, dtype="f4").tobytes()
+    tex = ctx.texture((columns, rows), components, data, dtype="f4")
     tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
     tex.repeat_x = tex.repeat_y = False  # CLAMP_TO_EDGE
     return tex
@@ -81,7 +84,8 @@ def use_shading_textures(prog, scene: Scene, table, streak) -> None:
     camera program, with the streaks' uniforms; either may be None."""
     if table is not None:
         table.use(0)
-        set_uniforms(prog, kajiya_kay_table=0)
+        # The model's sampler (the other is not in its branch of strand.vert).
+        set_uniforms(prog, kajiya_kay_table=0, marschner_tables=0)
     set_uniforms(prog, streaks=streak is not None)
     if streak is not None and scene.streaks is not None:  # the texture is made from scene.streaks
         streak.use(1)

@@ -21,9 +21,14 @@ gl/_renderer.py (now gl/_camera_pass.py's camera_depth_far).
 | model.glsl: specular_power                      | shading: test_shininess_extremes[mixed-0.5-gl]        |
 | model.glsl: kajiya_kay_gap, b ≤ 0               | glsl_kajiya_kay_gap_and_log1p                         |
 | model.glsl: log1p_accurate, x ∉ (−½, 1)         | glsl_kajiya_kay_gap_and_log1p                         |
+| model.glsl: safe_normalize, in marschner_lobes  | glsl_marschner_lobes (L or V ∥ T)                     |
+| model.glsl: safe_normalize, in strand.vert      | geometry: test_point_light_at_a_strand_point[gl]      |
+| model.glsl: fresnel_dielectric clamp            | glsl_marschner_lobes                                  |
+| model.glsl: safe_sqrt (cos θ_d = 0)             | glsl_marschner_lobes                                  |
+| model.glsl: marschner_lobes series (f·T → 1)    | glsl_marschner_lobes                                  |
+| model.glsl: grid_cell clamp (sin θ beyond ±1)   | test_marschner: glsl_dual_terms_match_jax_at_points   |
 | model.glsl: slice_of clamp                      | geometry: test_all_points_at_one_depth[gl] (maps)     |
 | ribbon.geom: zero-length segments               | geometry: test_zero_length_segments_…_points[gl]      |
-| strand.vert: safe_normalize                     | geometry: test_point_light_at_a_strand_point[gl]      |
 | omega_maps.comp: outside the map, f clamp       | geometry: test_point_light_at_the_hairs_centre[gl]    |
 | omega_exact.comp: texels outside the map        | geometry: test_point_light_at_a_strand_point[gl]      |
 | occluder_sphere.frag: t > 0                     | point_light_on_the_occluder (eye outside)             |
@@ -37,7 +42,7 @@ gl/_renderer.py (now gl/_camera_pass.py's camera_depth_far).
 | gl/_camera_pass: camera_depth_far (fixed)       | test_gl_depth_test_keeps_its_resolution_…             |
 
 "geometry:" is tests/geometry/test_stability.py, "shading:" tests/shading/test_stability.py,
-"test_occluder::" tests/geometry/test_occluder.py.
+"test_occluder::" tests/geometry/test_occluder.py, "test_marschner:" tests/gl/test_marschner.py.
 """
 
 from __future__ import annotations
@@ -45,7 +50,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from helpers import unexplained_pixels
-from stability_helpers import glsl_highlight, run_glsl, unit_roundoff
+from stability_helpers import (
+    glsl_highlight,
+    glsl_marschner_lobes,
+    jax_marschner_lobes,
+    run_glsl,
+    unit_roundoff,
+)
 
 import hairjax as hj
 from hairjax._errors import EmptyViewWarning
@@ -132,6 +143,42 @@ def test_guard_glsl_kajiya_kay_gap_and_log1p(gl):
     u = unit_roundoff(np.float32)
     assert rel[:, 0].max() <= 16 * u, xs[np.argmax(rel[:, 0])]
     assert rel[:, 1].max() >= 1e5 * u  # plain log(1 + x): 1 + x rounds away x's low bits
+
+
+# (T, L, V) rows where marschner_lobes' guards fire, float32: L and V along the fibre and
+# opposite (cos θ_d = 0: safe_sqrt at 0, both projections 0 for safe_normalize, Fresnel 1,
+# and with σ_a = 0 the TRT series' 1 − f·T = 0); L along the fibre; V along it; back-lit
+# exactly (φ = π, cos(φ/2) = 0); a unit vector an ulp long (Fresnel's clamp at cos > 1).
+_X, _Y, _Z = np.eye(3)
+_LONG = np.float32(1.0) + np.float32(2.0**-23)
+MARSCHNER_GUARD_ROWS = [
+    (_X, _X, -_X),
+    (_X, _X, _Y),
+    (_X, _Y, _X),
+    (_X, _Y, -_Y),
+    (_X, _Z * _LONG, _Z * _LONG),
+]
+
+
+@pytest.mark.parametrize("roughness", [0.02, 1.0])
+@pytest.mark.parametrize("melanin", [0.0, 8.0])
+def test_guard_glsl_marschner_lobes(gl, melanin, roughness):
+    """model.glsl's marschner_lobes where its guards fire (MARSCHNER_GUARD_ROWS), σ_a = 0
+    (melanin 0) and large (8), the roughness extremes: finite, and equal to the JAX model
+    (float64, on the same float32 inputs; its guards are the same, each tested in
+    tests/shading/) within 2e-5 of each lobe's largest value over the rows plus 1e-6
+    (float32 rounding of values ≤ ~50, tests/gl/test_marschner.py measures ≤ 4e-6
+    relative); the first row, where no light passes, exactly 0 in GL."""
+    params = hj.MarschnerParams(
+        eumelanin=melanin, pheomelanin=0.0, longitudinal_roughness=roughness, tilt=2.0
+    )
+    t, light, eye = (np.array(c, np.float32) for c in zip(*MARSCHNER_GUARD_ROWS))
+    got = glsl_marschner_lobes(gl, t, light, eye, params)
+    want = jax_marschner_lobes(t, light, eye, params)
+    assert np.all(np.isfinite(got)) and np.all(np.isfinite(want))
+    scale = np.abs(want).max(axis=0)
+    assert np.all(np.abs(got - want) <= 2e-5 * scale + 1e-6), (got, want)
+    np.testing.assert_array_equal(got[0], 0.0)
 
 
 def test_guard_point_light_on_the_occluder(gl):

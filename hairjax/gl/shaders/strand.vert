@@ -19,11 +19,13 @@ uniform bool world_width;  // §5: in_width in world units, w·f/D pixels here (
 uniform bool shade;        // camera pass: shade points; light passes: geometry only
 uniform Shading shading;
 uniform Scheuermann scheuermann;  // used when shading.model == SHADING_SCHEUERMANN
+uniform Marschner marschner;      // used when shading.model == SHADING_MARSCHNER
 uniform vec3 light_rgb;
 uniform vec3 light_vector; // −direction (directional) or the light's position (point)
 uniform bool point_light;
 uniform vec3 eye;
 uniform sampler2D kajiya_kay_table;  // §14, bound for SHADING_KAJIYA_KAY_LOOKUP only
+uniform sampler2D marschner_tables;  // §19, bound for SHADING_MARSCHNER with dual scattering only
 uniform bool streaks;                 // §16
 uniform sampler2D streak_texture;     // (N_{k mod m}, P_k), k = 0 … m
 uniform int streak_texels;            // m
@@ -36,11 +38,6 @@ out VertexOut {
     float width;
     float level;
 } vout;
-
-vec3 safe_normalize(vec3 x) {
-    float n = safe_norm(x);
-    return x / (n > 0.0 ? n : 1.0);  // fires for zero vectors: the result is 0
-}
 
 void main() {
     vout.screen = project(view, in_position);
@@ -57,6 +54,9 @@ void main() {
         if (shading.model == SHADING_SCHEUERMANN)
             vout.color = shade_scheuermann(scheuermann, in_tangent, in_normal, L, V, in_maps.x,
                                            in_maps.y, in_color, light_rgb, tau);
+        else if (shading.model == SHADING_MARSCHNER)
+            vout.color = shade_marschner(marschner, marschner_tables, shading.ambient, in_tangent, L, V,
+                                         light_rgb, tau, in_visibility, shading.kappa * in_omega);
         else if (shading.model == SHADING_KAJIYA_KAY_LOOKUP)
             vout.color = shade_point_lookup(shading, kajiya_kay_table, in_tangent, L, V, in_color, light_rgb, tau);
         else
