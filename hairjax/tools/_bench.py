@@ -9,7 +9,9 @@ Every configuration runs in a fresh child process (the same interpreter), so tha
   next.
 
 The configurations and targets are in `_bench_cases.py`, what the child measures in
-`_bench_timing.py`, the table and the JSON in `_bench_report.py`.
+`_bench_timing.py`, the table and the JSON in `_bench_report.py`. After them, the cost of
+each shading model and quality setting on the first configuration, in a child process of
+its own (`_bench_models.py`): a second table, and the JSON's "shading_models".
 """
 
 from __future__ import annotations
