@@ -366,7 +366,11 @@ def build_parser() -> argparse.ArgumentParser:
     p = command("info", "summarise a hair file (.hair, .tfx, .ply)", scene_options=False)
     p.add_argument("file", type=Path, help="hair file")
 
-    p = command("bench", "time the stages on fur balls (BENCHMARKS.md)", scene_options=False)
+    p = command(
+        "bench",
+        "time the stages, and each shading model's cost, on fur balls (BENCHMARKS.md)",
+        scene_options=False,
+    )
     p.add_argument("--quick", action="store_true", help="small sizes only, for a smoke test")
     p.add_argument("--repeats", type=positive_int, default=5, help="timed runs per case (their median)")
     p.add_argument("--json", type=Path, help="also write the figures as JSON")

@@ -9,7 +9,9 @@ Every configuration runs in a fresh child process (the same interpreter), so tha
   next.
 
 The configurations and targets are in `_bench_cases.py`, what the child measures in
-`_bench_timing.py`, the table and the JSON in `_bench_report.py`.
+`_bench_timing.py`, the table and the JSON in `_bench_report.py`. After them, the cost of
+each shading model and quality setting on the first configuration, in a child process of
+its own (`_bench_models.py`): a second table, and the JSON's "shading_models".
 """
 
 from __future__ import annotations
@@ -41,12 +43,14 @@ from ._bench_cases import (
     config_name,
     configurations,
 )
+from ._bench_models import format_models_table
 from ._bench_report import format_table, missed_targets, verdict, verdict_line, write_json_strict
 
 __all__ = ["bench_main"]
 
 
-def _run_child(cfg: dict, workdir: Path) -> dict:
+def _run_child(cfg: dict, workdir: Path, entry: tuple[str, str] = ("_bench_timing", "child_main")) -> dict:
+    """Run `hairjax.tools.<module>.<function>` (`entry`) on `cfg` in a child process."""
     cfg_path = workdir / f"config-{cfg['index']}.json"
     out_path = workdir / f"result-{cfg['index']}.json"
     cfg_path.write_text(json.dumps(cfg))
@@ -54,9 +58,8 @@ def _run_child(cfg: dict, workdir: Path) -> dict:
     # The child imports this very package, installed or not.
     package_root = str(Path(__file__).resolve().parents[2])
     env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
-    code = (
-        "import sys; from hairjax.tools._bench_timing import child_main; sys.exit(child_main(sys.argv[1:]))"
-    )
+    module, function = entry
+    code = f"import sys; from hairjax.tools.{module} import {function}; sys.exit({function}(sys.argv[1:]))"
     proc = subprocess.run([sys.executable, "-c", code, str(cfg_path), str(out_path)], env=env)
     if proc.returncode == 0 and out_path.exists():
         return json.loads(out_path.read_text())
@@ -188,6 +191,33 @@ def _json_data(configs, results, machine: dict, quick: bool, backend: str, repea
     }
 
 
+def _model_costs(cfg: dict, workdir: Path) -> dict:
+    """The cost per shading model on `cfg` (the run's first configuration), in a child
+    process of its own (`_bench_models.py`), as the JSON's "shading_models" record."""
+    cfg = dict(cfg, index="models", name=config_name(cfg))
+    print(f"[models] {cfg['name']}: each shading model and its quality settings", flush=True)
+    t0 = time.perf_counter()
+    r = _run_child(cfg, workdir, entry=("_bench_models", "models_child_main"))
+    print(f"      {r['status']} in {time.perf_counter() - t0:.1f} s", flush=True)
+    keep = ("status", "error", "models", "wall_s", "peak_rss_kib")
+    return {
+        "configuration": cfg["name"],
+        "strands": cfg["strands"],
+        "width": cfg["size"],
+        "height": cfg["size"],
+        "maps": cfg["maps"],
+        "map_resolution": cfg["map_resolution"],
+        **{k: r[k] for k in keep if k in r},
+    }
+
+
+def _models_title(record: dict, repeats: int) -> str:
+    return (
+        f"shading models: cost per model at {record['configuration']} (the machine of the header "
+        f"above; medians of {repeats} warm call(s) after 1 that compiles, geometry reused)"
+    )
+
+
 def bench_main(args) -> int:
     """`hairjax bench [--quick] [--repeats N] [--json PATH] [--backend jax|gl|both]`;
     returns the exit status."""
@@ -222,6 +252,8 @@ def bench_main(args) -> int:
             r["verdict"] = verdict(r, judged=not quick)
             results.append(r)
             print(f"      {r['verdict']} in {time.perf_counter() - t0:.1f} s", flush=True)
+        base = dict(configs[0], repeats=repeats, x64=x64, backend=backend)
+        models = _model_costs(base, Path(tmp))
 
     machine = _machine_info(results)
     header = _header(backend, repeats, machine, results)
@@ -229,14 +261,18 @@ def bench_main(args) -> int:
     print(format_table(configs, results, header))
     print()
     print(verdict_line(configs, results, judged=not quick))
+    print()
+    print(format_models_table(models, backend, _models_title(models, repeats)))
     print(f"total {time.perf_counter() - started:.1f} s")
     if getattr(args, "json", None):
-        write_json_strict(args.json, _json_data(configs, results, machine, quick, backend, repeats))
+        data = _json_data(configs, results, machine, quick, backend, repeats)
+        write_json_strict(args.json, dict(data, shading_models=models))
         print(f"wrote {args.json}")
     # Running out of memory is a property of the machine, not a failure of the benchmark.
     # So is a machine without OpenGL ("unavailable"); a GL error is a failure. So are missed
     # targets: measured, and said in the status row and the line under the table.
     failed = any(
-        r["status"] not in ("ok", "MemoryError") or r.get("gl", {}).get("status") == "error" for r in results
+        r.get("status", "ok") not in ("ok", "MemoryError") or r.get("gl", {}).get("status") == "error"
+        for r in [*results, models, *models.get("models", [])]
     )
     return 1 if failed else 0

@@ -226,8 +226,9 @@ def _peak_rss_kib() -> int:
     return int(peak // 1024) if sys.platform == "darwin" else int(peak)
 
 
-def child_main(argv) -> int:
-    """Entry point of the child process: `<config.json> <result.json>`."""
+def child_main(argv, measure=_measure) -> int:
+    """Entry point of the child process: `<config.json> <result.json>`; `measure(cfg,
+    repeats, progress)` gives the figures (the stages by default)."""
     cfg_path, out_path = argv
     cfg = json.loads(Path(cfg_path).read_text())
     if cfg.get("x64"):
@@ -241,7 +242,7 @@ def child_main(argv) -> int:
     result: dict[str, Any] = {"status": "ok", "error": None}
     start = time.perf_counter()
     try:
-        result.update(_measure(cfg, cfg["repeats"], progress))
+        result.update(measure(cfg, cfg["repeats"], progress))
     except MemoryError as err:
         result.update(status="MemoryError", error=f"MemoryError: {err}")
     except Exception as err:  # reported in the table; the parent exits non-zero

@@ -16,8 +16,10 @@ import statistics
 import jax
 import pytest
 
+from hairjax._shading import shading_model_class, shading_model_names
 from hairjax.cli import main
 from hairjax.tools import GL_PASSES, STAGES
+from hairjax.tools._bench_models import NO_GL, format_models_table, model_rows
 from hairjax.tools._bench_report import QUICK_NOTE, format_table, verdict, verdict_line
 from hairjax.tools._bench_timing import measure_gl
 
@@ -65,6 +67,89 @@ def test_bench_quick_writes_every_figure(tmp_path, capsys):
     assert config["ordering"]["segments"] == 2000 * 15
     assert config["fragments"] > 0
     assert config["peak_rss_kib"] > 0
+    _check_model_costs(data["shading_models"], printed, gl=False)
+
+
+def _model_line(printed: str, label: str) -> str:
+    (line,) = [x for x in printed.splitlines() if x.startswith(label + "  ")]
+    return line
+
+
+def _check_model_costs(record: dict, printed: str, gl: bool) -> None:
+    """The cost per shading model: a row per registered model (at its defaults) and per
+    declared variant, each with positive times, printed under its own title."""
+    assert record["status"] == "ok", record.get("error")
+    assert record["configuration"] == "2k @ 128x128" and record["strands"] == 2000
+    assert "shading models: cost per model at 2k @ 128x128" in printed
+    rows = record["models"]
+    assert [r["label"] for r in rows] == [label for label, _, _ in model_rows()]
+    assert {r["model"] for r in rows if not r["options"]} == set(shading_model_names())
+    assert "marschner (azimuthal=chiang, azimuthal_samples=16)" in [r["label"] for r in rows]
+    for r in rows:
+        for key in ("shading", "gradient"):
+            assert _positive_finite(r[key]["median_s"]), (r["label"], key)
+            assert len(r[key]["runs_s"]) == 2
+        assert r["image_finite"] and r["gradient_finite"], r["label"]
+        assert set(r["gradient_wrt"]) <= set(shading_model_class(r["model"]).fittable) and r["gradient_wrt"]
+        line = _model_line(printed, r["label"])
+        assert len(re.findall(r" \d+\.\d\dx", line)) == 2, line  # / kajiya-kay and gradient / shading
+        cells = line.split()
+        if not gl:
+            assert "gl" not in r and NO_GL not in printed
+        elif r["gl_id"] is None:
+            assert r["gl"]["status"] == "no GL side" and cells[-1] == NO_GL, r["label"]
+        else:
+            assert r["gl"]["status"] == "ok", r["gl"]["error"]
+            assert _positive_finite(r["gl"]["full_render"]["median_s"]), r["label"]
+            assert cells[-1] == "ms" or cells[-1] == "s"
+
+
+def test_model_rows_come_from_the_registry_and_the_declared_variants():
+    """Every registered model at its defaults, then the variants whose options its class
+    declares; a variant naming an option the class lacks is left out."""
+    variants = (
+        ("marschner", {"azimuthal": "chiang", "azimuthal_samples": 16}),
+        ("kajiya-kay", {"no_such_option": 1}),
+    )
+    rows = model_rows(variants)
+    assert [name for _, name, options in rows if not options] == list(shading_model_names())
+    assert [(label, opts) for label, _, opts in rows if opts] == [
+        (
+            "marschner (azimuthal=chiang, azimuthal_samples=16)",
+            {"azimuthal": "chiang", "azimuthal_samples": 16},
+        )
+    ]
+    i = [label for label, _, _ in rows].index("marschner")
+    assert rows[i + 1][0].startswith("marschner (")
+
+
+def test_the_models_table_marks_a_model_without_gl():
+    """A model without a GL side shows — in the GL column, one with it its GL frame, and
+    the shading stage is also given relative to Kajiya-Kay's."""
+
+    def row(label, shading, gradient, gl):
+        return {
+            "label": label,
+            "shading": {"median_s": shading},
+            "gradient": {"median_s": gradient},
+            "gl": gl,
+        }
+
+    record = {
+        "status": "ok",
+        "models": [
+            row("kajiya-kay", 0.010, 0.030, {"status": "ok", "full_render": {"median_s": 0.2}}),
+            row("toy", 0.025, 0.050, {"status": "no GL side", "error": None}),
+        ],
+    }
+    table = format_models_table(record, "both", "title")
+    kk, toy = _model_line(table, "kajiya-kay"), _model_line(table, "toy")
+    assert kk.split()[1:] == ["10.0", "ms", "1.00x", "30.0", "ms", "3.00x", "200.0", "ms"]
+    assert toy.split()[1:] == ["25.0", "ms", "2.50x", "50.0", "ms", "2.00x", NO_GL]
+    jax_only = format_models_table(record, "jax", "title")
+    assert NO_GL not in jax_only and "GL frame" not in jax_only
+    failed = format_models_table({"status": "MemoryError", "error": "killed"}, "both", "title")
+    assert "MemoryError: killed" in failed
 
 
 def test_bench_quick_both_backends(tmp_path, capsys):
@@ -99,6 +184,7 @@ def test_bench_quick_both_backends(tmp_path, capsys):
     assert config["jax_over_gl"] == pytest.approx(statistics.median(paired["ratios"]), rel=1e-12)
     # The JAX figures are still all there.
     assert set(STAGES) <= set(config["stages"])
+    _check_model_costs(data["shading_models"], printed, gl=True)
 
 
 def test_bench_reports_gl_unavailable(monkeypatch):
