@@ -231,7 +231,7 @@ def azimuthal_quadrature(
         out.append(jnp.tensordot(weight * d, a_p, axes=(0, 0)))
     series = 1.0 - f * t
     # Double-where: fires only where f·T → 1 (grazing and no absorption); the remainder is 0 there.
-    ok = series > _SERIES_EPS
+    ok = series > HAIR_SERIES_EPS
     rest = jnp.where(ok, attenuation[2] * f * t / jnp.where(ok, series, 1.0), 0.0)
     return out[0], out[1], out[2], jnp.tensordot(weight, rest, axes=(0, 0))
 
@@ -302,7 +302,7 @@ def marschner_lobes(
     d_trt = jnp.exp(KARIS_TRT[0] * cos_phi - KARIS_TRT[1])
     series = 1.0 - f_trt * t_trt
     # Double-where: fires only where f·T → 1 (grazing and no absorption); the remainder is 0 there.
-    ok = series > _SERIES_EPS
+    ok = series > HAIR_SERIES_EPS
     a_rest = jnp.where(ok, a_trt * f_trt * t_trt / jnp.where(ok, series, 1.0), 0.0)
     trt = jnp.pi * (m_trt * a_trt * d_trt + m_rest * a_rest / (2.0 * jnp.pi))
     return r, tt, trt

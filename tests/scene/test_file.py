@@ -642,7 +642,11 @@ ERROR_CASES = [
     (
         "shading-model",
         HAIR + '[shading]\nmodel = "phong"\n',
-        ["shading.model must be one of 'kajiya-kay', 'kajiya-kay-lookup', 'marschner', 'kajiya-kay-mirror'", "'phong'"],
+        [
+            "shading.model must be one of 'kajiya-kay', 'kajiya-kay-lookup', 'marschner', "
+            "'kajiya-kay-mirror'",
+            "'phong'",
+        ],
     ),
     (
         "kd-negative",
