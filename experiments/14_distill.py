@@ -14,9 +14,12 @@ in it). Swept:
 - three assets (`ASSETS`): the procedural fur ball, AMD's TressFX ponytail, Sintel's
   hair with her head as a mesh occluder (experiments/scenes/*.toml; the hair files are
   read from `--data`, shared/data beside the checkout);
-- three real-time models (`MODELS`): Kajiya-Kay with the seed's retro-reflection cone
+- the real-time models (`MODELS`): Kajiya-Kay with the seed's retro-reflection cone
   (`hj.KajiyaKay`), with the specular (mirror) cone of a cylinder (`hj.KajiyaKayMirror`,
-  docs/model.md §8), and Scheuermann's two shifted highlights (`hj.Scheuermann`, §17).
+  docs/model.md §8), Scheuermann's two shifted highlights (`hj.Scheuermann`, §17), and
+  the Marschner-family fibre (`hj.Marschner`, §19), with and without dual scattering
+  (`marschner`, `marschner-dual`), whose fitted pigments and β_m are tabled against the
+  reference's (the recovery table).
 
 Per asset there are four views (`VIEWS`): three train one fit (the asset's camera under
 its key light, the camera turned 60° about the vertical under the same light, and the
@@ -103,6 +106,7 @@ FIT_NAMES = {
     "kajiya-kay-mirror": KAJIYA_KAY_NAMES,
     "scheuermann": SCHEUERMANN_NAMES,
     "marschner": MARSCHNER_NAMES,
+    "marschner-dual": MARSCHNER_NAMES,
 }
 
 MODELS = tuple(FIT_NAMES)
@@ -111,6 +115,7 @@ SHORT = {
     "kajiya-kay-mirror": "KK mirror",
     "scheuermann": "Scheuermann",
     "marschner": "Marschner",
+    "marschner-dual": "Marschner dual",
 }
 # Where every fit starts (ambient 0: the reference has no ambient light).
 STARTS = {
@@ -243,12 +248,13 @@ def view_scene(scene, view: View, light_of: dict):
 def shading_model(model: str):
     import hairjax as hj
 
-    start = STARTS[model]
+    start = STARTS[model.removesuffix("-dual")]
     if model == "scheuermann":
         maps = hj.ScheuermannMaps(shift_noise=0.0, mask_noise=0.0)
         return hj.Scheuermann(hj.ScheuermannParams(**start), maps)
-    if model == "marschner":
-        return hj.Marschner(hj.MarschnerParams(**start))
+    if model.startswith("marschner"):
+        scattering = "dual" if model == "marschner-dual" else "none"
+        return hj.Marschner(hj.MarschnerParams(**start), multiple_scattering=scattering)
     kind = hj.KajiyaKayMirror if model == "kajiya-kay-mirror" else hj.KajiyaKay
     return kind(hj.ShadingParams(**start))
 
