@@ -250,6 +250,13 @@ class Marschner(AbstractShadingModel):
             scattered={g: scattered[:, i] for i, g in enumerate(_LOBE_GAINS)},
         )
 
+    def gl_unsupported(self) -> str | None:
+        # The camera shader has Karis's closed forms only: refused rather than drawing
+        # another model than the JAX one.
+        if self.azimuthal != "karis":
+            return 'the GL renderer has no shading.azimuthal = "chiang" (JAX only); use "karis"'
+        return None
+
     def gl_uniforms(self, params: MarschnerParams) -> dict:
         """The `Marschner` struct of model.glsl: what depends on the parameters alone is
         computed here by the JAX functions the lobes use (σ_a, the Gaussians' widths, each

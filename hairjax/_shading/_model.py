@@ -263,6 +263,11 @@ class AbstractShadingModel(eqx.Module):
         """Uniforms of the camera shader for this model (names as strand.vert has them)."""
         raise NotImplementedError(f"shading model {self.name!r} has no GL renderer")
 
+    def gl_unsupported(self) -> str | None:
+        """Why the GL renderer cannot draw this model as configured, or None where it can
+        (by default: where the class has a shader branch, `gl_id`)."""
+        return None if self.gl_id is not None else f"shading model {self.name!r} has no GL renderer"
+
     def gl_table(self, params) -> np.ndarray | None:
         """A `[rows, columns, c]` table (c ≤ 4 components) the shader reads as its model's
         sampler (`kajiya_kay_table`, `marschner_tables`, hairjax/gl/_shading.py), or None."""

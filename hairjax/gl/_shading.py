@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._errors import SceneError
 from .._scene._scene import Scene
 from .._shading._streaks import strand_coordinates, streak_prefix
 from .._shading._streaks import streak_texture as streak_values
@@ -44,6 +45,9 @@ def shading_uniforms(scene: Scene, params) -> dict:
     model = scene.shading
     if model.gl_id is None:
         raise TypeError(f"shading model {model.name!r} has no GL renderer (gl_id is None)")
+    reason = model.gl_unsupported()
+    if reason is not None:  # a configuration its branch does not draw
+        raise SceneError(reason)
     if not isinstance(params, model.params_type):
         raise TypeError(
             f"shading model {model.name!r} takes {model.params_type.__name__}, got {type(params).__name__}"

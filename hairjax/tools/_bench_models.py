@@ -120,7 +120,7 @@ def _jax_costs(scene, repeats: int, progress) -> dict:
 
 
 def _gl_frame(scene, repeats: int, progress) -> dict:
-    if scene.shading.gl_id is None:
+    if scene.shading.gl_unsupported() is not None:
         return {"status": "no GL side", "error": None}
     try:
         return measure_gl(scene, repeats, progress)
@@ -145,7 +145,8 @@ def measure_models(cfg: dict, repeats: int, progress) -> dict:
         def tell(msg, label=label):
             progress(f"{label}: {msg}")
 
-        row = {"label": label, "model": name, "options": options, "gl_id": cls.gl_id}
+        gl_id = None if scene.shading.gl_unsupported() else cls.gl_id  # None: "—" in the table
+        row = {"label": label, "model": name, "options": options, "gl_id": gl_id}
         if backend in ("gl", "both"):
             row["gl"] = _gl_frame(scene, repeats, tell)
         if backend in ("jax", "both"):

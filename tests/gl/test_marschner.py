@@ -196,3 +196,14 @@ def test_glsl_dual_terms_match_jax_at_points(gl, melanin, roughness):
     scale = np.abs(want).max(axis=0)
     bound = 2e-5 * scale + 1e-7 * scale.max()
     assert np.all(np.abs(got - want) <= bound), (np.abs(got - want) / scale).max(axis=0)
+
+
+def test_gl_refuses_the_far_field_azimuth(gl):
+    """`azimuthal = "chiang"` has no shader: one SceneError naming the key, not Karis's
+    image under the far field's name."""
+    from hairjax.gl import render_gl
+
+    far = scene(FRONT).replace(shading=hj.Marschner(azimuthal="chiang"))
+    assert far.shading.gl_unsupported() is not None
+    with pytest.raises(hj.SceneError, match="azimuthal"):
+        render_gl(far)
