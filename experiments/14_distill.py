@@ -146,6 +146,7 @@ STARTS = {
         ambient=0.0,
     ),
 }
+STARTS["marschner-dual"] = STARTS["marschner"]  # the same start, with dual scattering on
 
 
 class View(NamedTuple):
@@ -248,7 +249,7 @@ def view_scene(scene, view: View, light_of: dict):
 def shading_model(model: str):
     import hairjax as hj
 
-    start = STARTS[model.removesuffix("-dual")]
+    start = STARTS[model]
     if model == "scheuermann":
         maps = hj.ScheuermannMaps(shift_noise=0.0, mask_noise=0.0)
         return hj.Scheuermann(hj.ScheuermannParams(**start), maps)
