@@ -380,4 +380,10 @@ def build_parser() -> argparse.ArgumentParser:
         default="jax",
         help="time the JAX path, the GL renderer, or both in one process with the ratio of their renders",
     )
+    p.add_argument(
+        "--models",
+        metavar="NAMES",
+        help="the cost-per-model table for these shading models only, comma-separated, e.g. "
+        "kajiya-kay,marschner (default: every registered model)",
+    )
     return parser

@@ -43,7 +43,7 @@ from ._bench_cases import (
     config_name,
     configurations,
 )
-from ._bench_models import format_models_table
+from ._bench_models import format_models_table, model_names
 from ._bench_report import format_table, missed_targets, verdict, verdict_line, write_json_strict
 
 __all__ = ["bench_main"]
@@ -219,8 +219,8 @@ def _models_title(record: dict, repeats: int) -> str:
 
 
 def bench_main(args) -> int:
-    """`hairjax bench [--quick] [--repeats N] [--json PATH] [--backend jax|gl|both]`;
-    returns the exit status."""
+    """`hairjax bench [--quick] [--repeats N] [--json PATH] [--backend jax|gl|both]
+    [--models NAMES]`; returns the exit status."""
     import jax
 
     quick = bool(getattr(args, "quick", False))
@@ -232,6 +232,7 @@ def bench_main(args) -> int:
         raise ValueError(f"--repeats must be at least 1, got {repeats}")
     if quick:
         repeats = min(repeats, QUICK_REPEATS)
+    models_run = model_names(getattr(args, "models", None))
     x64 = bool(jax.config.jax_enable_x64)  # type: ignore[attr-defined]  # jax declares its options at run time
 
     configs = configurations(quick)
@@ -252,7 +253,7 @@ def bench_main(args) -> int:
             r["verdict"] = verdict(r, judged=not quick)
             results.append(r)
             print(f"      {r['verdict']} in {time.perf_counter() - t0:.1f} s", flush=True)
-        base = dict(configs[0], repeats=repeats, x64=x64, backend=backend)
+        base = dict(configs[0], repeats=repeats, x64=x64, backend=backend, models=list(models_run))
         models = _model_costs(base, Path(tmp))
 
     machine = _machine_info(results)

@@ -25,6 +25,7 @@ from ._bench_timing import child_main, measure_gl
 
 __all__ = [
     "MODEL_VARIANTS",
+    "model_names",
     "model_rows",
     "measure_models",
     "models_child_main",
@@ -50,13 +51,30 @@ def _label(name: str, options: dict) -> str:
     return f"{name} (" + ", ".join(f"{k}={v}" for k, v in options.items()) + ")"
 
 
-def model_rows(variants=MODEL_VARIANTS) -> list[tuple[str, str, dict]]:
-    """(label, model name, static options) of every registered model at its defaults,
-    each followed by its declared variants (those whose options its class declares)."""
+def model_names(text: str | None) -> tuple[str, ...]:
+    """The models of `--models` ("a,b"), checked against the registry; None: every one."""
+    from .._shading import shading_model_names
+
+    known = shading_model_names()
+    if text is None:
+        return tuple(known)
+    names = tuple(name.strip() for name in text.split(",") if name.strip())
+    unknown = [name for name in names if name not in known]
+    if not names or unknown:
+        raise ValueError(f"--models takes registered shading models ({', '.join(known)}), got {text!r}")
+    return names
+
+
+def model_rows(variants=MODEL_VARIANTS, names: tuple[str, ...] | None = None) -> list[tuple[str, str, dict]]:
+    """(label, model name, static options) of every registered model (or of `names`, in
+    registry order) at its defaults, each followed by its declared variants (those whose
+    options its class declares)."""
     from .._shading import shading_model_class, shading_model_names
 
     rows: list[tuple[str, str, dict]] = []
     for name in shading_model_names():
+        if names is not None and name not in names:
+            continue
         fields = {f.name for f in dataclasses.fields(shading_model_class(name))}
         rows.append((name, name, {}))
         for variant_name, options in variants:
@@ -138,7 +156,7 @@ def measure_models(cfg: dict, repeats: int, progress) -> dict:
     backend = cfg.get("backend", "jax")
     base = bench_scene(cfg)
     rows = []
-    for label, name, options in model_rows():
+    for label, name, options in model_rows(names=tuple(cfg["models"]) if "models" in cfg else None):
         cls = shading_model_class(name)
         scene = base.replace(shading=cls(**options))
 

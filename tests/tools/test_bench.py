@@ -28,6 +28,7 @@ def _positive_finite(x) -> bool:
     return isinstance(x, (int, float)) and math.isfinite(x) and x > 0
 
 
+@pytest.mark.slow
 def test_bench_quick_writes_every_figure(tmp_path, capsys):
     out = tmp_path / "b.json"
     status = main(["bench", "--quick", "--repeats", "2", "--json", str(out)])
@@ -75,16 +76,18 @@ def _model_line(printed: str, label: str) -> str:
     return line
 
 
-def _check_model_costs(record: dict, printed: str, gl: bool) -> None:
-    """The cost per shading model: a row per registered model (at its defaults) and per
-    declared variant, each with positive times, printed under its own title."""
+def _check_model_costs(record: dict, printed: str, gl: bool, models=None) -> None:
+    """The cost per shading model: a row per registered model (or per one of `models`) at
+    its defaults and per declared variant, each with positive times, printed under its own
+    title."""
     assert record["status"] == "ok", record.get("error")
     assert record["configuration"] == "2k @ 128x128" and record["strands"] == 2000
     assert "shading models: cost per model at 2k @ 128x128" in printed
     rows = record["models"]
-    assert [r["label"] for r in rows] == [label for label, _, _ in model_rows()]
-    assert {r["model"] for r in rows if not r["options"]} == set(shading_model_names())
-    assert "marschner (azimuthal=chiang, azimuthal_samples=16)" in [r["label"] for r in rows]
+    assert [r["label"] for r in rows] == [label for label, _, _ in model_rows(names=models)]
+    assert {r["model"] for r in rows if not r["options"]} == set(models or shading_model_names())
+    if models is None:
+        assert "marschner (azimuthal=chiang, azimuthal_samples=16)" in [r["label"] for r in rows]
     for r in rows:
         for key in ("shading", "gradient"):
             assert _positive_finite(r[key]["median_s"]), (r["label"], key)
@@ -152,9 +155,12 @@ def test_the_models_table_marks_a_model_without_gl():
     assert "MemoryError: killed" in failed
 
 
+@pytest.mark.slow
 def test_bench_quick_both_backends(tmp_path, capsys):
     out = tmp_path / "b.json"
-    status = main(["bench", "--quick", "--repeats", "2", "--backend", "both", "--json", str(out)])
+    # The GL column on one model (every model's row is checked by the JAX-only test above).
+    argv = ["bench", "--quick", "--repeats", "2", "--backend", "both", "--models", "kajiya-kay"]
+    status = main([*argv, "--json", str(out)])
     assert status == 0
     printed = capsys.readouterr().out
     data = json.loads(out.read_text())
@@ -184,7 +190,14 @@ def test_bench_quick_both_backends(tmp_path, capsys):
     assert config["jax_over_gl"] == pytest.approx(statistics.median(paired["ratios"]), rel=1e-12)
     # The JAX figures are still all there.
     assert set(STAGES) <= set(config["stages"])
-    _check_model_costs(data["shading_models"], printed, gl=True)
+    _check_model_costs(data["shading_models"], printed, gl=True, models=("kajiya-kay",))
+
+
+def test_bench_refuses_an_unknown_model_in_one_line(capsys):
+    assert main(["bench", "--quick", "--models", "kajiya-kay,no-such-model"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--models takes registered shading models" in err[0], err
+    assert "'kajiya-kay,no-such-model'" in err[0]
 
 
 def test_bench_reports_gl_unavailable(monkeypatch):
