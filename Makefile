@@ -12,7 +12,7 @@ $(error JAX_EXTRA must be cuda or empty, got '$(JAX_EXTRA)')
 endif
 STAMP   := $(VENV)/.installed$(if $(JAX_EXTRA),-$(JAX_EXTRA))
 
-.PHONY: run test notebooks bench clean
+.PHONY: run test test-slow notebooks bench clean
 
 $(BIN)/python:
 	@$(PY) -c 'import sys; assert sys.version_info >= (3, 11), sys.version' 2>/dev/null \
@@ -53,9 +53,13 @@ test: $(STAMP)
 	$(BIN)/python -m ruff check hairjax tests experiments notebooks
 	$(BIN)/python -m ruff format --check hairjax tests experiments notebooks
 	$(BIN)/python -m mypy
-	$(BIN)/python -m pytest -q -n 2  # both cores (pytest-xdist): keeps make test under 10 minutes
+	$(BIN)/python -m pytest -q -n 2 -m "not slow"  # both cores (pytest-xdist); under 12 minutes in all
 
-# Every notebook executed; `make test` executes only 06 (about 1.5 minutes).
+# The slow tier (pyproject.toml's marker `slow`, README): about 4 minutes on two cores.
+test-slow: $(STAMP)
+	$(BIN)/python -m pytest -q -n 2 -m slow
+
+# Every notebook executed (about 1.5 minutes).
 notebooks: $(STAMP)
 	HAIRJAX_ALL_NOTEBOOKS=1 $(BIN)/python -m pytest -q -n 2 tests/test_notebooks.py
 

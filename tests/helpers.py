@@ -20,6 +20,13 @@ DATA = REPO.parent / "shared" / "data"
 EXAMPLES = REPO / "experiments" / "scenes"
 
 
+def first_then_slow(values) -> list:
+    """Parameters of which `make test` runs the first and the slow tier (`make test-slow`,
+    README) the others: the further cases of a check that every case runs the same way."""
+    values = list(values)
+    return values[:1] + [pytest.param(v, marks=pytest.mark.slow) for v in values[1:]]
+
+
 def load_experiment(name: str):
     """The module experiments/NAME.py (experiments/ is not a package)."""
     import importlib.util

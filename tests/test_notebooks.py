@@ -138,12 +138,11 @@ def test_notebook_stored_with_outputs(path):
     assert path.stat().st_size < MAX_NOTEBOOK_BYTES
 
 
-# Executed by `make notebooks` (HAIRJAX_ALL_NOTEBOOKS=1), not by `make test`, which must
-# stay under 10 minutes on two cores: the notebooks whose code the suite tests on its own
-# (the renderers, the fit, the sweep and the stiff fits, every example scene), about 100 s
-# of CPU together. `make test` executes the physically based one, whose reference and
-# distillation fits it shares with no other test but experiment 14's, and checks every
-# notebook's stored outputs (above).
+# Executed by `make notebooks` (HAIRJAX_ALL_NOTEBOOKS=1) only: the notebooks whose code
+# the suite tests on its own (the renderers, the fit, the sweep and the stiff fits, every
+# example scene), about 100 s of CPU together. The slow tier (`make test-slow`) executes
+# the physically based one, whose reference and distillation fits it shares with no other
+# test but experiment 14's; `make test` checks every notebook's stored outputs (above).
 OUTSIDE_MAKE_TEST = {
     "01_tour.ipynb",
     "02_jax_vs_gl.ipynb",

@@ -6,9 +6,11 @@ from __future__ import annotations
 import csv
 import math
 
+import pytest
 from helpers import load_experiment
 
 
+@pytest.mark.slow
 def test_stiff_fits_quick(tmp_path, capsys):
     module = load_experiment("03_stiff_fits")
     out = tmp_path / "out"

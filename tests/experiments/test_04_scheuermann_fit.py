@@ -1,9 +1,11 @@
 """experiments/04_scheuermann_fit.py: every Scheuermann parameter it fits is recovered from a
 GL-rendered target (docs/model.md §17: the model's parameters are fit-able)."""
 
+import pytest
 from helpers import load_experiment
 
 
+@pytest.mark.slow
 def test_scheuermann_fit_recovers_a_gl_target(gl):
     module = load_experiment("04_scheuermann_fit")
     errors, steps, _, rmse = module.run(size=32, strands=150, target="gl")

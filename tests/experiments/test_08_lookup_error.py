@@ -3,9 +3,11 @@ table's error against the analytic model shrinks with the table's size (docs/mod
 
 import csv
 
+import pytest
 from helpers import load_experiment
 
 
+@pytest.mark.slow
 def test_lookup_error_experiment_runs(tmp_path, capsys, gl):
     """experiments/08_lookup_error.py end to end on a tiny scene, both renderers."""
     scene = tmp_path / "tiny.toml"

@@ -12,6 +12,7 @@ from helpers import load_experiment
 pytest.importorskip("ipywidgets")
 
 
+@pytest.mark.slow
 def test_explore_latency_quick(tmp_path, capsys):
     out = tmp_path / "explore.json"
     assert load_experiment("10_explore_latency").main(["--quick", "--json", str(out)]) == 0

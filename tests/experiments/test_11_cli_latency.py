@@ -5,9 +5,11 @@ from __future__ import annotations
 import json
 import math
 
+import pytest
 from helpers import load_experiment
 
 
+@pytest.mark.slow
 def test_cli_latency_runs(tmp_path, capsys):
     out = tmp_path / "cli.json"
     assert load_experiment("11_cli_latency").main(["--repeats", "1", "--json", str(out)]) == 0

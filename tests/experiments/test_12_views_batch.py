@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import re
 
+import pytest
 from helpers import load_experiment
 
 
+@pytest.mark.slow
 def test_views_batch_runs(capsys):
     # A 500-strand ball: the same code path as the default 20,000 (which only take longer).
     argv = ["--size", "24", "--views", "2", "--repeats", "1", "--strands", "500"]

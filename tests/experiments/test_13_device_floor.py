@@ -5,9 +5,11 @@ from __future__ import annotations
 
 import re
 
+import pytest
 from helpers import load_experiment
 
 
+@pytest.mark.slow
 def test_device_floor_runs(capsys):
     argv = ["--strands", "200", "--size", "32", "--repeats", "1"]
     assert load_experiment("13_device_floor").main(argv) == 0

@@ -25,6 +25,7 @@ def quick_run(tmp_path_factory):
     return module, out, rows
 
 
+@pytest.mark.slow
 def test_distill_quick_fits(quick_run, capsys):
     module, out, rows = quick_run
     assert {r["model"] for r in rows} == set(module.QUICK["models"])

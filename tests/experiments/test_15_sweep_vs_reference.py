@@ -12,6 +12,7 @@ from helpers import load_experiment
 pytest.importorskip("mitsuba", reason="the reference needs Mitsuba 3 (pip install 'hairjax[reference]')")
 
 
+@pytest.mark.slow
 def test_sweep_against_the_reference_runs(tmp_path, capsys):
     assert load_experiment("15_sweep_vs_reference").main(["--quick", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import pytest
 from helpers import load_experiment
 
 
@@ -25,6 +26,7 @@ def test_device_figures_run(tmp_path, capsys):
     assert "300 @ 32x32" in capsys.readouterr().out
 
 
+@pytest.mark.slow
 def test_device_figures_time_the_host_set_up_too_on_an_accelerator(tmp_path, monkeypatch, capsys):
     """With the set-up on the device (forced here on the CPU device, as a GPU's default),
     each fur ball is timed a second time with the set-up on the host, and the placement is

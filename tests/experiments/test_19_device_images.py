@@ -9,6 +9,7 @@ from pathlib import Path
 
 import jax
 import numpy as np
+import pytest
 from helpers import load_experiment
 
 import hairjax as hj
@@ -16,6 +17,7 @@ import hairjax as hj
 SCENE = Path(__file__).resolve().parents[2] / "experiments" / "scenes" / "grazing.toml"
 
 
+@pytest.mark.slow
 def test_device_images_run(tmp_path, monkeypatch):
     monkeypatch.setenv(hj.SETUP_PLACEMENT, "host")
     out = tmp_path / "images.json"

@@ -6,7 +6,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from helpers import fit_image, fit_terms, real_fragments, small_furball_scene
+from helpers import first_then_slow, fit_image, fit_terms, real_fragments, small_furball_scene
 
 import hairjax as hj
 from hairjax._fit import _convergence, _entry, _nnls, _problem, _shading_fit, _solvers, _space, _varpro
@@ -29,7 +29,7 @@ def rel(a, b):
     return np.max(np.abs(np.asarray(a) - np.asarray(b)) / np.abs(np.asarray(b)))
 
 
-@pytest.mark.parametrize("solver", ["levenberg-marquardt", "gauss-newton", "dogleg", "bfgs"])
+@pytest.mark.parametrize("solver", first_then_slow(["levenberg-marquardt", "gauss-newton", "dogleg", "bfgs"]))
 def test_noise_free_recovery(scene, target, solver):
     r = hj.fit(scene, target, init=INIT, solver=solver, max_steps=200)
     assert r.termination == "converged"
@@ -217,7 +217,7 @@ def test_shininess_undetermined_without_specular(scene):
     assert np.isfinite(float(r.params.shininess)) and all(np.isfinite(r.loss))
 
 
-@pytest.mark.parametrize("solver", ["gauss-newton", "dogleg", "levenberg-marquardt"])
+@pytest.mark.parametrize("solver", first_then_slow(["gauss-newton", "dogleg", "levenberg-marquardt"]))
 def test_a_parameter_without_effect_does_not_stop_the_solvers(scene, solver):
     """Ks held at 0: p has no effect, J has a zero column. Gauss-Newton's and dogleg's
     default solve returned NaN (GN) or never moved (dogleg); with a least-squares solve all
@@ -278,6 +278,7 @@ def test_standard_errors_equal_the_parameter_space_formula(scene, target):
     np.testing.assert_allclose(got, se, rtol=1e-3)
 
 
+@pytest.mark.slow
 def test_bfgs_on_a_faint_highlight_in_float32():
     """Ks ≈ 0.02 with a sharp highlight, in float32 (as the CLI and experiments run). With
     optimistix's BFGS the updates were skipped (sᵀy < 1.2e-7) and it crawled 300 steps to
@@ -467,7 +468,7 @@ def test_divergence_ends_cleanly(scene, monkeypatch, fresh_jit):
     assert r.undetermined == () or all(r.std_error[n] is None for n in r.undetermined)
 
 
-@pytest.mark.parametrize("solver", ["levenberg-marquardt", "gauss-newton", "dogleg", "bfgs"])
+@pytest.mark.parametrize("solver", first_then_slow(["levenberg-marquardt", "gauss-newton", "dogleg", "bfgs"]))
 def test_no_solver_accepts_a_step_into_overflow(scene, monkeypatch, fresh_jit, solver):
     """Trust regions (LM, dogleg) and Armijo backtracking (Gauss-Newton, BFGS) reject a
     step whose loss is not finite: every recorded loss stays finite, κ stays ≤ 5."""

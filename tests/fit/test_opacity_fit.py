@@ -57,6 +57,7 @@ def test_the_image_derivative_in_alpha_matches_finite_differences():
     np.testing.assert_allclose(jax.grad(f)(0.45), central_difference(f, 0.45, 1e-5), rtol=1e-7)
 
 
+@pytest.mark.slow
 def test_alpha_is_recovered_with_the_shading_parameters():
     scene = small_furball_scene(strands=120, size=32)  # strands' opacity 0.6: the start
     target = np.asarray(hj.render(scene, TRUE, _opacity_fit.strand_alpha(scene, 0.4)))

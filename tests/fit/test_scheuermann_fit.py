@@ -24,6 +24,7 @@ FIT_NAMES = (
 )
 
 
+@pytest.mark.slow
 def test_fit_recovers_every_parameter():
     """hairjax.fit on a Scheuermann scene: from 20-100 % off, every fittable parameter back
     to 1e-8 relative on a noise-free float64 target (LM converges to ~1e-15; 1e-8 leaves
@@ -69,6 +70,7 @@ def test_fit_refuses_what_it_cannot_do():
         hj.fit(scene, target, init=hj.ShadingParams())
 
 
+@pytest.mark.slow  # the CLI fit of Kajiya-Kay runs in make test (tests/cli/test_commands.py)
 def test_fit_from_the_cli(tmp_path, capsys):
     import json
 

@@ -9,6 +9,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from helpers import first_then_slow
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -157,7 +158,7 @@ SCENES = {
 }
 
 
-@pytest.mark.parametrize("name", SCENES)
+@pytest.mark.parametrize("name", first_then_slow(SCENES))
 def test_the_set_up_on_the_device_gives_the_hosts_fragments_and_image(monkeypatch, name):
     """Each scene set up and rendered twice, on the host and on the device (fresh scene
     objects: the set-up is cached per scene)."""

@@ -7,7 +7,7 @@ from __future__ import annotations
 import jax
 import numpy as np
 import pytest
-from helpers import DATA, EXAMPLES, central_difference, shadow_method, unexplained_pixels
+from helpers import DATA, EXAMPLES, central_difference, first_then_slow, shadow_method, unexplained_pixels
 
 import hairjax as hj
 from hairjax._disagreement import OCCLUDER_VERTEX_STEP, PIXEL_TOL
@@ -242,7 +242,7 @@ def gl_scenes():
 SCENES = gl_scenes()
 
 
-@pytest.mark.parametrize("name", list(SCENES))
+@pytest.mark.parametrize("name", first_then_slow(SCENES))
 def test_gl_agrees_with_jax(gl, name):
     """With JAX's Ω and occluder light, GL's image equals JAX's to 1e-4 outside the camera
     band (hairjax/_disagreement: it holds the mesh's silhouette pixels and those where GL's

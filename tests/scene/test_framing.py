@@ -33,6 +33,7 @@ def cloud(seed: int = 0, n: int = 200) -> Strands:
 
 
 @pytest.mark.skipif(not ASSETS, reason=f"no hair assets in {DATA}")
+@pytest.mark.slow
 @pytest.mark.parametrize("path", ASSETS, ids=lambda p: p.name)
 def test_every_asset_is_framed(path):
     scene = scene_for_hair(path, width=96, height=96)

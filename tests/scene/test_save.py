@@ -7,7 +7,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from helpers import DATA, EXAMPLES
+from helpers import DATA, EXAMPLES, first_then_slow
 
 import hairjax as hj
 from hairjax._errors import SceneError
@@ -54,7 +54,7 @@ CASES = {
 }
 
 
-@pytest.mark.parametrize("case", CASES)
+@pytest.mark.parametrize("case", first_then_slow(CASES))
 def test_a_saved_scene_reads_back_to_the_same_scene_and_image(case, tmp_path):
     path, overrides = CASES[case]
     if case == "a hair file" and not (DATA / "tressfx" / "ponytail_side.tfx").exists():
