@@ -55,7 +55,7 @@ test: $(STAMP)
 	$(BIN)/python -m mypy
 	$(BIN)/python -m pytest -q -n 2 -m "not slow"  # both cores (pytest-xdist); under 12 minutes in all
 
-# The slow tier (pyproject.toml's marker `slow`, README): about 4 minutes on two cores.
+# The slow tier (pyproject.toml's marker `slow`, README): about 5 minutes on two cores.
 test-slow: $(STAMP)
 	$(BIN)/python -m pytest -q -n 2 -m slow
 
