@@ -50,7 +50,8 @@ squared RMSE, so floor/√2 is the share of a fit's RMSE that no model can remov
 
 Writes DIR/distill.csv (one row per fit), DIR/distill.md (the tables), DIR/fits.json
 (`FitResult.to_json()` per fit) and DIR/figures/*.png (target | fit | residual for each
-model, `FIGURES`); `--docs DOCS` also copies the figures to DOCS/figures/. Prints a line
+model, `FIGURES`); `--docs DOCS` also copies the figures to DOCS/figures/ and the CSV to
+DOCS/distill.csv. Prints a line
 per fit and the tables.
 """
 
@@ -524,7 +525,12 @@ def _parser() -> argparse.ArgumentParser:
         help="read the references of an earlier run from OUT/references/ where they exist "
         "(every run writes them there) instead of rendering them again",
     )
-    p.add_argument("--docs", type=Path, default=None, help="also copy the figures to DOCS/figures/")
+    p.add_argument(
+        "--docs",
+        type=Path,
+        default=None,
+        help="also copy the figures to DOCS/figures/ and the CSV to DOCS/distill.csv",
+    )
     p.add_argument(
         "--quick",
         action="store_true",
@@ -643,6 +649,9 @@ def main(argv=None) -> int:
     write_text(args.out / "distill.md", text + "\n")
     write_json(args.out / "fits.json", fits)
     if args.docs is not None:
+        # The fitted parameters per model, colour and roughness with their held-out RMSE,
+        # for the people who set them in an engine (docs/physically_based.md §3).
+        write_csv(args.docs / "distill.csv", CSV_COLUMNS, rows, float_format=".6g")
         for path in figures:
             (args.docs / "figures").mkdir(parents=True, exist_ok=True)
             shutil.copyfile(path, args.docs / "figures" / path.name)

@@ -19,7 +19,9 @@ pytest.importorskip("mitsuba", reason="the Mitsuba reference is the optional ext
 def quick_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("distill")
     module = load_experiment("14_distill")
-    assert module.main(["--quick", "--out", str(out)]) == 0
+    assert module.main(["--quick", "--out", str(out), "--docs", str(out / "docs")]) == 0
+    # --docs carries the CSV of fitted parameters, the same file as the run's own.
+    assert (out / "docs" / "distill.csv").read_bytes() == (out / "distill.csv").read_bytes()
     with open(out / "distill.csv", newline="") as f:
         rows = list(csv.DictReader(f))
     return module, out, rows
