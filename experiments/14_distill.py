@@ -51,8 +51,7 @@ squared RMSE, so floor/√2 is the share of a fit's RMSE that no model can remov
 Writes DIR/distill.csv (one row per fit), DIR/distill.md (the tables), DIR/fits.json
 (`FitResult.to_json()` per fit) and DIR/figures/*.png (target | fit | residual for each
 model, `FIGURES`); `--docs DOCS` also copies the figures to DOCS/figures/ and the CSV to
-DOCS/distill.csv. Prints a line
-per fit and the tables.
+DOCS/distill.csv. Prints a line per fit and the tables.
 """
 
 from __future__ import annotations

@@ -149,14 +149,15 @@ def _gl_frame(scene, repeats: int, progress) -> dict:
 
 
 def measure_models(cfg: dict, repeats: int, progress) -> dict:
-    """The cost of every model of `model_rows()` on `cfg`'s scene (module docstring)."""
+    """The cost of every row of `model_rows()` for the models `cfg["models"]` names (every
+    registered one unless `--models` said otherwise) on `cfg`'s scene (module docstring)."""
     from .._shading import shading_model_class
     from ._bench_cases import bench_scene
 
     backend = cfg.get("backend", "jax")
     base = bench_scene(cfg)
     rows = []
-    for label, name, options in model_rows(names=tuple(cfg["models"]) if "models" in cfg else None):
+    for label, name, options in model_rows(names=tuple(cfg["models"])):
         cls = shading_model_class(name)
         scene = base.replace(shading=cls(**options))
 
