@@ -21,16 +21,18 @@ in it). Swept:
   (`marschner`, `marschner-dual`), whose fitted pigments and β_m are tabled against the
   reference's (the recovery table).
 
-Per asset there are four views (`VIEWS`): three train one fit (the asset's camera under
-its key light, the camera turned 60° about the vertical under the same light, and the
-first camera under a back light, which travels towards the eye from behind and above the
-hair), and one is held out (`hj.fit(holdout=...)`): a camera turned −50° under a side
-light, a view and a light the fit never saw. Every model is fitted to the same targets,
-from the same start (`STARTS`), with `hj.fit`'s defaults (Levenberg-Marquardt, the gains
-solved for by variable projection). The fitted names are `FIT_NAMES`, one tuple per
-model; a name every model fits is in `SHARED_NAMES` (one edit adds the strand opacity
-`alpha` once `hj.fit` takes it; `ambient` is not fittable today, and is held at 0, as
-the reference has no ambient light).
+Each target is one `hj.distill` per model (docs/physically_based.md §4), its references
+rendered by the first and reused by the others. Per asset there are four views
+(`hj.DISTILL_VIEWS`): three train one fit (the asset's camera under its key light, the
+camera turned 60° about its up vector under the same light, and the first camera under a
+back light, which travels towards the eye from behind and above the hair), and one is
+held out: a camera turned −50° under a side light, a view and a light the fit never saw.
+Every model is fitted to the same targets, from the same start (`STARTS`), with
+`hj.fit`'s defaults (Levenberg-Marquardt, the gains solved for by variable projection).
+The fitted names are `FIT_NAMES`, one tuple per model; a name every model fits is in
+`SHARED_NAMES` (one edit adds the strand opacity `alpha` once `hj.fit` takes it;
+`ambient` is not fittable today, and is held at 0, as the reference has no ambient
+light).
 
 Real-time settings, not fitted: the strands are opaque (alpha 1: fibres are opaque tubes,
 and the ribbons then cover what the fibres do), white (the fitted gains carry the
@@ -63,9 +65,10 @@ import shutil
 import sys
 import time
 from pathlib import Path
-from typing import NamedTuple
 
 import numpy as np
+
+import hairjax as hj
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "experiments" / "scenes"
@@ -149,20 +152,10 @@ STARTS = {
 STARTS["marschner-dual"] = STARTS["marschner"]  # the same start, with dual scattering on
 
 
-class View(NamedTuple):
-    name: str
-    azimuth: float  # the camera turned about the vertical through its target, degrees
-    light: str  # a key of LIGHTS
-    train: bool
+# The views are hj.distill's: front, side (the camera turned 60°) and back-lit train;
+# held-out (the camera turned −50° under a side light) is held out.
+VIEWS = hj.DISTILL_VIEWS
 
-
-VIEWS = (
-    View("front", 0.0, "key", True),
-    View("side", 60.0, "key", True),
-    View("back-lit", 0.0, "back", True),
-    View("held-out", -50.0, "side", False),
-)
-LIGHTS = ("key", "back", "side")
 # (asset, colour, roughness, view): the figures, each target | fit | residual per model.
 FIGURES = (
     ("ponytail", "brown", 0.2, "held-out"),
@@ -172,23 +165,10 @@ FIGURES = (
 )
 
 
-def rotate_y(v, degrees: float) -> np.ndarray:
-    a = math.radians(degrees)
-    c, s = math.cos(a), math.sin(a)
-    x, y, z = np.asarray(v, float)
-    return np.array([c * x + s * z, y, -s * x + c * z])
-
-
-def _unit(v) -> np.ndarray:
-    v = np.asarray(v, float)
-    return v / np.linalg.norm(v)
-
-
 def asset_scene(asset: str, size: int, strands: int | None, data: Path):
     """The asset's scene as the real-time side renders it: its camera at `size`², its key
     light, opaque white 1-px strands (at most `strands` of them, every k-th), shading and
     ambient at the start, no ambient term."""
-    import hairjax as hj
 
     if asset == "furball":  # under the default scene's camera and light, as experiments/03
         scene = hj.Scene(
@@ -222,32 +202,7 @@ def asset_scene(asset: str, size: int, strands: int | None, data: Path):
     return scene.replace(strands=hair, camera=camera, shadows=hj.Shadows("opacity-maps", 32, 2 * size))
 
 
-def lights(scene) -> dict:
-    """The three lights: the asset's key light; a back light travelling from behind and
-    above the hair towards the eye; a side light, the key light turned 90° about the
-    vertical."""
-    import hairjax as hj
-
-    key = np.asarray(scene.light.direction, float)
-    to_eye = _unit(np.subtract(scene.camera.eye, scene.camera.target))
-    back = _unit(to_eye + np.array([0.0, -0.6, 0.0]))
-    return {
-        "key": scene.light,
-        "back": hj.Light(direction=tuple(back)),
-        "side": hj.Light(direction=tuple(rotate_y(key, 90.0))),
-    }
-
-
-def view_scene(scene, view: View, light_of: dict):
-    cam = scene.camera
-    target = np.asarray(cam.target, float)
-    eye = target + rotate_y(np.subtract(cam.eye, target), view.azimuth)
-    camera = dataclasses.replace(cam, eye=tuple(float(x) for x in eye))
-    return scene.replace(camera=camera, light=light_of[view.light], name=f"{scene.name}-{view.name}")
-
-
 def shading_model(model: str):
-    import hairjax as hj
 
     start = STARTS[model]
     if model == "scheuermann":
@@ -267,25 +222,6 @@ def rmse(a, b) -> float:
     return math.sqrt(total / sum(3 * np.asarray(x)[..., 0].size for x, _ in pairs))
 
 
-def references(scenes: dict, colour: str, roughness: float, spp: int) -> dict:
-    """View name → (target at sample seed 0, the same at seed 1)."""
-    import hairjax as hj
-
-    eu, pheo = COLOURS[colour]
-    settings = hj.ReferenceSettings(
-        eumelanin=eu,
-        pheomelanin=pheo,
-        longitudinal_roughness=roughness,
-        azimuthal_roughness=AZIMUTHAL_ROUGHNESS,
-        spp=spp,
-    )
-    out = {}
-    for name, scene in scenes.items():
-        s = scene.replace(reference=settings)
-        out[name] = tuple(np.asarray(hj.reference_image(s, spp=spp, seed=seed)) for seed in (0, 1))
-    return out
-
-
 def _fmt(value, error) -> str:
     v = np.atleast_1d(np.asarray(value, float))
     text = " ".join(f"{x:.3g}" for x in v)
@@ -295,45 +231,58 @@ def _fmt(value, error) -> str:
     return f"{text} ± {' '.join(f'{x:.2g}' for x in e)}"
 
 
-def fit_one(model: str, scenes: dict, refs: dict, max_steps: int) -> tuple[dict, object, dict]:
-    """Fit `model` to the training views, hold out the held-out one. Returns (the CSV row's
-    numbers, the FitResult, view name → fitted image)."""
-    import hairjax as hj
+def distill_one(args, model: str, base, colour: str, roughness: float, refs) -> tuple[dict, object]:
+    """`hj.distill` of `model` on `base`'s views: rendering the references (with their
+    second seed, for the noise floor) where `refs` is None. Returns (the CSV row's
+    numbers, the Distillation)."""
+    eu, pheo = COLOURS[colour]
+    shading = shading_model(model)
+    rendered = []  # when each reference was finished, for the render time
 
-    train = [v.name for v in VIEWS if v.train and v.name in scenes]
-    held = [v.name for v in VIEWS if not v.train and v.name in scenes]
-    start = scenes[train[0]].params
+    def progress(done, total, message):
+        if message.startswith("reference"):
+            rendered.append(time.perf_counter())
+
     t0 = time.perf_counter()
-    r = hj.fit(
-        [scenes[v] for v in train],
-        [refs[v][0] for v in train],
-        fit=FIT_NAMES[model],
-        init=start,
-        max_steps=max_steps,
-        holdout=([scenes[v] for v in held], [refs[v][0] for v in held]),
+    d = hj.distill(
+        base.replace(shading=shading),
+        shading,
+        eumelanin=eu,
+        pheomelanin=pheo,
+        roughness=roughness,
+        azimuthal_roughness=AZIMUTHAL_ROUGHNESS,
+        spp=args.spp,
+        views=chosen_views(args),
+        fit_names=FIT_NAMES[model],
+        max_steps=args.max_steps,
+        noise_floor=True,
+        references=refs,
+        progress=progress,
     )
-    wall = time.perf_counter() - t0
-    fitted = {v: np.asarray(hj.render(scenes[v], r.params)) for v in scenes}
-    started = [np.asarray(hj.render(scenes[v], start)) for v in train]
+    wall = time.perf_counter() - (rendered[-1] if rendered else t0)
+    r, train = d.result, [v.name for v in d.views if v.train]
+    start = shading.params
+    started = [np.asarray(hj.render(d.scenes[v].replace(params=start))) for v in train]
     row = dict(
         model=model,
-        start_rmse=rmse(started, [refs[v][0] for v in train]),
+        start_rmse=rmse(started, [d.references[v] for v in train]),
         train_rmse=float(r.rmse),
         holdout_rmse=float(r.holdout_rmse),
-        floor_train=rmse([refs[v][0] for v in train], [refs[v][1] for v in train]),
-        floor_holdout=rmse([refs[v][0] for v in held], [refs[v][1] for v in held]),
-        target_rms=rmse([refs[v][0] for v in train], [0.0 * refs[v][0] for v in train]),
+        floor_train=d.floor(train=True),
+        floor_holdout=d.floor(train=False),
+        target_rms=rmse([d.references[v] for v in train], [0.0 * d.references[v] for v in train]),
         steps=r.steps,
         time_s=float(r.time_s),
         wall_s=wall,
+        render_s=(rendered[-1] - t0) if rendered else 0.0,
         termination=r.termination,
         undetermined=" ".join(r.undetermined),
         params="; ".join(f"{n} {_fmt(r.get(n), r.std_error.get(n))}" for n in FIT_NAMES[model]),
         **{f"fit_{n}": float(np.asarray(r.get(n))) for n in RECOVERED if n in FIT_NAMES[model]},
-        **{f"rmse_{v}": rmse([fitted[v]], [refs[v][0]]) for v in scenes},
-        **{f"floor_{v}": rmse([refs[v][0]], [refs[v][1]]) for v in scenes},
+        **{f"rmse_{v}": e for v, e in d.rmse.items()},
+        **{f"floor_{v}": e for v, e in d.floors.items()},
     )
-    return row, r, fitted
+    return row, d
 
 
 # --- tables and figures ------------------------------------------------------------------
@@ -539,43 +488,41 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
-def cached_references(args, asset: str, views: dict, colour: str, roughness: float) -> dict:
-    """`references`, read from OUT/references/ with `--reuse-references` where an earlier
-    run wrote them (every run writes them)."""
-    n = len(next(iter(views.values())).strands.offsets) - 1
-    path = args.out / "references" / f"{asset}-{n}_{colour}_{roughness:g}_{args.size}_{args.spp}.npz"
-    if args.reuse_references and path.is_file():
-        with np.load(path) as f:
-            return {v: (f[f"{v}_0"], f[f"{v}_1"]) for v in views}
-    refs = references(views, colour, roughness, args.spp)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    np.savez_compressed(path, **{f"{v}_{i}": x[i] for v, x in refs.items() for i in (0, 1)})
-    return refs
+def reference_path(args, asset: str, base, colour: str, roughness: float) -> Path:
+    """Where a run writes the references (both seeds) of one target, for `--reuse-references`."""
+    n = len(base.strands.offsets) - 1
+    return args.out / "references" / f"{asset}-{n}_{colour}_{roughness:g}_{args.size}_{args.spp}.npz"
 
 
-def chosen_views(args) -> list[View]:
+def chosen_views(args) -> list:
     return [v for v in VIEWS if not args.quick or v.name in QUICK["views"]]
 
 
 def run_asset(args, asset: str, strands: int | None, colours, roughnesses, models) -> tuple:
     """Every fit of one asset: (CSV rows, FitResult JSONs, figure paths)."""
     base = asset_scene(asset, args.size, strands, args.data)
-    light_of = lights(base)
     chosen = chosen_views(args)
-    views = {v.name: view_scene(base, v, light_of) for v in chosen}
-    scenes = {m: {n: s.replace(shading=shading_model(m)) for n, s in views.items()} for m in models}
     print(f"{asset}: {len(base.strands.offsets) - 1} strands, {len(base.strands.points)} points", flush=True)
     rows, fits, figures = [], [], []
     for colour in colours:
         for roughness in roughnesses:
-            t0 = time.perf_counter()
-            refs = cached_references(args, asset, views, colour, roughness)
-            render_s = time.perf_counter() - t0
-            images = {}
+            path = reference_path(args, asset, base, colour, roughness)
+            refs = None  # the first model's distillation renders them, unless reused
+            if args.reuse_references and path.is_file():
+                with np.load(path) as f:
+                    refs = {v.name: (f[f"{v.name}_0"], f[f"{v.name}_1"]) for v in chosen}
+            images, render_s = {}, 0.0
             for m in models:
-                row, r, images[m] = fit_one(m, scenes[m], refs, args.max_steps)
+                row, d = distill_one(args, m, base, colour, roughness, refs)
+                if refs is None:
+                    refs = {v: (d.references[v], d.second[v]) for v in d.references}
+                    path.parent.mkdir(parents=True, exist_ok=True)
+                    np.savez_compressed(path, **{f"{v}_{i}": x[i] for v, x in refs.items() for i in (0, 1)})
+                    render_s = row["render_s"]
                 row.update(asset=asset, colour=colour, roughness=roughness, render_s=render_s)
                 rows.append(row)
+                images[m] = d.images
+                r = d.result
                 fits.append(dict(asset=asset, colour=colour, roughness=roughness, **r.to_json()))
                 print(
                     f"  {asset:<8} {colour:<6} {roughness:<4} {SHORT[m]:<11} "
@@ -586,7 +533,9 @@ def run_asset(args, asset: str, strands: int | None, colours, roughnesses, model
                     flush=True,
                 )
             for v in chosen:
-                if (asset, colour, roughness, v.name) in FIGURES or (args.quick and not v.train):
+                if refs is not None and (
+                    (asset, colour, roughness, v.name) in FIGURES or (args.quick and not v.train)
+                ):
                     path = args.out / "figures" / f"distill_{asset}_{colour}_{roughness:g}_{v.name}.png"
                     title = (
                         f"{asset}, {colour}, β_m {roughness:g}, {v.name} view ({args.size}², {args.spp} spp)"
@@ -598,7 +547,6 @@ def run_asset(args, asset: str, strands: int | None, colours, roughnesses, model
 
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
-    import hairjax as hj
     from hairjax.tools import write_csv, write_json, write_text
 
     strands = dict(FULL["strands"])

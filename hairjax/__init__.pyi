@@ -11,6 +11,10 @@ from ._animate import load_animation as load_animation
 from ._animate import write_frames as write_frames
 from ._cache import forget as forget
 from ._disagreement import renderer_band as renderer_band
+from ._distill import DISTILL_VIEWS as DISTILL_VIEWS
+from ._distill import Distillation as Distillation
+from ._distill import DistillView as DistillView
+from ._distill import distill as distill
 from ._errors import EmptyViewWarning as EmptyViewWarning
 from ._errors import HairFormatError as HairFormatError
 from ._errors import MissingDependency as MissingDependency
