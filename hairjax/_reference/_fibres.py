@@ -1,21 +1,29 @@
-"""The strands as Mitsuba fibres: control points and radii for `linearcurve` (docs/reference.md).
+"""The strands as Mitsuba fibres: control points and radii for `bsplinecurve` (docs/reference.md).
 
-A `linearcurve` passes through its control points, as hairjax's segments do (docs/model.md
-§1), and is a round tube whose radius is interpolated linearly between them. Its diameter
-is the ribbon's world width (§5):
+The fibres are cubic B-splines whose every control point is repeated three times: such a
+curve is the polyline itself (each of its pieces is a weighted mean of two consecutive
+points only, so it runs straight from one to the next), and so passes through the points,
+as hairjax's segments do (docs/model.md §1), with the radius linear between them. Not
+`linearcurve`, which is the same tube: Mitsuba 3.9.1's `linearcurve` sets only the
+shading frame's normal, so the frame's tangent, which the `hair` BSDF reads as the
+fibre's axis (its plugin says it assumes `bsplinecurve`'s frame), is an arbitrary
+direction about that normal. Measured on a fibre leaning 17° in the image plane: the
+frame's tangent is (0, 1, 0) and the BSDF's value off by a factor up to 2.5 lit from
+behind; `bsplinecurve`'s frame has the fibre's tangent (docs/reference.md, "Why
+B-splines").
 
+The diameter is the ribbon's world width (§5):
 - `width_units = "world"`: the strand's `width`, at every point;
 - `width_units = "pixels"`: w·D/f at a point of depth D (f the camera's focal length in
   pixels, §2), the world width a camera-facing ribbon needs there to be w pixels wide. The
   projected diameter 2r/D is then w/f along the whole segment (r and D are both linear along
   it), so the fibre covers the ribbon's pixels; its shadows and shading follow that width.
-
 What hairjax does not draw is left out: segments with an endpoint at depth ≤ `camera.near`
 (§2) and zero-length segments; a strand is cut where a segment is left out, and pieces of
-one point are dropped. Mitsuba closes each curve with a hemisphere of its radius beyond
-the end points, where a ribbon stops at them (§5), so each piece's two ends are pulled in
-along their segment by their radius (at most a third of the segment): the fibre then ends
-where the ribbon does.
+one point are dropped. The ends are Mitsuba's: past each end point a `bsplinecurve`
+reaches about half its radius further (measured: 1.6 px on a fibre 6 px wide, seen
+square-on), a share of a pixel on the 1–2 px fibres of a hair, where a ribbon stops at the
+point (docs/reference.md, "The mapping").
 """
 
 from __future__ import annotations
@@ -26,11 +34,12 @@ from .._geometry._projection import camera_view
 from .._scene._camera import Camera
 from .._scene._strands import Strands
 
-__all__ = ["fibre_curves", "curve_file_text", "END_TRIM_LIMIT"]
+__all__ = ["fibre_curves", "bspline_control_points", "curve_file_text", "REPEATS"]
 
-# An end is pulled in by its radius, but by no more than this fraction of its segment, so
-# that a short piece keeps a third of its length between its two pulled-in ends.
-END_TRIM_LIMIT = 1.0 / 3.0
+# Each point is a B-spline control point this many times: a cubic B-spline piece weighs
+# four consecutive control points, so with three copies of each, every piece holds at
+# most two distinct points and runs straight between them.
+REPEATS = 3
 
 
 def fibre_curves(strands: Strands, camera: Camera) -> tuple[np.ndarray, np.ndarray]:
@@ -61,21 +70,13 @@ def fibre_curves(strands: Strands, camera: Camera) -> tuple[np.ndarray, np.ndarr
     # Each piece's points: its first segment's start, then every segment's end.
     index = np.stack([np.where(starts, a, -1), b], axis=1).ravel()
     points = rows[index[index >= 0]]
-    return _trim_ends(points, offsets), offsets
+    return points, offsets
 
 
-def _trim_ends(points: np.ndarray, offsets: np.ndarray) -> np.ndarray:
-    """`points` with each piece's first and last point moved inwards along its segment by
-    its radius (at most END_TRIM_LIMIT of the segment), the radius interpolated to the new
-    point. Both moves are measured on the original points, so a one-segment piece keeps a
-    third of its length."""
-    out = points.copy()
-    for end, inner in ((offsets[:-1], offsets[:-1] + 1), (offsets[1:] - 1, offsets[1:] - 2)):
-        step = points[inner] - points[end]
-        length = np.linalg.norm(step[:, :3], axis=1)  # > 0: zero-length segments are cut
-        t = np.minimum(points[end, 3], END_TRIM_LIMIT * length) / length
-        out[end] = points[end] + t[:, None] * step
-    return out
+def bspline_control_points(points: np.ndarray, offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """`fibre_curves`' polylines as `bsplinecurve` control points: every row `REPEATS`
+    times (module docstring). Returns (control points, offsets) in `fibre_curves`' form."""
+    return np.repeat(points, REPEATS, axis=0), np.asarray(offsets) * REPEATS
 
 
 def curve_file_text(points: np.ndarray, offsets: np.ndarray) -> str:

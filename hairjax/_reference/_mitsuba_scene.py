@@ -15,7 +15,8 @@ Each part maps to its Mitsuba counterpart (docs/reference.md, "The mapping"):
   centre of the hair's bounding sphere: the two agree there;
 - occluder (§9, §13): a `sphere` or an `obj` mesh (the occluder's own triangles) with a
   `diffuse` BSDF of reflectance k;
-- strands: a `linearcurve` (`_fibres.py`) with the `hair` BSDF of `ReferenceSettings`;
+- strands: a `bsplinecurve` (`_fibres.py`: the polylines themselves, with the frame the
+  `hair` BSDF reads) with the `hair` BSDF of `ReferenceSettings`;
 - the integrator: `path` with `max_depth`.
 """
 
@@ -142,7 +143,7 @@ def mitsuba_scene(
         "light": light_emitter(scene),
     }
     if curve_file is not None:
-        out["hair"] = {"type": "linearcurve", "filename": str(curve_file), "bsdf": hair_bsdf(settings)}
+        out["hair"] = {"type": "bsplinecurve", "filename": str(curve_file), "bsdf": hair_bsdf(settings)}
     occluder = scene.occluder
     if occluder is not None:
         bsdf = {"type": "diffuse", "reflectance": _rgb(occluder.color)}

@@ -12,7 +12,7 @@ import numpy as np
 
 from .._scene._reference import ReferenceSettings
 from .._scene._scene import Scene
-from ._fibres import curve_file_text, fibre_curves
+from ._fibres import bspline_control_points, curve_file_text, fibre_curves
 from ._mitsuba_scene import mitsuba_scene, obj_text, sample_count
 from ._support import MITSUBA_VARIANT, check_supported, import_mitsuba
 
@@ -80,7 +80,7 @@ def reference_image(scene: Scene, *, spp: int | None = None, seed: int = 0) -> n
         curve_file = mesh_file = None
         if len(points):  # Mitsuba refuses an empty curve file; a scene with no fibre drawn has none
             curve_file = Path(folder) / "fibres.txt"
-            curve_file.write_text(curve_file_text(points, offsets))
+            curve_file.write_text(curve_file_text(*bspline_control_points(points, offsets)))
         occluder = scene.occluder
         if occluder is not None and occluder.kind == "mesh":
             mesh_file = Path(folder) / "occluder.obj"

@@ -112,7 +112,9 @@ def test_fibres_cover_the_ribbons_pixels():
 def test_a_point_lands_in_the_pixel_hairjax_projects_it_to():
     """Short thick strands centred on world points: the centroid of each fibre's coverage is
     the point's projection by hairjax's camera (docs/model.md §2), within 0.25 px, so in the
-    same pixel (the points are placed away from pixel edges)."""
+    same pixel (the points are placed away from pixel edges). Each coordinate is read across
+    strands that lie along the other: a fibre's ends are Mitsuba's (docs/reference.md, "The
+    mapping"), which shift a stub's centroid along it, by 0.35–0.45 px here."""
     view = hj.camera_view(CAMERA)
     targets = np.array([(14.3, 10.6), (50.7, 12.4), (31.5, 24.5), (9.6, 38.3), (55.4, 40.7)])
     depth = 4.2
@@ -126,12 +128,17 @@ def test_a_point_lands_in_the_pixel_hairjax_projects_it_to():
     ]
     xy, _ = view.project(np.array(points))
     np.testing.assert_allclose(xy, targets, atol=1e-9)  # hairjax's own projection
-    half = 1.5 * depth / view.focal * view.right  # 3 px long, along the image's x
-    strands = [[p - half, p, p + half] for p in points]
-    scene = _scene(strands, 3.0 * depth / view.focal, reference=hj.ReferenceSettings(max_depth=2, spp=SPP))
-    alpha = hj.reference_image(scene, seed=2)[..., 3]
-    for (x, y), box in zip(targets, _regions(CAMERA, strands, margin=3), strict=True):
-        centroid = _centroid(alpha[box]) + (box[1].start, box[0].start)
+    centroids = np.zeros_like(targets)
+    for axis, along in ((1, view.right), (0, view.up)):  # along x for y, along y for x
+        half = 1.5 * depth / view.focal * along  # 3 px long
+        strands = [[p - half, p, p + half] for p in points]
+        scene = _scene(
+            strands, 3.0 * depth / view.focal, reference=hj.ReferenceSettings(max_depth=2, spp=SPP)
+        )
+        alpha = hj.reference_image(scene, seed=2)[..., 3]
+        for i, box in enumerate(_regions(CAMERA, strands, margin=3)):
+            centroids[i, axis] = (_centroid(alpha[box]) + (box[1].start, box[0].start))[axis]
+    for (x, y), centroid in zip(targets, centroids, strict=True):
         assert np.linalg.norm(centroid - (x, y)) <= CENTROID_TOL, ((x, y), centroid)
         assert tuple(np.floor(centroid).astype(int)) == (int(x), int(y))
 
@@ -214,3 +221,36 @@ def test_a_lambertian_sphere_shows_the_closed_form(light):
     assert np.all(error <= tolerance[inside]), float((error / tolerance[inside]).max())
     lit, dark = inside & (cosine > 0.3), inside & (cosine == 0)
     assert lit.sum() > 200 and dark.sum() > 50  # both sides of the terminator are tested
+
+
+def test_the_hair_bsdf_reads_the_fibres_own_axis():
+    """The `hair` BSDF takes its shading frame's tangent for the fibre's axis. A fibre
+    leaning in the image plane and towards the eye, traced through the curve the reference
+    writes: at the hit, the frame's tangent is the fibre's direction, and the normal is
+    perpendicular to it (`linearcurve` in Mitsuba 3.9.1 fails this: its tangent is (0, 1, 0)
+    here, docs/reference.md, "Why B-splines")."""
+    import tempfile
+    from pathlib import Path
+
+    import mitsuba as mi
+
+    from hairjax._reference._fibres import bspline_control_points, curve_file_text, fibre_curves
+    from hairjax._reference._mitsuba_scene import mitsuba_scene
+    from hairjax._reference._render import _variant
+
+    axis = np.array([0.3, 1.0, -0.3]) / np.linalg.norm([0.3, 1.0, -0.3])
+    strands = hj.Strands.from_list([[tuple(-axis), tuple(axis)]], width=0.1).replace(width_units="world")
+    camera = hj.Camera(eye=(0.0, 0.0, 4.0), target=(0.0, 0.0, 0.0), width=32, height=32)
+    scene = hj.Scene(strands, camera=camera)
+    with tempfile.TemporaryDirectory() as folder, _variant(mi):
+        path = Path(folder) / "fibres.txt"
+        path.write_text(curve_file_text(*bspline_control_points(*fibre_curves(strands, camera))))
+        loaded = mi.load_dict(mitsuba_scene(mi, scene, hj.ReferenceSettings(), 16, path, None))
+        for x in (-0.02, 0.0, 0.03):  # across the fibre, through its middle
+            si = loaded.ray_intersect(mi.Ray3f(mi.Point3f(x, 0.0, 4.0), mi.Vector3f(0.0, 0.0, -1.0)))
+            assert si.is_valid()
+            tangent, normal = np.array(si.sh_frame.t), np.array(si.sh_frame.n)
+            # float32 geometry: the frame is the axis to ~1e-6; 1e-4 is far below the
+            # 0.27 that an axis-free frame is off by here.
+            assert abs(abs(tangent @ axis) - 1.0) < 1e-4, (x, tangent)
+            assert abs(normal @ axis) < 1e-4, (x, normal)

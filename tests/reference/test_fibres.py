@@ -1,13 +1,13 @@
 """The strands as Mitsuba curves (hairjax/_reference/_fibres.py): radii from the ribbons'
-world width, what hairjax does not draw left out, ends pulled in by their radius, and the
-curve file's text. NumPy only: no Mitsuba needed."""
+world width, what hairjax does not draw left out, the B-spline that is the polyline, and
+the curve file's text. NumPy only: no Mitsuba needed."""
 
 from __future__ import annotations
 
 import numpy as np
 
 import hairjax as hj
-from hairjax._reference._fibres import END_TRIM_LIMIT, curve_file_text, fibre_curves
+from hairjax._reference._fibres import bspline_control_points, curve_file_text, fibre_curves
 
 CAMERA = hj.Camera(eye=(0.0, 0.0, 5.0), target=(0.0, 0.0, 0.0), fov=40.0, width=64, height=48)
 
@@ -16,12 +16,13 @@ def _strands(points_list, width, units):
     return hj.Strands.from_list(points_list, width=width).replace(width_units=units)
 
 
-def test_world_width_is_the_diameter_and_ends_are_pulled_in_by_the_radius():
+def test_world_width_is_the_diameter_and_the_ends_are_the_strands():
     strands = _strands([[(0, 0, 0), (1, 0, 0), (2, 0, 0)]], 0.2, "world")
     points, offsets = fibre_curves(strands, CAMERA)
     np.testing.assert_array_equal(offsets, [0, 3])
     np.testing.assert_allclose(points[:, 3], 0.1)
-    np.testing.assert_allclose(points[:, :3], [(0.1, 0, 0), (1, 0, 0), (1.9, 0, 0)])
+    # A bsplinecurve has no end caps: the fibre ends where the ribbon does, at the points.
+    np.testing.assert_allclose(points[:, :3], [(0, 0, 0), (1, 0, 0), (2, 0, 0)])
 
 
 def test_pixel_width_becomes_w_d_over_f_at_each_point():
@@ -48,13 +49,39 @@ def test_what_hairjax_does_not_draw_is_left_out():
     )
     points, offsets = fibre_curves(strands, CAMERA)
     assert np.diff(offsets).tolist() == [3, 2, 3]  # the third strand cut around the eye
-    np.testing.assert_allclose(points[offsets[1] : offsets[2], 2], [0.005, 0.995])
+    np.testing.assert_allclose(points[offsets[1] : offsets[2], 2], [0.0, 1.0])
 
 
-def test_a_short_piece_keeps_a_third_between_its_ends():
-    strands = _strands([[(0, 0, 0), (0.3, 0, 0)]], 2.0, "world")  # radius 1 > the segment
-    points, _ = fibre_curves(strands, CAMERA)
-    np.testing.assert_allclose(points[:, 0], [0.3 * END_TRIM_LIMIT, 0.3 * (1 - END_TRIM_LIMIT)])
+def _uniform_cubic_bspline(control: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """The uniform cubic B-spline of `control` at parameters t in [0, len − 3): piece i
+    weighs control points i … i + 3 by the basis ((1−u)³, 3u³ − 6u² + 4, −3u³ + 3u² + 3u + 1,
+    u³)/6 (de Boor; the curve Mitsuba's bsplinecurve draws)."""
+    i = np.minimum(np.floor(t).astype(int), len(control) - 4)
+    u = (t - i)[:, None]
+    w = [(1 - u) ** 3, 3 * u**3 - 6 * u**2 + 4, -3 * u**3 + 3 * u**2 + 3 * u + 1, u**3]
+    return sum(wk * control[i + k] for k, wk in enumerate(w)) / 6.0
+
+
+def test_the_b_spline_is_the_polyline():
+    """Evaluated as a B-spline, the control points trace the polyline: through every point,
+    straight between them, the radius linear in the position along each segment."""
+    strands = _strands([[(0, 0, 0), (1, 0.5, 0), (1.5, 2, 1), (1, 3, 1)]], 0.2, "world")
+    points, offsets = fibre_curves(strands, CAMERA)
+    points[:, 3] = [0.1, 0.3, 0.2, 0.05]  # radii that change, to see them interpolated
+    control, control_offsets = bspline_control_points(points, offsets)
+    np.testing.assert_array_equal(control_offsets, 3 * offsets)
+    curve = _uniform_cubic_bspline(control, np.linspace(0.0, len(control) - 3, 2001))
+    np.testing.assert_allclose(curve[0], points[0])
+    np.testing.assert_allclose(curve[-1], points[-1])
+    for p in points:  # every point lies on the curve
+        assert np.min(np.linalg.norm(curve - p, axis=1)) < 1e-3
+    for c in curve:  # every curve point lies on a segment, its radius interpolated there
+        a, b = points[:-1], points[1:]
+        step = b[:, :3] - a[:, :3]
+        s = np.clip(np.sum((c[:3] - a[:, :3]) * step, axis=1) / np.sum(step * step, axis=1), 0, 1)
+        near = a + s[:, None] * (b - a)
+        k = np.argmin(np.linalg.norm(near[:, :3] - c[:3], axis=1))
+        np.testing.assert_allclose(c, near[k], atol=1e-12)
 
 
 def test_the_curve_file_has_a_line_per_point_and_a_blank_line_between_curves():
