@@ -1,9 +1,11 @@
 """The strands as Mitsuba fibres: control points and radii for `bsplinecurve` (docs/reference.md).
 
-The fibres are cubic B-splines whose every control point is repeated three times: such a
-curve is the polyline itself (each of its pieces is a weighted mean of two consecutive
-points only, so it runs straight from one to the next), and so passes through the points,
-as hairjax's segments do (docs/model.md §1), with the radius linear between them. Not
+The fibres are cubic B-splines whose every control point is repeated three times, the
+outer copies moved 1 % of the way towards the neighbouring points. Such a curve is the
+polyline, as hairjax's segments are (docs/model.md §1), with the radius linear along it:
+away from the corners each piece of the spline weighs points of one segment only, so it
+runs straight along it; it rounds each corner, off the polyline by at most 0.2 % of a
+segment (`tests/reference/test_fibres.py`). Not
 `linearcurve`, which is the same tube: Mitsuba 3.9.1's `linearcurve` sets only the
 shading frame's normal, so the frame's tangent, which the `hair` BSDF reads as the
 fibre's axis (its plugin says it assumes `bsplinecurve`'s frame), is an arbitrary
@@ -34,12 +36,18 @@ from .._geometry._projection import camera_view
 from .._scene._camera import Camera
 from .._scene._strands import Strands
 
-__all__ = ["fibre_curves", "bspline_control_points", "curve_file_text", "REPEATS"]
+__all__ = ["fibre_curves", "bspline_control_points", "curve_file_text", "REPEATS", "SPREAD"]
 
 # Each point is a B-spline control point this many times: a cubic B-spline piece weighs
 # four consecutive control points, so with three copies of each, every piece holds at
 # most two distinct points and runs straight between them.
 REPEATS = 3
+# How far the outer copies move towards the neighbouring points: exact copies make the
+# curve's derivative 0 at the points, where Mitsuba 3.9.1 crashed (a segmentation fault in
+# `render`: Sintel's side view of experiment 14 at sample seed 1). Moved, a piece near a
+# corner holds points of two segments, so the curve rounds it, off the polyline by at most
+# a quarter of this share of a segment, and is straight elsewhere.
+SPREAD = 0.01
 
 
 def fibre_curves(strands: Strands, camera: Camera) -> tuple[np.ndarray, np.ndarray]:
@@ -74,9 +82,16 @@ def fibre_curves(strands: Strands, camera: Camera) -> tuple[np.ndarray, np.ndarr
 
 
 def bspline_control_points(points: np.ndarray, offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """`fibre_curves`' polylines as `bsplinecurve` control points: every row `REPEATS`
-    times (module docstring). Returns (control points, offsets) in `fibre_curves`' form."""
-    return np.repeat(points, REPEATS, axis=0), np.asarray(offsets) * REPEATS
+    """`fibre_curves`' polylines as `bsplinecurve` control points (module docstring): each
+    point `REPEATS` times, the first copy moved `SPREAD` of the way towards the point before
+    it and the last towards the point after it (a piece's end points stay). Returns
+    (control points, offsets) in `fibre_curves`' form."""
+    index = np.arange(len(points))
+    piece = np.searchsorted(offsets, index, side="right") - 1
+    before = np.maximum(index - 1, offsets[piece])
+    after = np.minimum(index + 1, offsets[piece + 1] - 1)
+    copies = [points + SPREAD * (points[before] - points), points, points + SPREAD * (points[after] - points)]
+    return np.stack(copies, axis=1).reshape(-1, points.shape[1]), np.asarray(offsets) * REPEATS
 
 
 def curve_file_text(points: np.ndarray, offsets: np.ndarray) -> str:

@@ -46,10 +46,12 @@ def scene(tilt: float, model_tilt: float, light=(-0.3, -0.4, -1.0)) -> hj.Scene:
 
 
 def test_front_lit_fibres_match_mitsuba_and_the_tilt_sign():
-    """Mean RGB over the fibres' pixels, model ÷ Mitsuba, lit from the front: 1.02 measured
-    at 96², 256 spp (docs/model.md §19); within 6 % here, the bound covering 64 spp noise
-    (the mean over ~500 pixels: < 1 %) and the model's approximations (Karis's Gaussian
-    M_p, far-field N_p). A tilt of the wrong sign gives 1.24 at 96²: the test tells them apart."""
+    """Mean RGB over the fibres' pixels, model ÷ Mitsuba, lit from the front: 1.00–1.02
+    measured at 96², 256 spp (experiments/20_fibre_against_mitsuba.py, docs/model.md §19),
+    0.94–0.99 at this test's 48² (the same at 256 spp and either seed: at 1.5 px wide the
+    fibres' edge pixels weigh more). The bound, 8 %, holds those and 64 spp noise (the mean
+    over ~500 pixels: < 1 %). A tilt of the wrong sign gives 1.24 at 96²: the test tells
+    them apart."""
     right = scene(3.0, 3.0)
     reference = hj.reference_image(right, spp=64, seed=0)
     covered = np.asarray(hj.render(right))[..., 3] > 0.5
@@ -59,7 +61,7 @@ def test_front_lit_fibres_match_mitsuba_and_the_tilt_sign():
         image = np.asarray(hj.render(scene(3.0, model_tilt)))
         return image[covered, :3].mean(axis=0) / mean_ref
 
-    assert np.all(np.abs(ratio(3.0) - 1.0) < 0.06), ratio(3.0)
+    assert np.all(np.abs(ratio(3.0) - 1.0) < 0.08), ratio(3.0)
     # the wrong sign: 1.19, 1.15, 1.03 at 48² (blue, absorbed most, carries the least R)
     assert ratio(-3.0).mean() > 1.09, ratio(-3.0)
 
