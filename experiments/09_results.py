@@ -88,7 +88,7 @@ def _table(rows: list[dict], columns: list[str]) -> str:
 
 def distillation_summary(docs: Path) -> str:
     """docs/physically_based.md §1's per-view table: the real-time models fitted to Mitsuba's
-    hair (experiments/14_distill.py, whose full run takes 25 minutes and is not rerun here),
+    hair (experiments/14_distill.py, whose full run takes 35 minutes and is not rerun here),
     or a pointer to the page where it has no such table (a fresh `--docs` folder)."""
     page = docs / "physically_based.md"
     lines = page.read_text().splitlines() if page.exists() else []
@@ -344,13 +344,14 @@ projection is the default:
 
 ## 6. The real-time models against physically based hair
 
-Kajiya-Kay (seed and mirror cone) and Scheuermann fitted by `hj.fit` to Mitsuba 3's hair
-BSDF (Chiang et al. 2016, docs/reference.md) on the same strands: 3 assets × 4 melanin
-colours × 2 longitudinal roughnesses, three training views and one held-out view and light,
-each RMSE beside the reference's own noise floor (two sample seeds). Quoted from
-docs/physically_based.md §1, which has the full table, the figures (target | fit |
-residual), where the models cannot follow (back light through TT, multiple scattering in
-light hair) and its command (`python experiments/14_distill.py --docs docs`, 25 minutes):
+Kajiya-Kay (seed and mirror cone), Scheuermann and Marschner (with and without dual
+scattering) fitted by `hj.distill` to Mitsuba 3's hair BSDF (Chiang et al. 2016,
+docs/reference.md) on the same strands: 3 assets × 4 melanin colours × 2 longitudinal
+roughnesses, three training views and one held-out view and light, each RMSE beside the
+reference's own noise floor (two sample seeds). Quoted from docs/physically_based.md §1,
+which has the full table, the figures (target | fit | residual), where the models cannot
+follow (back light through TT, multiple scattering in light hair) and its command (`python
+experiments/14_distill.py --docs docs`, 34 minutes):
 
 {distillation_summary(docs)}
 
