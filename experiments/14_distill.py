@@ -169,7 +169,6 @@ def asset_scene(asset: str, size: int, strands: int | None, data: Path):
     """The asset's scene as the real-time side renders it: its camera at `size`², its key
     light, opaque white 1-px strands (at most `strands` of them, every k-th), shading and
     ambient at the start, no ambient term."""
-
     if asset == "furball":  # under the default scene's camera and light, as experiments/03
         scene = hj.Scene(
             hj.furball(strands or 1000, 16, seed=1),
@@ -203,7 +202,6 @@ def asset_scene(asset: str, size: int, strands: int | None, data: Path):
 
 
 def shading_model(model: str):
-
     start = STARTS[model]
     if model == "scheuermann":
         maps = hj.ScheuermannMaps(shift_noise=0.0, mask_noise=0.0)

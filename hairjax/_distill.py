@@ -121,9 +121,9 @@ class Distillation:
     - `references`: view name → the reference (sampler seed `seed`), `float32[H, W, 4]`.
     - `images`: view name → the fitted model's render of that view.
     - `rmse`: view name → the fitted render's RMSE against its reference.
-    - `floors`: view name → the noise floor, the RMSE between the reference and the same
-      at the next seed, where that second render was made (`distill(noise_floor=True)`, or
-      a pair given in `references`); empty otherwise.
+    - `second`: view name → the reference at the next seed, where it was made
+      (`distill(noise_floor=True)`, or a pair given in `references`); empty otherwise.
+    - `floors`: view name → the noise floor, the RMSE between `references` and `second`.
     """
 
     model: AbstractShadingModel
@@ -155,7 +155,7 @@ class Distillation:
         return image_rmse([self.references[n] for n in names], [self.second[n] for n in names])
 
 
-def _model_of(scene: Scene, model: str | AbstractShadingModel) -> AbstractShadingModel:
+def _model_of(model: str | AbstractShadingModel) -> AbstractShadingModel:
     if isinstance(model, AbstractShadingModel):
         return model
     if not isinstance(model, str):
@@ -275,7 +275,7 @@ def distill(
     from ._render import render
 
     views = _check_views(views)
-    start_model = _model_of(scene, model)
+    start_model = _model_of(model)
     names = tuple(start_model.fittable) if fit_names is None else tuple(fit_names)
     if references is None:
         settings = _reference_settings(scene, eumelanin, pheomelanin, roughness, azimuthal_roughness, spp)

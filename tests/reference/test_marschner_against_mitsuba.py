@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers import load_experiment
 
 import hairjax as hj
 
@@ -16,33 +17,15 @@ pytest.importorskip(
 SIZE = 48
 
 
-def fibres() -> hj.Strands:
-    """Six separated, leaning, gently curved fibres 0.06 world units wide (3 px)."""
-    t = np.linspace(-1.0, 1.0, 24)
-    pieces = [
-        np.stack([x + (i - 2.5) * 0.15 * t, t, 0.2 * np.sin(1.5 * t + i)], axis=1)
-        for i, x in enumerate(np.linspace(-0.8, 0.8, 6))
-    ]
-    offsets = np.arange(7) * len(t)
-    return hj.Strands(np.concatenate(pieces), offsets, alpha=1.0, width=0.06, width_units="world")
+# The fibres, camera, light and blonde hair of experiments/20_fibre_against_mitsuba.py,
+# whose 96² table the bounds below quote: one geometry for the measurement and the test.
+FIBRES = load_experiment("20_fibre_against_mitsuba")
 
 
-def scene(tilt: float, model_tilt: float, light=(-0.3, -0.4, -1.0)) -> hj.Scene:
-    eu, pheo, beta = 0.3, 0.0, 0.2  # blonde: the lobes' colours differ most
-    return hj.Scene(
-        strands=fibres(),
-        camera=hj.Camera(eye=(0.0, 0.0, 3.5), target=(0.0, 0.0, 0.0), fov=40.0, width=SIZE, height=SIZE),
-        light=hj.Light(direction=light),
-        shading=hj.Marschner(
-            hj.MarschnerParams(
-                eumelanin=eu, pheomelanin=pheo, longitudinal_roughness=beta, tilt=model_tilt, kappa=0.0
-            )
-        ),
-        shadows=hj.Shadows("none"),
-        reference=hj.ReferenceSettings(
-            eumelanin=eu, pheomelanin=pheo, longitudinal_roughness=beta, scale_tilt=tilt, max_depth=2
-        ),
-    )
+def scene(model_tilt: float, light: str = "front") -> hj.Scene:
+    """The experiment's six fibres, blonde (the lobes' colours differ most), β_m 0.2, the
+    scales' tilt 3° in the reference and `model_tilt` in the model, lit by its `light`."""
+    return FIBRES.scene(FIBRES.Case(light, "blonde", 0.2, model_tilt), SIZE, "karis")
 
 
 def test_front_lit_fibres_match_mitsuba_and_the_tilt_sign():
@@ -52,13 +35,13 @@ def test_front_lit_fibres_match_mitsuba_and_the_tilt_sign():
     fibres' edge pixels weigh more). The bound, 8 %, holds those and 64 spp noise (the mean
     over ~500 pixels: < 1 %). A tilt of the wrong sign gives 1.24 at 96²: the test tells
     them apart."""
-    right = scene(3.0, 3.0)
+    right = scene(3.0)
     reference = hj.reference_image(right, spp=64, seed=0)
     covered = np.asarray(hj.render(right))[..., 3] > 0.5
     mean_ref = reference[covered, :3].mean(axis=0)
 
     def ratio(model_tilt):
-        image = np.asarray(hj.render(scene(3.0, model_tilt)))
+        image = np.asarray(hj.render(scene(model_tilt)))
         return image[covered, :3].mean(axis=0) / mean_ref
 
     assert np.all(np.abs(ratio(3.0) - 1.0) < 0.08), ratio(3.0)
@@ -72,7 +55,7 @@ def test_back_lit_fibres_match_mitsuba():
     closed forms; Chiang's far field 1.15; docs/model.md §19). The bound, 1.35, leaves
     that and 64 spp noise; the reference with the fibres' axis lost (a `linearcurve` in
     Mitsuba 3.9.1, docs/reference.md "Why B-splines") gives 2.7, which this tells apart."""
-    lit = scene(3.0, 3.0, light=(0.3, -0.4, 1.0))
+    lit = scene(3.0, light="behind")
     reference = hj.reference_image(lit, spp=64, seed=0)
     image = np.asarray(hj.render(lit))
     covered = image[..., 3] > 0.5
