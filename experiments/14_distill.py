@@ -49,6 +49,12 @@ squared RMSE, so floor/√2 is the share of a fit's RMSE that no model can remov
     python experiments/14_distill.py --docs docs    # the full sweep (docs/physically_based.md §1)
     python experiments/14_distill.py --quick        # tiny, for the test suite
     python experiments/14_distill.py --assets furball --colours brown --models kajiya-kay
+    # the recovery (docs/physically_based.md §3): only the pigments, β_m and κ fitted
+    python experiments/14_distill.py --assets furball,ponytail \
+        --models marschner-dual-pigments,marschner-pigments
+    # which part of the light is missing: references of direct light only (§3)
+    python experiments/14_distill.py --assets furball,ponytail --max-depth 2 \
+        --models marschner,marschner-pigments
 
 Writes DIR/distill.csv (one row per fit), DIR/distill.md (the tables), DIR/fits.json
 (`FitResult.to_json()` per fit) and DIR/figures/*.png (target | fit | residual for each
@@ -104,21 +110,31 @@ MARSCHNER_NAMES = (
     "tilt",
     *SHARED_NAMES,
 )
+# The recovery fits (docs/physically_based.md §3): only the reference's own hair parameters
+# are free (and κ, the opacity maps' density, which has no counterpart in the fibres); the
+# lobe weights stay at their physical 1 and the tilt at the reference's 2°, so the
+# brightness and the colour must come from the pigments and β_m.
+PIGMENT_NAMES = ("eumelanin", "pheomelanin", "longitudinal_roughness", *SHARED_NAMES)
 FIT_NAMES = {
     "kajiya-kay": KAJIYA_KAY_NAMES,
     "kajiya-kay-mirror": KAJIYA_KAY_NAMES,
     "scheuermann": SCHEUERMANN_NAMES,
     "marschner": MARSCHNER_NAMES,
     "marschner-dual": MARSCHNER_NAMES,
+    "marschner-pigments": PIGMENT_NAMES,
+    "marschner-dual-pigments": PIGMENT_NAMES,
 }
 
-MODELS = tuple(FIT_NAMES)
+# The sweep's models by default; the pigment-only fits are asked for by name (`--models`).
+MODELS = tuple(m for m in FIT_NAMES if not m.endswith("-pigments"))
 SHORT = {
     "kajiya-kay": "KK",
     "kajiya-kay-mirror": "KK mirror",
     "scheuermann": "Scheuermann",
     "marschner": "Marschner",
     "marschner-dual": "Marschner dual",
+    "marschner-pigments": "Marschner pigments",
+    "marschner-dual-pigments": "Marschner dual pigments",
 }
 # Where every fit starts (ambient 0: the reference has no ambient light).
 STARTS = {
@@ -149,7 +165,9 @@ STARTS = {
         ambient=0.0,
     ),
 }
-STARTS["marschner-dual"] = STARTS["marschner"]  # the same start, with dual scattering on
+# The same start, with dual scattering on, or with only the pigments and β_m fitted.
+for _m in ("marschner-dual", "marschner-pigments", "marschner-dual-pigments"):
+    STARTS[_m] = STARTS["marschner"]
 
 
 # The views are hj.distill's: front, side (the camera turned 60°) and back-lit train;
@@ -207,7 +225,7 @@ def shading_model(model: str):
         maps = hj.ScheuermannMaps(shift_noise=0.0, mask_noise=0.0)
         return hj.Scheuermann(hj.ScheuermannParams(**start), maps)
     if model.startswith("marschner"):
-        scattering = "dual" if model == "marschner-dual" else "none"
+        scattering = "dual" if model.startswith("marschner-dual") else "none"
         return hj.Marschner(hj.MarschnerParams(**start), multiple_scattering=scattering)
     kind = hj.KajiyaKayMirror if model == "kajiya-kay-mirror" else hj.KajiyaKay
     return kind(hj.ShadingParams(**start))
@@ -409,6 +427,8 @@ def figure(path: Path, target, fitted: dict, title: str) -> None:
 # --- the sweep ---------------------------------------------------------------------------
 
 FULL = dict(size=96, spp=256, strands={"furball": 1000, "ponytail": None, "sintel": None})
+# The reference's longest path: 16 keeps the light scattered between fibres (docs/reference.md).
+DEFAULT_MAX_DEPTH = 16
 QUICK = dict(
     size=40,
     spp=16,
@@ -463,6 +483,13 @@ def _parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--strands", type=int, default=None, help="at most this many strands per asset")
     p.add_argument("--max-steps", type=int, default=100)
+    p.add_argument(
+        "--max-depth",
+        type=int,
+        default=DEFAULT_MAX_DEPTH,
+        help=f"the reference's longest path (default {DEFAULT_MAX_DEPTH}); 2 is direct light only, "
+        "one scattering event per path, for separating the light scattered between fibres",
+    )
     p.add_argument("--data", type=Path, default=ROOT.parent / "shared" / "data", help="shared/data")
     p.add_argument("--out", type=Path, default=Path("out/distill"))
     p.add_argument(
@@ -489,7 +516,9 @@ def _parser() -> argparse.ArgumentParser:
 def reference_path(args, asset: str, base, colour: str, roughness: float) -> Path:
     """Where a run writes the references (both seeds) of one target, for `--reuse-references`."""
     n = len(base.strands.offsets) - 1
-    return args.out / "references" / f"{asset}-{n}_{colour}_{roughness:g}_{args.size}_{args.spp}.npz"
+    depth = "" if args.max_depth == DEFAULT_MAX_DEPTH else f"_depth{args.max_depth}"
+    name = f"{asset}-{n}_{colour}_{roughness:g}_{args.size}_{args.spp}{depth}.npz"
+    return args.out / "references" / name
 
 
 def chosen_views(args) -> list:
@@ -499,6 +528,7 @@ def chosen_views(args) -> list:
 def run_asset(args, asset: str, strands: int | None, colours, roughnesses, models) -> tuple:
     """Every fit of one asset: (CSV rows, FitResult JSONs, figure paths)."""
     base = asset_scene(asset, args.size, strands, args.data)
+    base = base.replace(reference=hj.ReferenceSettings(max_depth=args.max_depth))
     chosen = chosen_views(args)
     print(f"{asset}: {len(base.strands.offsets) - 1} strands, {len(base.strands.points)} points", flush=True)
     rows, fits, figures = [], [], []
@@ -557,7 +587,7 @@ def main(argv=None) -> int:
     assets = _choices(args.assets, ASSETS, "asset")
     colours = _choices(args.colours, tuple(COLOURS), "colour")
     roughnesses = [float(x) for x in args.roughnesses.split(",")]
-    models = _choices(args.models, MODELS, "model")
+    models = _choices(args.models, tuple(FIT_NAMES), "model")
     print(
         f"distill: {', '.join(assets)} × {', '.join(colours)} × β_m {', '.join(map(str, roughnesses))} "
         f"× {', '.join(models)}; {args.size}², {args.spp} spp, {hj.__version__}",
@@ -572,7 +602,7 @@ def main(argv=None) -> int:
 
     total = time.perf_counter() - started
     header = (
-        f"{', '.join(assets)}; {args.size}², {args.spp} spp (Mitsuba `max_depth` 16); "
+        f"{', '.join(assets)}; {args.size}², {args.spp} spp (Mitsuba `max_depth` {args.max_depth}); "
         f"training views {', '.join(v.name for v in chosen_views(args) if v.train)}, held out: "
         f"{', '.join(v.name for v in chosen_views(args) if not v.train)}; total {total:.0f} s"
     )
