@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import csv
 import math
+from pathlib import Path
 
 import pytest
 from helpers import load_experiment
@@ -55,6 +56,27 @@ def test_distill_quick_fits(quick_run, capsys):
 def test_fit_names_share_one_tuple():
     """A name every model fits (the strand opacity, once hj.fit takes it) is one edit."""
     module = load_experiment("14_distill")
-    assert set(module.FIT_NAMES) == set(module.MODELS) == set(module.STARTS)
+    assert set(module.FIT_NAMES) == set(module.STARTS) == set(module.SHORT)
     for names in module.FIT_NAMES.values():
         assert names[-len(module.SHARED_NAMES) :] == module.SHARED_NAMES
+
+
+def test_the_recovery_fits_only_the_hairs_parameters_and_is_asked_for_by_name():
+    """The pigment-only models (docs/physically_based.md §3) hold the lobe weights and the
+    tilt: they are not in the default sweep, and a direct-light run keeps its references
+    apart from the full ones."""
+    module = load_experiment("14_distill")
+    pigments = [m for m in module.FIT_NAMES if m.endswith("-pigments")]
+    assert pigments and not set(pigments) & set(module.MODELS)
+    for m in pigments:
+        assert set(module.FIT_NAMES[m]) == {"eumelanin", "pheomelanin", "longitudinal_roughness", "kappa"}
+    assert module.shading_model("marschner-dual-pigments").multiple_scattering == "dual"
+    assert module.shading_model("marschner-pigments").multiple_scattering == "none"
+    base = module.asset_scene("furball", 16, 10, Path("."))
+    paths = {
+        depth: module.reference_path(
+            module._parser().parse_args(["--max-depth", str(depth)]), "furball", base, "red", 0.2
+        )
+        for depth in (2, 16)
+    }
+    assert paths[2] != paths[16] and paths[2].name.endswith("_depth2.npz")
