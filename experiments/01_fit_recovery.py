@@ -106,7 +106,12 @@ def main(argv=None) -> int:
                 for solver in solvers:
                     start = time.perf_counter()
                     r = hj.fit(
-                        scene, noisy, init=START, solver=solver, max_steps=args.max_steps, masks=[mask]
+                        scene,
+                        noisy,
+                        init=START,
+                        solver=hj.fit_solvers()[solver],
+                        max_steps=args.max_steps,
+                        masks=[mask],
                     )
                     errors = relative_errors(r.params, truth)
                     # Weakly identifiable: the fit's own standard error exceeds half the

@@ -57,7 +57,7 @@ def params_of(v) -> hj.ShadingParams:
 
 
 def staged(scene, target):
-    r = hj.fit(scene, target, init=START, solver="lm")
+    r = hj.fit(scene, target, init=START)  # Levenberg-Marquardt
     return r.time_s, r.steps, worst_error(r.params)
 
 

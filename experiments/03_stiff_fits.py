@@ -202,7 +202,7 @@ def run_fit(
             target,
             fit=case.fit,
             init=start,
-            solver=solver,
+            solver=hj.fit_solvers()[solver],
             max_steps=max_steps,
             separable=separable,
             progress=lambda step, loss, t: elapsed.append(t),

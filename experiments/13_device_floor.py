@@ -12,13 +12,12 @@ uint64 key and sorts keys alone) and keep the covered raster candidates (a compa
 about 2.3 F candidates to F). Those two XLA primitives, plus today's opacity and shading
 stages (already JAX), bound such a set-up's full render from below. Medians of
 `--repeats` runs after a warm-up. "Today's render" is the host set-up's
-(`HAIRJAX_SETUP=host`, set here); experiment 19 times the set-up built on this floor.
+(`placement="host"`, set here); experiment 19 times the set-up built on this floor.
 """
 
 from __future__ import annotations
 
 import argparse
-import os
 import statistics
 import time
 
@@ -51,13 +50,12 @@ def main(argv=None) -> int:
     p.add_argument("--repeats", type=int, default=3)
     p.add_argument("--no-gl", action="store_true", help="leave out the GL renderer")
     args = p.parse_args(argv)
-    os.environ[hj.SETUP_PLACEMENT] = "host"  # the compiled loops', against XLA's primitives
     scene = bench_scene(dict(strands=args.strands, size=args.size, maps=64, map_resolution=256))
 
     rows = {}
     stages = []
     for _ in range(args.repeats + 1):  # the first run compiles
-        _, timings = hj.render_profiled(scene)
+        _, timings = hj.render_profiled(scene, placement="host")  # the compiled loops, against XLA's
         stages.append(timings)
     stages = stages[1:]
 
@@ -74,7 +72,7 @@ def main(argv=None) -> int:
 
         rows["GL render"] = median_time(lambda: render_gl(scene), args.repeats)
 
-    pixel = np.asarray(hj.prepare(scene).frag_pixel, np.uint32)
+    pixel = np.asarray(hj.prepare(scene, placement="host").frag_pixel, np.uint32)
     n = pixel.size
     rng = np.random.default_rng(0)
     # The set-up's pixel keys in raster order (segment after segment): the sort's real input.

@@ -31,8 +31,9 @@ Runtime: on the shared 2-core CPU (llvmpipe for GL) `--quick` (2k and 4k strands
 192², TressFX at 320 × 180) about 30 s; `--bench 20000x512 --skip tressfx` (with the fit)
 45 s; `--bench 100000x1024 --skip fit --repeats 2` (with TressFX at 1280 × 720) 80 s. The
 default sizes were planned to take under 3 minutes on a 16-core machine with an H200,
-most of it the set-up at 100k / 1024² and XLA's compilation. `HAIRJAX_SETUP=host` times
-the host's set-up on a machine whose default device is a GPU (docs/model.md §5).
+most of it the set-up at 100k / 1024² and XLA's compilation. On a machine whose default
+device is a GPU, each fur ball is timed again with the set-up on the host
+(`placement="host"`, docs/model.md §5); `HAIRJAX_SETUP=host` makes the host the default.
 """
 
 from __future__ import annotations
@@ -162,7 +163,7 @@ def machine_info() -> dict:
         "device_kind": jax.devices()[0].device_kind,
         "x64": bool(jax.config.jax_enable_x64),  # type: ignore[attr-defined]
         "numpy_version": np.__version__,
-        "setup_placement": "device" if hj.setup_on_device() else "host",  # HAIRJAX_SETUP, docs/model.md §5
+        "setup_placement": hj.default_placement(),  # HAIRJAX_SETUP's default, docs/model.md §5
     }
     for name in (
         "jaxlib",
@@ -191,22 +192,22 @@ def machine_info() -> dict:
 # --- timing --------------------------------------------------------------------------------
 
 
-def time_jax(scene, repeats: int, label: str) -> dict:
+def time_jax(scene, repeats: int, label: str, placement=None) -> dict:
     """`hairjax bench`'s JAX runs: `render_profiled` (forgets the scene's stages, then times
     the set-up, the opacity stage and the shading stage, blocking between them); one warm-up
-    run, then `repeats`."""
+    run, then `repeats`; the set-up at `placement` (None: the default)."""
     progress(f"{label}: JAX warm-up render (compiles)")
     t0 = time.perf_counter()
-    image, timings = hj.render_profiled(scene)
+    image, timings = hj.render_profiled(scene, placement=placement)
     warm_up = time.perf_counter() - t0
     runs: dict[str, list[float]] = {}
     for i in range(repeats):
         del image  # two runs' arrays never coexist
-        image, timings = hj.render_profiled(scene)
+        image, timings = hj.render_profiled(scene, placement=placement)
         for key, value in timings.items():
             runs.setdefault(key, []).append(value)
         progress(f"{label}: JAX run {i + 1}/{repeats}: {timings['total']:.3f} s")
-    setup = hj.prepare(scene)  # the last run's, cached
+    setup = hj.prepare(scene, placement=placement)  # the last run's, cached
     shadow = getattr(setup, "shadow", None)
     coverage = getattr(shadow, "frag_coverage", None)
     return {
@@ -299,19 +300,16 @@ def jax_and_gl(out: dict, scene, repeats: int, label: str, save, shading: bool) 
 
 def bench_case(out: dict, strands: int, size: int, sizes: dict, repeats: int, save, host_too: bool) -> None:
     """One fur ball: JAX (set-up where JAX runs), GL, and with `host_too` on an accelerator
-    JAX again with the set-up on the host (`HAIRJAX_SETUP=host`, docs/model.md §5)."""
+    JAX again with the set-up on the host (`placement="host"`, docs/model.md §5)."""
     label = f"{count(strands)} @ {size}²"
     scene = bench_scene(
         dict(strands=strands, size=size, maps=sizes["maps"], map_resolution=sizes["map_resolution"])
     )
     out.update(strands=strands, size=size, segments=int(len(scene.strands.segments())))
     jax_and_gl(out, scene, repeats, label, save, shading=True)
-    if host_too and hj.setup_on_device():
-        try:
-            with hj.setup_placed("host"):
-                out["jax_host_setup"] = time_jax(scene.replace(), repeats, f"{label}, set-up on the host")
-        finally:
-            hj.forget(scene)
+    if host_too and hj.default_placement() == "device":
+        hj.forget(scene)  # the device set-up's arrays, before the host's
+        out["jax_host_setup"] = time_jax(scene.replace(), repeats, f"{label}, set-up on the host", "host")
         save()
 
 
@@ -328,7 +326,7 @@ def fit_case(strands: int, size: int, repeats: int) -> dict:
 
     def one() -> dict:
         t0 = time.perf_counter()
-        r = hj.fit(scene, target, init=START, solver="lm")
+        r = hj.fit(scene, target, init=START)  # Levenberg-Marquardt
         wall = time.perf_counter() - t0
         err = max(
             float(

@@ -11,7 +11,7 @@ For each scene of `experiments/scenes/` and the built-in default scene it prints
 largest absolute difference of the RGBA images: default device against the CPU (docs/model.md
 holds them to 1e-5: float32 arithmetic in another order, and a GPU's scatter-add in no
 fixed order); the set-up's rasters and grouping as compiled loops on the host
-(`HAIRJAX_SETUP=host`) against XLA programs on the default device (`=device`, docs/model.md
+(`placement="host"`) against XLA programs on the default device (`"device"`, docs/model.md
 §5; on a machine without an accelerator that device is the CPU, which runs the programs a
 GPU would), with whether their camera fragments are the same and, with `--repeats N`, the
 median time of N warm renders of each; and GL against the default device's JAX (the bands
@@ -51,17 +51,16 @@ def placed_render(path: Path, where: str, repeats: int):
     """(image, camera fragments as NumPy, median seconds of `repeats` warm renders or None)
     with the set-up placed `where`; every render on a fresh scene (the set-up is cached
     per scene object)."""
-    with hj.setup_placed(where):
-        scene = hj.load_scene(path)
-        image = np.asarray(hj.render(scene))  # the warm-up: compiles
-        setup = hj.prepare(scene)
-        fragments = tuple(np.asarray(x) for x in (setup.frag_pixel, setup.frag_i0, setup.frag_t))
-        seconds = []
-        for _ in range(repeats):
-            again = scene.replace()
-            start = time.perf_counter()
-            np.asarray(hj.render(again))
-            seconds.append(time.perf_counter() - start)
+    scene = hj.load_scene(path)
+    image = np.asarray(hj.render(scene, placement=where))  # the warm-up: compiles
+    setup = hj.prepare(scene, placement=where)
+    fragments = tuple(np.asarray(x) for x in (setup.frag_pixel, setup.frag_i0, setup.frag_t))
+    seconds = []
+    for _ in range(repeats):
+        again = scene.replace()
+        start = time.perf_counter()
+        np.asarray(hj.render(again, placement=where))
+        seconds.append(time.perf_counter() - start)
     return image, fragments, statistics.median(seconds) if seconds else None
 
 

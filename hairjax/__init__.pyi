@@ -22,14 +22,14 @@ from ._errors import SceneError as SceneError
 from ._errors import SceneTooLarge as SceneTooLarge
 from ._explore import Explorer as Explorer
 from ._explore import explore as explore
+from ._fit import BFGS as BFGS
 from ._fit import FitError as FitError
 from ._fit import FitResult as FitResult
+from ._fit import GaussNewton as GaussNewton
 from ._fit import fit as fit
+from ._fit import fit_solvers as fit_solvers
 from ._fit import fitted_image as fitted_image
 from ._geometry._capacity import fragment_bucket as fragment_bucket
-from ._geometry._device_raster import SETUP_PLACEMENT as SETUP_PLACEMENT
-from ._geometry._device_raster import setup_on_device as setup_on_device
-from ._geometry._device_raster import setup_placed as setup_placed
 from ._geometry._ordering import AbstractOrdering as AbstractOrdering
 from ._geometry._ordering import Ordering as Ordering
 from ._geometry._ordering import draw_order as draw_order
@@ -37,6 +37,8 @@ from ._geometry._ordering import hair_centre as hair_centre
 from ._geometry._ordering import register_ordering as register_ordering
 from ._geometry._ordering import segment_depth as segment_depth
 from ._geometry._ordering import static_order as static_order
+from ._geometry._placement import Placement as Placement
+from ._geometry._placement import default_placement as default_placement
 from ._geometry._projection import camera_view as camera_view
 from ._geometry._setup import prepare as prepare
 from ._geometry._setup import visibility_order as visibility_order

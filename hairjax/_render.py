@@ -21,6 +21,7 @@ from jaxtyping import Array, Float
 from ._cache import forget
 from ._geometry._capacity import refuses_out_of_memory
 from ._geometry._estimate import check_capacity
+from ._geometry._placement import Placement
 from ._geometry._setup import prepare
 from ._geometry._stage import geometry_stage
 from ._progress import Progress
@@ -32,7 +33,12 @@ __all__ = ["render", "render_profiled"]
 
 @refuses_out_of_memory
 def render(
-    scene: Scene, params=None, alpha: Float[Array, " S"] | None = None, *, order=None
+    scene: Scene,
+    params=None,
+    alpha: Float[Array, " S"] | None = None,
+    *,
+    order=None,
+    placement: Placement | None = None,
 ) -> Float[Array, "H W 4"]:
     """Render `scene` to linear RGBA `[H, W, 4]`.
 
@@ -44,6 +50,9 @@ def render(
     scene, so a new `params` re-runs only the shading stage. `order`: segment indices to
     draw in, instead of sorting for this camera (e.g. an order reused from an earlier
     view, kim-2003 Fig. 8; see `visibility_order`); the earlier stages then run afresh.
+    `placement`: where the set-up's raster and grouping run, "host" (numba loops) or
+    "device" (XLA programs on JAX's default device); None takes the default, the device
+    unless it is the CPU, or `HAIRJAX_SETUP` (docs/model.md §5).
     """
     params = scene.params if params is None else params
     if scene.patches is not None:  # §18: hair patches, drawn with slide 17's four passes
@@ -53,17 +62,20 @@ def render(
 
         check_capacity(scene)  # the image, points and maps, before the patches' fragments
         return render_patches(scene, params)
-    return shading_stage(geometry_stage(scene, alpha, order=order), params)
+    return shading_stage(geometry_stage(scene, alpha, order=order, placement=placement), params)
 
 
 @refuses_out_of_memory
-def render_profiled(scene: Scene, params=None, *, progress: Progress | None = None):
+def render_profiled(
+    scene: Scene, params=None, *, progress: Progress | None = None, placement: Placement | None = None
+):
     """Render and time each stage (block-until-ready between stages).
 
     Returns `(image, timings)`; timings are seconds by stage name, set-up sub-steps
     prefixed with `geometry/`. Includes compilation on a first call. `progress(done,
     total, stage)` (`hairjax._progress`) after each stage, outside the timed spans: three
-    (geometry set-up, geometry opacity, shading), one for a hair-patch scene.
+    (geometry set-up, geometry opacity, shading), one for a hair-patch scene. `placement`:
+    as `render`'s.
     """
     params = scene.params if params is None else params
     if scene.patches is not None:  # §18: one stage, the patches' set-up and composite
@@ -81,10 +93,10 @@ def render_profiled(scene: Scene, params=None, *, progress: Progress | None = No
 
     forget(scene)
     t0 = time.perf_counter()
-    setup = prepare(scene)
+    setup = prepare(scene, placement=placement)
     t1 = time.perf_counter()
     t1p = step(1, "geometry set-up")
-    geometry = jax.block_until_ready(geometry_stage(scene))
+    geometry = jax.block_until_ready(geometry_stage(scene, placement=placement))
     t2 = time.perf_counter()
     t2p = step(2, "geometry opacity (JAX)")
     image = jax.block_until_ready(shading_stage(geometry, params))

@@ -147,7 +147,7 @@ def test_geometry_reused_and_unneeded_work_skipped(monkeypatch):
     scene = small_furball_scene(shadows="none")
     calls, opacity_calls = [], []
     original = setup_mod._prepare
-    monkeypatch.setattr(setup_mod, "_prepare", lambda s: calls.append(s) or original(s))
+    monkeypatch.setattr(setup_mod, "_prepare", lambda s, *rest: calls.append(s) or original(s, *rest))
     original_weights = stage_mod.composite_weights
     monkeypatch.setattr(
         stage_mod, "composite_weights", lambda *a: opacity_calls.append(1) or original_weights(*a)

@@ -16,4 +16,8 @@ from ._lit import LIGHT_NAMES as LIGHT_NAMES
 from ._opacity_fit import ALPHA as ALPHA
 from ._result import FitError as FitError
 from ._result import FitResult as FitResult
+from ._solvers import BFGS as BFGS
 from ._solvers import SOLVERS as SOLVERS
+from ._solvers import GaussNewton as GaussNewton
+from ._solvers import fit_solvers as fit_solvers
+from ._solvers import solver_named as solver_named

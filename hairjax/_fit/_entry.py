@@ -16,6 +16,7 @@ from collections.abc import Callable, Sequence
 import jax
 import jax.numpy as jnp
 import numpy as np
+import optimistix as optx
 
 from .._scene._scene import Scene
 from .._shading import AbstractShadingModel, LightParams
@@ -38,7 +39,7 @@ from ._problem import (
 )
 from ._result import FitError, FitResult
 from ._shading_fit import fit_model, rgb_searched
-from ._solvers import make_solver
+from ._solvers import default_tolerances, is_least_squares
 from ._space import to_flat
 from ._uncertainty import standard_errors
 
@@ -50,7 +51,7 @@ def fit(
     targets,
     fit: Sequence[str] | None = None,
     init=None,
-    solver: str = "levenberg-marquardt",
+    solver=None,
     *,
     masks=None,
     weights=None,
@@ -58,8 +59,6 @@ def fit(
     max_steps: int = 100,
     light: LightParams | None = None,
     separable: bool = True,
-    rtol: float | None = None,
-    atol: float | None = None,
     progress: Callable[[int, float, float], None] | None = None,
     holdout=None,
 ) -> FitResult:
@@ -79,7 +78,14 @@ def fit(
       strands' opacity"); the rest stay at `init` and `light`.
     - `init`: starting (and fixed) parameters, the model's parameter type; default the
       first scene's.
-    - `solver`: levenberg-marquardt (lm), gauss-newton, dogleg, or bfgs (on ½‖r‖²).
+    - `solver`: an optimistix least-squares solver or minimiser (a minimiser is given
+      ½‖r‖²), whose `rtol` and `atol` are the fit's tolerances: e.g.
+      `optimistix.LevenbergMarquardt(rtol=1e-5, atol=1e-7)`, `hairjax.GaussNewton(...)`
+      (damped), `hairjax.BFGS(...)` (a scaled first step), or `hairjax.fit_solvers()[name]`,
+      the four the CLI's `--solver` names, with the working precision's tolerances. Default
+      (None): Levenberg-Marquardt with those tolerances (1e-8 and 1e-10 in float64, 1e-5
+      and 1e-7 in float32: tighter than float32 resolves only adds steps that change
+      nothing).
     - `light`: the light's starting (and held) `LightParams`; default the scenes' light.
       Given, or with a light name in `fit`, the image is the shading stage's with this
       light (Ω and V stay the scenes' light's).
@@ -93,8 +99,6 @@ def fit(
       step (variable projection; the image is linear in them) so that the solver iterates
       on the model's searched parameters (shininess, κ, …) only; a fit of gains alone is
       then one solve. False: the solver iterates on every fitted parameter (docs/fitting.md).
-    - `rtol`, `atol`: the solver's tolerances; default 1e-8 and 1e-10 in float64, 1e-5 and
-      1e-7 in float32 (tighter than float32 resolves only adds steps that change nothing).
     - `progress(step, loss, elapsed_s)`: called after every step.
     - `holdout`: `(scene or scenes, target or targets)` the fit does not see, paired like
       `scene` and `targets`; the result's `holdout_rmse` is the fitted parameters' RMSE on
@@ -120,10 +124,11 @@ def fit(
     model = _model_of(scenes, lit, opacity, init)
     names = check_names(model.defaults if fit is None else fit, () if scalar is None else scalar, model)
     scalar = tuple(n for n in model.grey if n in names) if scalar is None else tuple(scalar)
-    double = jnp.result_type(float) == jnp.float64
-    rtol = (1e-8 if double else 1e-5) if rtol is None else rtol
-    atol = (1e-10 if double else 1e-7) if atol is None else atol
-    opt, least_squares = make_solver(solver, rtol, atol)
+    if solver is None:
+        rtol, atol = default_tolerances()
+        solver = optx.LevenbergMarquardt(rtol=rtol, atol=atol)
+    least_squares = is_least_squares(solver)
+    rtol, atol = float(solver.rtol), float(solver.atol)
     arrays = [target_arrays(s, t, m, w) for s, t, m, w in zip(scenes, target_list, mask_list, weight_list)]
     if not isinstance(init, model.params_type):
         raise FitError(
@@ -173,7 +178,7 @@ def fit(
         report(steps, losses[-1])
     else:
         z, steps, termination, restarts, diverged = solve(
-            opt,
+            solver,
             fn,
             residuals,
             z,

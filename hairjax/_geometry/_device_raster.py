@@ -22,15 +22,13 @@ Capacity policy: the plan's columns and segments are padded to the fragments' bu
 need more than the device's free memory is refused before anything is allocated
 (`SceneTooLarge`), and the count of kept fragments is the one value read back.
 
-`HAIRJAX_SETUP=host` or `=device` overrides where the set-up runs (default `auto`: on the
-device unless it is the CPU), e.g. to compare the two on one machine.
+Which kernels a set-up runs is its placement (`_placement`): "device" runs these, "host"
+the loops; by default the device unless it is the CPU.
 """
 
 from __future__ import annotations
 
-import contextlib
 import functools
-import os
 
 import jax
 import jax.numpy as jnp
@@ -45,9 +43,6 @@ from ._raster import Fragments
 from ._raster_plan import raster_plan
 
 __all__ = [
-    "SETUP_PLACEMENT",
-    "setup_on_device",
-    "setup_placed",
     "device_memory",
     "candidate_size",
     "candidate_bytes",
@@ -55,34 +50,6 @@ __all__ = [
     "rasterize_on_device",
     "group_on_device",
 ]
-
-SETUP_PLACEMENT = "HAIRJAX_SETUP"  # the environment variable: auto, host or device
-
-
-def setup_on_device() -> bool:
-    """Whether the set-up's raster and grouping run as XLA programs on JAX's default
-    device (`SETUP_PLACEMENT`; by default unless that device is the CPU)."""
-    choice = os.environ.get(SETUP_PLACEMENT, "auto")
-    if choice not in ("auto", "host", "device"):
-        raise ValueError(f"{SETUP_PLACEMENT} must be auto, host or device, got {choice!r}")
-    return choice == "device" or (choice == "auto" and jax.default_backend() != "cpu")
-
-
-@contextlib.contextmanager
-def setup_placed(where: str):
-    """The set-up placed `where` ("auto", "host" or "device", as `SETUP_PLACEMENT` takes
-    it) inside the block, and as before after it: e.g. both set-ups on one machine."""
-    if where not in ("auto", "host", "device"):
-        raise ValueError(f"the set-up's placement must be auto, host or device, got {where!r}")
-    before = os.environ.get(SETUP_PLACEMENT)
-    os.environ[SETUP_PLACEMENT] = where
-    try:
-        yield
-    finally:
-        if before is None:
-            del os.environ[SETUP_PLACEMENT]
-        else:
-            os.environ[SETUP_PLACEMENT] = before
 
 
 def _free_bytes() -> int | None:
@@ -143,7 +110,7 @@ def device_candidates(
             f"the {image_width}x{image_height} raster of this scene has {total * plan.rows:,} candidate "
             f"fragments, which need {need / 2**30:.1f} GiB ({per_candidate} bytes each) on the device; "
             f"{free / 2**30:.1f} GiB is free there: render fewer pixels (--size), fewer or thinner "
-            "strands, or with HAIRJAX_SETUP=host"
+            "strands, or with the set-up on the host (placement='host', or HAIRJAX_SETUP=host)"
         )
     seg_data = np.zeros((n_pad, plan.seg_data.shape[1]), dtype)
     seg_data[:n] = plan.seg_data  # padding rows: length 0, no candidate covered

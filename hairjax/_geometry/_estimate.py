@@ -34,7 +34,8 @@ from .._errors import SceneTooLarge
 from .._scene._scene import Scene
 from . import _capacity, _device_raster
 from ._capacity import fragment_bytes, memory_size
-from ._device_raster import candidate_bytes, setup_on_device
+from ._device_raster import candidate_bytes
+from ._placement import Placement
 from ._raster import count_fragments
 from ._raster_plan import raster_plan
 from ._shadows import MAX_MAP_CELLS, light_raster
@@ -147,14 +148,17 @@ def _width_keys(scene: Scene) -> str:
     return f"hair.width = {widest:g} ({strands.width_units}), {strands.num_strands:,} strands"
 
 
-def fragment_needs(scene: Scene, camera_raster, light, *, limit: int | None = None) -> list[Need]:
+def fragment_needs(
+    scene: Scene, camera_raster, light, *, placement: Placement = "host", limit: int | None = None
+) -> list[Need]:
     """The camera's and the light's fragments (module docstring): `camera_raster` and
     `light` (`light_raster`'s, or None without shadows) are `rasterize`'s arguments;
-    bounded, or with a `limit` counted (`_fragments`)."""
+    bounded, or with a `limit` counted (`_fragments`); with the raster's candidates where
+    the set-up is `placement`d on the device."""
     cam = scene.camera
     f = jnp.dtype(jnp.result_type(float)).itemsize
     depth = scene.occluder is not None
-    on_device = setup_on_device()
+    on_device = placement == "device"
     count, counted = _fragments(camera_raster, limit)
     keys = f"{_width_keys(scene)}, camera.width x camera.height = {cam.width}x{cam.height} (--size)"
     what = f"the camera's {count:,} fragments" if counted else f"the camera's fragments (at most {count:,})"
@@ -201,11 +205,11 @@ def _over(needs: list[Need]) -> SceneTooLarge | None:
     return None
 
 
-def check_capacity(scene: Scene, camera_raster=None) -> None:
+def check_capacity(scene: Scene, camera_raster=None, *, placement: Placement = "host") -> None:
     """Refuse (`SceneTooLarge`) a render of `scene` whose estimate exceeds the memory
     available: the closed-form items (`fixed_needs`); with the camera's `camera_raster`
     (`rasterize`'s arguments) also the fragments, bounded, then counted where the bound
-    is over (module docstring)."""
+    is over (module docstring), for the set-up at `placement` (`_placement`)."""
     needs = fixed_needs(scene)
     refusal = _over(needs)
     if refusal is not None:
@@ -228,11 +232,11 @@ def check_capacity(scene: Scene, camera_raster=None) -> None:
             scene.shadows.resolution,
             strands.width_units,
         )
-    bounded = needs + fragment_needs(scene, camera_raster, light)
+    bounded = needs + fragment_needs(scene, camera_raster, light, placement=placement)
     if _over(bounded) is None:
         return
     available = _capacity.available_memory() or 0
     limit = COUNT_VISITS * available // fragment_bytes(jnp.dtype(jnp.result_type(float)).itemsize, False)
-    refusal = _over(needs + fragment_needs(scene, camera_raster, light, limit=limit))
+    refusal = _over(needs + fragment_needs(scene, camera_raster, light, placement=placement, limit=limit))
     if refusal is not None:
         raise refusal

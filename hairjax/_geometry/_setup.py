@@ -25,14 +25,16 @@ from .._scene._scene import Scene
 from .._scene._strands import tangents, unit_rows
 from .._shading import PointInputs
 from ._capacity import fragment_bucket, refuses_out_of_memory
-from ._device_raster import device_candidates, group_on_device, setup_on_device
+from ._device_raster import device_candidates, group_on_device
 from ._estimate import check_capacity
 from ._group import group_parts
 from ._host import release_heap, release_shared
 from ._occluder import occluder_hits, occluder_light_view, occluder_visibility
 from ._ordering import segment_depth
+from ._placement import Placement, placement_of
 from ._projection import View, camera_view
 from ._raster import Arrays, rasterize_parts, ribbon_widths
+from ._shadows import ShadowInputs
 
 __all__ = ["GeometrySetup", "prepare", "visibility_order", "to_light", "warn_empty_view"]
 
@@ -89,22 +91,24 @@ class GeometrySetup:
 
 
 @refuses_out_of_memory
-def prepare(scene: Scene, *, order=None) -> GeometrySetup:
-    """The NumPy geometry set-up of `scene`, cached per scene object (`_cache`).
+def prepare(scene: Scene, *, order=None, placement: Placement | None = None) -> GeometrySetup:
+    """The NumPy geometry set-up of `scene`, cached per scene object and placement (`_cache`).
 
     `order`: a draw order to use instead of the scene's (see `visibility_order`); such a
-    set-up is computed afresh, not cached."""
+    set-up is computed afresh, not cached. `placement`: where the raster and the grouping
+    run, "host" or "device" (`_placement`; None: `default_placement()`)."""
+    where = placement_of(placement)
     # The set-up depends on concrete geometry only: evaluate it eagerly even when
     # `render` is being traced (e.g. under jax.jit or jax.grad).
     if order is not None:
         with jax.ensure_compile_time_eval():
-            return _prepare(scene, order)
+            return _prepare(scene, order, where)
 
     def compute():
         with jax.ensure_compile_time_eval():
-            return _prepare(scene)
+            return _prepare(scene, None, where)
 
-    return cached(scene, "setup", compute)
+    return cached(scene, f"setup on the {where}", compute)
 
 
 def visibility_order(scene: Scene, order=None):
@@ -175,7 +179,7 @@ def to_light(light, points: np.ndarray) -> np.ndarray:
     return unit_rows(np.asarray(light.position, dtype=np.float64) - points)
 
 
-def _prepare(scene: Scene, order=None) -> GeometrySetup:
+def _prepare(scene: Scene, order, placement: Placement) -> GeometrySetup:
     release_shared()  # a forgotten scene's fragments, before this one's are allocated
     timings: dict[str, float] = {}
     clock = time.perf_counter()
@@ -188,7 +192,7 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
 
     strands, cam = scene.strands, scene.camera
     points = strands.points
-    check_capacity(scene)  # the closed-form items, before anything is projected
+    check_capacity(scene, placement=placement)  # the closed-form items, before anything is projected
     view, xy, depth, segments, order = visibility_order(scene, order)
     seg_strand = strands.strand_of_point[segments[:, 0]]
     lap("project+order")
@@ -216,7 +220,8 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
     # Rasterised nearest segment first; each fragment names its segment's first point
     # (the segment is that point and the next). Depth only for the occluder's depth test.
     raster = (xy[s0], xy[s1], depth[s0], depth[s1], widths, cam.width, cam.height, True)
-    check_capacity(scene, raster)  # with the fragments, before the image's arrays and theirs
+    # With the fragments, before the image's arrays and theirs.
+    check_capacity(scene, raster, placement=placement)
     lap("capacity")
     hw = cam.width * cam.height
     light = scene.light
@@ -242,7 +247,7 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
         backdrop[opaque] = 0.0  # the shading stage adds the occluder's colour (§13)
         lap("occluder")
 
-    place = _fragments_on_device if setup_on_device() else _fragments_on_host
+    place = _fragments_on_device if placement == "device" else _fragments_on_host
     drawn, padded, n_frags = place(raster, s0.astype(np.int32), hit_depth, lap)
     frag_pixel, frag_i0, frag_coverage, frag_t = padded
     # Hair whose segments all have length 0 (or that has none: one-point strands) draws
@@ -261,7 +266,7 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
     shadow = None
     if scene.shadows.casts:
         receivers = surface if occluder else None
-        shadow = scene.shadows.setup(
+        shadow_inputs = ShadowInputs(
             points,
             segments,
             seg_strand,
@@ -270,7 +275,9 @@ def _prepare(scene: Scene, order=None) -> GeometrySetup:
             receivers=receivers,
             segment_alpha=segment_alpha,
             width_units=strands.width_units,
+            placement=placement,
         )
+        shadow = scene.shadows.setup(shadow_inputs)
         lap("shadow set-up")
         if occluder:
             # §13: the occluder's shadow, a depth test in the light's view.

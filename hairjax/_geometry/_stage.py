@@ -21,6 +21,7 @@ from .._shading._streaks import streak_factors
 from ._capacity import refuses_out_of_memory
 from ._hidden import drawn_cutoff, keep_visible
 from ._host import release_heap, to_device
+from ._placement import Placement, placement_of
 from ._setup import prepare
 
 __all__ = ["Geometry", "composite_weights", "fragment_alpha", "geometry_stage"]
@@ -81,7 +82,12 @@ def composite_weights(alpha, strand_of_point, frag_i0, frag_coverage, frag_pixel
 
 @refuses_out_of_memory
 def geometry_stage(
-    scene: Scene, alpha: Float[Array, " S"] | None = None, *, order=None, cutoff: float | None = None
+    scene: Scene,
+    alpha: Float[Array, " S"] | None = None,
+    *,
+    order=None,
+    cutoff: float | None = None,
+    placement: Placement | None = None,
 ) -> Geometry:
     """Compositing weights and Ω for `scene`, differentiable in the per-strand `alpha`.
 
@@ -92,25 +98,30 @@ def geometry_stage(
     is cached. `cutoff`: fragments seen through a transmittance below it are left out
     (`_hidden`, docs/model.md §6); by default `drawn_cutoff` of the working precision,
     where all they would add is below a colour's rounding; 0 keeps every fragment. With
-    `alpha` given every fragment is kept: which are hidden depends on α.
+    `alpha` given every fragment is kept: which are hidden depends on α. `placement`: where
+    the set-up's raster and grouping run, "host" or "device" (`_placement`; None: the
+    default, `HAIRJAX_SETUP`'s); the cache keeps one result per placement.
     """
+    where = placement_of(placement)
     if alpha is None:
         cut = drawn_cutoff(jnp.result_type(float)) if cutoff is None else float(cutoff)
 
         def compute():
             with jax.ensure_compile_time_eval():
-                return _geometry_stage(scene, scene.strands.alpha, order, cut)
+                return _geometry_stage(scene, scene.strands.alpha, order, cut, where)
 
-        return compute() if order is not None else cached(scene, f"geometry, cutoff {cut!r}", compute)
+        if order is not None:
+            return compute()
+        return cached(scene, f"geometry on the {where}, cutoff {cut!r}", compute)
     if cutoff is not None:
         raise ValueError("geometry_stage keeps every fragment when given `alpha`: it takes no `cutoff` then")
-    return _geometry_stage(scene, alpha, order, 0.0)
+    return _geometry_stage(scene, alpha, order, 0.0, where)
 
 
-def _geometry_stage(scene: Scene, alpha, order, cutoff: float) -> Geometry:
+def _geometry_stage(scene: Scene, alpha, order, cutoff: float, placement: Placement) -> Geometry:
     """The geometry stage, the fragments hidden at `cutoff` left out (none at 0; a
-    positive cutoff needs a concrete `alpha`)."""
-    setup = prepare(scene, order=order)
+    positive cutoff needs a concrete `alpha`), its set-up placed at `placement`."""
+    setup = prepare(scene, order=order, placement=placement)
     dtype = jnp.result_type(float)
     alpha = jnp.asarray(alpha, dtype=dtype)
     hw = scene.camera.width * scene.camera.height

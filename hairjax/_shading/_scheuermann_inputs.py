@@ -16,7 +16,7 @@ from jaxtyping import ArrayLike, Float
 
 from .._errors import SceneError
 from .._geometry._ordering import hair_centre
-from .._geometry._shadows import ExactShadows
+from .._geometry._shadows import ExactShadows, ShadowInputs
 from .._scene._light import Light, Vec3Like
 
 __all__ = [
@@ -221,7 +221,7 @@ def hair_occlusion(strands, density: float, seg_alpha: np.ndarray | None = None)
     total = np.zeros(strands.num_points)
     exact = ExactShadows(resolution=HAIR_OCCLUSION_RESOLUTION)
     for d in sphere_directions(HAIR_OCCLUSION_DIRECTIONS):
-        setup = exact.setup(
+        inputs = ShadowInputs(
             strands.points,
             segments,
             seg_strand,
@@ -230,6 +230,7 @@ def hair_occlusion(strands, density: float, seg_alpha: np.ndarray | None = None)
             segment_alpha=seg_alpha,
             width_units=strands.width_units,
         )
+        setup = exact.setup(inputs)
         omega = exact_omega_numpy(setup, strands.alpha[setup.frag_strand] * setup.frag_coverage)
         total += np.exp(-density * omega)
     return total / HAIR_OCCLUSION_DIRECTIONS

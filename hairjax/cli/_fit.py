@@ -110,7 +110,7 @@ def _mask_weights(masks, target_paths, targets) -> list | None:
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from .._fit import ALPHA, LIGHT_NAMES, FitError, fit
+    from .._fit import ALPHA, LIGHT_NAMES, FitError, fit, solver_named
     from .._io._image import read_image
     from .._progress import reporter
     from ._scenes import load_cli_scene
@@ -169,7 +169,7 @@ def run(args: argparse.Namespace) -> int:
             scenes,
             targets,
             fit=names,
-            solver=args.solver,
+            solver=solver_named(args.solver),
             max_steps=args.max_steps,
             weights=weights,
             progress=on_step,

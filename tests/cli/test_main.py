@@ -66,8 +66,9 @@ def test_a_scene_beyond_memory_is_one_line_before_any_output(monkeypatch, tmp_pa
     """Refused by the set-up's capacity policy (docs/model.md §5) where it runs: the host's
     memory for the compiled loops, the device's for the XLA programs."""
     from hairjax._geometry import _capacity, _device_raster
+    from hairjax._geometry._placement import PLACEMENT_VARIABLE
 
-    monkeypatch.setenv(_device_raster.SETUP_PLACEMENT, placement)
+    monkeypatch.setenv(PLACEMENT_VARIABLE, placement)  # the CLI's renders take the default
     monkeypatch.setattr(_capacity, "available_memory", lambda: 1000)  # bytes: nothing fits
     monkeypatch.setattr(_device_raster, "_free_bytes", lambda: 1000)
     out = tmp_path / "x.exr"

@@ -226,10 +226,10 @@ def test_a_fit_leaves_the_second_plateau(two_lobes):
     leave. The fit scans q there (the model's second plateau)."""
     scene, target = two_lobes
     init = dataclasses.replace(TWO_LOBES, kd=jnp.full(3, 0.3), q=jnp.asarray(1e8))
-    _recovered(hj.fit(scene, target, init=init, solver="gauss-newton"))
+    _recovered(hj.fit(scene, target, init=init, solver=hj.fit_solvers()["gauss-newton"]))
     # Without the second plateau's scan the same fit stops on it, q where it started.
     one = scene.replace(shading=TwoLobesOnePlateau(TWO_LOBES))
-    alone = hj.fit(one, target, init=init, solver="gauss-newton")
+    alone = hj.fit(one, target, init=init, solver=hj.fit_solvers()["gauss-newton"])
     assert alone.restarts == 0 and float(alone.params.q) > 1e7 and alone.rmse > 1e-3
 
 
@@ -237,7 +237,7 @@ def test_a_fit_leaves_both_plateaus_in_turn(two_lobes):
     """Both highlights needles: the fit scans p, then q from the best p."""
     scene, target = two_lobes
     init = dataclasses.replace(TWO_LOBES, kd=jnp.full(3, 0.3), p=jnp.asarray(1e8), q=jnp.asarray(1e8))
-    _recovered(hj.fit(scene, target, init=init, solver="gauss-newton"))
+    _recovered(hj.fit(scene, target, init=init, solver=hj.fit_solvers()["gauss-newton"]))
 
 
 # ---------------------------------------------------------------- grey gains

@@ -31,7 +31,7 @@ def rel(a, b):
 
 @pytest.mark.parametrize("solver", first_then_slow(["levenberg-marquardt", "gauss-newton", "dogleg", "bfgs"]))
 def test_noise_free_recovery(scene, target, solver):
-    r = hj.fit(scene, target, init=INIT, solver=solver, max_steps=200)
+    r = hj.fit(scene, target, init=INIT, solver=hj.fit_solvers()[solver], max_steps=200)
     assert r.termination == "converged"
     # The issue's bound for noise-free targets: 1e-3 relative.
     for name in ("kd", "ks", "shininess", "kappa"):
@@ -66,7 +66,7 @@ def test_zero_specular_fitted_comes_back_zero(scene, solver):
     softplus could only approach it), p is reported undetermined, the others recovered."""
     truth = hj.ShadingParams(kd=(0.3, 0.5, 0.2), ks=0.0, shininess=25.0, kappa=2.5, ambient=0.05)
     target = np.asarray(hj.render(scene, truth))
-    r = hj.fit(scene, target, init=INIT, solver=solver, max_steps=200)
+    r = hj.fit(scene, target, init=INIT, solver=hj.fit_solvers()[solver], max_steps=200)
     assert r.termination == "converged" and "shininess" in r.undetermined
     np.testing.assert_array_equal(np.asarray(r.params.ks), 0.0)
     assert rel(r.params.kd, truth.kd) < 1e-3 and rel(r.params.kappa, truth.kappa) < 1e-3
@@ -145,7 +145,8 @@ def test_the_step_loss_is_the_loss_at_the_point_it_returns(scene, target, solver
     kind of solver, it is the loss at the z the step returns (the fit's losses and stall test rely
     on it), over accepted and rejected steps alike; so is the convergence test read off a
     least-squares solver's state (1e-9: two float64 SVDs of the same J, well conditioned here)."""
-    opt, least_squares = _solvers.make_solver(solver, 1e-5, 1e-7)
+    opt = _solvers.solver_named(solver, 1e-5, 1e-7)
+    least_squares = _solvers.is_least_squares(opt)
     model = _shading_fit.fit_model(hj.KajiyaKay)
     names = ("kd", "ks", "shininess", "kappa")
     data = [model.prepare(scene, INIT, names, *_problem.target_arrays(scene, target, None, None))]
@@ -225,7 +226,7 @@ def test_a_parameter_without_effect_does_not_stop_the_solvers(scene, solver):
     truth = hj.ShadingParams(kd=(0.3, 0.5, 0.2), ks=0.0, shininess=25.0, kappa=2.5, ambient=0.05)
     target = np.asarray(hj.render(scene, truth))
     start = hj.ShadingParams(kd=0.5, ks=0.0, shininess=10.0, kappa=1.0, ambient=0.05)
-    r = hj.fit(scene, target, fit=("kd", "shininess", "kappa"), init=start, solver=solver)
+    r = hj.fit(scene, target, fit=("kd", "shininess", "kappa"), init=start, solver=hj.fit_solvers()[solver])
     assert r.termination == "converged" and "shininess" in r.undetermined
     assert rel(r.params.kd, truth.kd) < 1e-3 and rel(r.params.kappa, truth.kappa) < 1e-3
 
@@ -295,7 +296,7 @@ def test_bfgs_on_a_faint_highlight_in_float32():
         r = hj.fit(
             scene,
             target,
-            solver="bfgs",
+            solver=hj.fit_solvers()["bfgs"],
             max_steps=300,
             init=hj.ShadingParams(kd=0.5, ks=0.3, shininess=40.0, kappa=2.0),
         )
@@ -309,7 +310,7 @@ def test_bfgs_first_step_has_unit_length():
     """The first step is −∇f/‖∇f‖ whatever the loss's scale (a 1e6-times steeper bowl)."""
     import jax
 
-    opt = _solvers.bfgs(rtol=1e-8, atol=1e-10)
+    opt = _solvers.BFGS(rtol=1e-8, atol=1e-10)
     fn = lambda z, args: (1e6 * jnp.sum((z - 3.0) ** 2), None)  # noqa: E731
     z0 = jnp.zeros(4)
     f_struct, aux_struct = jax.eval_shape(lambda: fn(z0, None))
@@ -322,7 +323,7 @@ def test_bfgs_update_satisfies_the_secant_equation_at_small_scale():
     """After the first pair, H s = y even when sᵀy ≈ 1e-12 (optimistix skips below ε)."""
     import optimistix as optx
 
-    opt = _solvers.bfgs(rtol=1e-8, atol=1e-10)
+    opt = _solvers.BFGS(rtol=1e-8, atol=1e-10)
     z = jnp.zeros(3)
     info, count = opt.init_hessian(z, jnp.asarray(0.0), z)
     g0 = jnp.asarray([1e-6, -2e-6, 5e-7])
@@ -341,7 +342,7 @@ def test_bfgs_update_satisfies_the_secant_equation_at_small_scale():
     "kwargs, message",
     [
         (dict(fit=("kd", "gloss")), "unknown parameter 'gloss'"),
-        (dict(solver="adam"), "unknown solver"),
+        (dict(solver="adam"), "optimistix least-squares solver or minimiser"),
         (dict(scalar=("kappa",)), "grey value"),
     ],
 )
@@ -423,12 +424,12 @@ def fresh_jit():
 def test_a_second_fit_reuses_the_compiled_steps(scene, target, monkeypatch, fresh_jit, solver):
     """A second fit of the same shapes and names (other values, another start) traces
     nothing: counted by a wrapper around nnls, which every step's trace calls."""
-    hj.fit(scene, target, init=INIT, solver=solver, max_steps=3)
+    hj.fit(scene, target, init=INIT, solver=hj.fit_solvers()[solver], max_steps=3)
     calls = []
     original = _varpro.nnls
     monkeypatch.setattr(_varpro, "nnls", lambda *a: calls.append(1) or original(*a))
     other = hj.ShadingParams(kd=0.2, ks=0.5, shininess=30.0, kappa=1.5, ambient=0.05)
-    r = hj.fit(scene, 0.9 * target, init=other, solver=solver, max_steps=3)
+    r = hj.fit(scene, 0.9 * target, init=other, solver=hj.fit_solvers()[solver], max_steps=3)
     assert r.steps >= 1 and calls == []
 
 
@@ -456,10 +457,8 @@ def test_divergence_ends_cleanly(scene, monkeypatch, fresh_jit):
     import optimistix as optx
 
     far, start = _overflow_beyond_kappa_5(monkeypatch, scene)
-    monkeypatch.setattr(
-        _entry, "make_solver", lambda name, rtol, atol: (optx.GaussNewton(rtol=rtol, atol=atol), True)
-    )
-    r = hj.fit(scene, far, fit=("kappa",), init=start, solver="gauss-newton")
+    plain = optx.GaussNewton(rtol=1e-8, atol=1e-10)
+    r = hj.fit(scene, far, fit=("kappa",), init=start, solver=plain)
     assert r.termination.startswith("stopped: diverged")
     assert not np.isfinite(r.loss[-1])  # the step that overflowed is recorded
     # ... but the result is the last finite point, and nothing is claimed about it.
@@ -473,7 +472,7 @@ def test_no_solver_accepts_a_step_into_overflow(scene, monkeypatch, fresh_jit, s
     """Trust regions (LM, dogleg) and Armijo backtracking (Gauss-Newton, BFGS) reject a
     step whose loss is not finite: every recorded loss stays finite, κ stays ≤ 5."""
     far, start = _overflow_beyond_kappa_5(monkeypatch, scene)
-    r = hj.fit(scene, far, fit=("kappa",), init=start, solver=solver, max_steps=30)
+    r = hj.fit(scene, far, fit=("kappa",), init=start, solver=hj.fit_solvers()[solver], max_steps=30)
     assert all(np.isfinite(r.loss)) and float(r.params.kappa) <= 5.0
     assert "diverged" not in r.termination
 
@@ -493,7 +492,7 @@ def test_a_weak_direction_is_not_dropped_from_the_step(solver):
     with jax.enable_x64(False):
         b = jnp.asarray(a @ truth)
         a = jnp.asarray(a)
-        opt, _ = _solvers.make_solver(solver, 1e-6, 1e-8)
+        opt = _solvers.solver_named(solver, 1e-6, 1e-8)
         z = optx.least_squares(lambda z, _: a @ z - b, opt, jnp.zeros(2, jnp.float32), max_steps=20).value
     assert rel(z, truth) < 1e-3, z
 
@@ -574,7 +573,7 @@ def test_a_fit_leaves_the_plateau_where_ks_is_zero(scene, target, solver):
     solvers stop at a stationary point with Kd and κ fitted to the wrong image. `fit`
     scans the shininess there and restarts from the best p."""
     start = hj.ShadingParams(kd=0.5, ks=0.2, shininess=1e8, kappa=1.0, ambient=0.05)
-    r = hj.fit(scene, target, init=start, solver=solver)
+    r = hj.fit(scene, target, init=start, solver=hj.fit_solvers()[solver])
     assert r.termination == "converged" and r.restarts >= 1
     assert all(rel(getattr(r.params, n), getattr(TRUE, n)) < 1e-3 for n in hj.KajiyaKay.fittable)
 

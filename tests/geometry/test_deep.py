@@ -13,7 +13,7 @@ from helpers import central_difference, small_furball_scene
 
 import hairjax as hj
 from hairjax import geometry_stage
-from hairjax._geometry._shadows import light_fragments
+from hairjax._geometry._shadows import ShadowInputs, light_fragments
 
 # The slab of tests/geometry/test_shadows.py: light straight down (−y) on three layers of
 # hairs along x at y = 0, −0.5, −1, i.e. light depths D₀, D₀ + ½, D₀ + 1 (exact binary
@@ -127,7 +127,7 @@ def omega_by_formula(scene, lookup):
     sh, s = scene.shadows, scene.strands
     n, r = sh.layers, R
     segs = s.segments()
-    lf = light_fragments(s.points, segs, s.strand_of_point[segs[:, 0]], s.width, scene.light, r)
+    lf = light_fragments(ShadowInputs(s.points, segs, s.strand_of_point[segs[:, 0]], s.width, scene.light), r)
     kd = sh.depth_range(lf.frame)
     alpha = s.alpha[lf.frag_strand] * lf.frag_coverage
     pixel, z = lf.frags.pixel, lf.frags.depth
@@ -192,11 +192,11 @@ def test_receivers_in_a_texel_without_hair_outside_the_map_and_beyond_the_last_b
         ]
     )
     segs = s.segments()
-    args = (s.points, segs, s.strand_of_point[segs[:, 0]], s.width, scene.light)
+    inputs = ShadowInputs(s.points, segs, s.strand_of_point[segs[:, 0]], s.width, scene.light, receivers)
     alpha = jnp.asarray(s.alpha)
-    deep = np.asarray(scene.shadows.omega(scene.shadows.setup(*args, receivers=receivers), alpha))
+    deep = np.asarray(scene.shadows.omega(scene.shadows.setup(inputs), alpha))
     exact_method = hj.Shadows("exact", resolution=R)
-    exact = np.asarray(exact_method.omega(exact_method.setup(*args, receivers=receivers), alpha))
+    exact = np.asarray(exact_method.omega(exact_method.setup(inputs), alpha))
     # `exact` counts the two layers in front. Beside the end it filters them in the 3
     # texels of the x-neighbour column, 3 · 2a / 9; deep maps give 0 where the point's own
     # texel has no z₀. Outside: 0 for both. In the interior the point lies beyond the last
@@ -236,7 +236,8 @@ def layer_limit(scene, layers):
     behind z₀(t'), which bounds |Ω_K − Ω_exact| there (its limit is `exact`)."""
     s = scene.strands
     segs = s.segments()
-    lf = light_fragments(s.points, segs, s.strand_of_point[segs[:, 0]], s.width, scene.light, 32)
+    inputs = ShadowInputs(s.points, segs, s.strand_of_point[segs[:, 0]], s.width, scene.light)
+    lf = light_fragments(inputs, 32)
     alpha = s.alpha[lf.frag_strand] * lf.frag_coverage
     pixel, z = lf.frags.pixel, lf.frags.depth
     z0 = np.full(32 * 32, np.inf)

@@ -1,6 +1,6 @@
 """The set-up's raster and grouping as XLA programs (hairjax/_geometry/_device_raster.py):
 the same fragments as the host's compiled loops, in the same order. Run here on the CPU
-device (`HAIRJAX_SETUP=device`), which executes the programs a GPU would."""
+device (`placement="device"`), which executes the programs a GPU would."""
 
 import dataclasses
 import os
@@ -20,11 +20,12 @@ from hairjax._geometry._device_raster import (
     device_candidates,
     group_on_device,
     rasterize_on_device,
-    setup_on_device,
 )
 from hairjax._geometry._group import group_by_pixel
+from hairjax._geometry._placement import PLACEMENT_VARIABLE, default_placement, placement_of
 from hairjax._geometry._raster import rasterize
 from hairjax._geometry._setup import prepare
+from hairjax._geometry._stage import geometry_stage
 
 W, H = 90, 70
 
@@ -108,29 +109,36 @@ def test_grouping_on_the_device_is_the_hosts(n_pixels, raw, seed):
     np.testing.assert_array_equal(np.asarray(padded_value), np.r_[want_value, np.zeros(size - count)])
 
 
-def test_placement_follows_the_environment(monkeypatch):
-    monkeypatch.delenv(_device_raster.SETUP_PLACEMENT, raising=False)
-    assert setup_on_device() == (jax.default_backend() != "cpu")
-    monkeypatch.setenv(_device_raster.SETUP_PLACEMENT, "device")
-    assert setup_on_device()
-    monkeypatch.setenv(_device_raster.SETUP_PLACEMENT, "host")
-    assert not setup_on_device()
-    monkeypatch.setenv(_device_raster.SETUP_PLACEMENT, "gpu")
+def test_the_default_placement_follows_the_environment_and_nothing_writes_it(monkeypatch):
+    monkeypatch.delenv(PLACEMENT_VARIABLE, raising=False)
+    assert default_placement() == ("host" if jax.default_backend() == "cpu" else "device")
+    for where in ("device", "host"):
+        monkeypatch.setenv(PLACEMENT_VARIABLE, where)
+        assert default_placement() == where == placement_of(None)
+        assert placement_of("host") == "host" and placement_of("device") == "device"
+    monkeypatch.setenv(PLACEMENT_VARIABLE, "gpu")
     with pytest.raises(ValueError, match="auto, host or device"):
-        setup_on_device()
+        default_placement()
+    with pytest.raises(ValueError, match="'host' or 'device'"):
+        placement_of("auto")
+    monkeypatch.setenv(PLACEMENT_VARIABLE, "host")
+    np.asarray(hj.render(_scene("default"), placement="device"))
+    assert os.environ[PLACEMENT_VARIABLE] == "host"
 
 
-def test_setup_placed_sets_the_placement_and_puts_it_back(monkeypatch):
-    monkeypatch.setenv(_device_raster.SETUP_PLACEMENT, "host")
-    with hj.setup_placed("device"):
-        assert setup_on_device()
-    assert not setup_on_device()
-    monkeypatch.delenv(_device_raster.SETUP_PLACEMENT)
-    with pytest.raises(RuntimeError), hj.setup_placed("device"):  # put back after an error too
-        raise RuntimeError
-    assert _device_raster.SETUP_PLACEMENT not in os.environ
-    with pytest.raises(ValueError, match="auto, host or device"), hj.setup_placed("gpu"):
-        pass
+def test_one_scene_under_both_placements_gets_each_placements_own_set_up():
+    """The per-scene cache keys on the placement: the same scene object set up on the host
+    and then on the device holds both, and each call gets its own (NumPy fragments from
+    the loops, JAX arrays from the XLA programs), with the same image."""
+    scene = _scene("default")
+    host_image = np.asarray(hj.render(scene, placement="host"))
+    device_image = np.asarray(hj.render(scene, placement="device"))
+    host, device = prepare(scene, placement="host"), prepare(scene, placement="device")
+    assert isinstance(host.frag_pixel, np.ndarray) and isinstance(device.frag_pixel, jax.Array)
+    assert prepare(scene, placement="host") is host and prepare(scene, placement="device") is device
+    assert geometry_stage(scene, placement="host") is not geometry_stage(scene, placement="device")
+    np.testing.assert_array_equal(np.asarray(device.frag_pixel), host.frag_pixel)
+    np.testing.assert_allclose(device_image, host_image, rtol=0, atol=1e-5)  # docs/model.md §5's bound
 
 
 def test_a_raster_beyond_the_devices_memory_is_refused_before_it_is_allocated(monkeypatch):
@@ -159,14 +167,13 @@ SCENES = {
 
 
 @pytest.mark.parametrize("name", first_then_slow(SCENES))
-def test_the_set_up_on_the_device_gives_the_hosts_fragments_and_image(monkeypatch, name):
+def test_the_set_up_on_the_device_gives_the_hosts_fragments_and_image(name):
     """Each scene set up and rendered twice, on the host and on the device (fresh scene
     objects: the set-up is cached per scene)."""
     results = {}
     for where in ("host", "device"):
-        monkeypatch.setenv(_device_raster.SETUP_PLACEMENT, where)
         scene = _scene(SCENES[name])
-        results[where] = prepare(scene), np.asarray(hj.render(scene))
+        results[where] = prepare(scene, placement=where), np.asarray(hj.render(scene, placement=where))
     (host, host_image), (device, device_image) = results["host"], results["device"]
     assert isinstance(device.frag_pixel, jax.Array) and isinstance(host.frag_pixel, np.ndarray)
     assert host.frag_pixel.size > 100
@@ -183,9 +190,8 @@ def test_the_set_up_on_the_device_gives_the_hosts_fragments_and_image(monkeypatc
     np.testing.assert_allclose(device_image, host_image, rtol=0, atol=1e-5)
 
 
-def test_an_empty_view_warns_on_the_device_too(monkeypatch):
-    monkeypatch.setenv(_device_raster.SETUP_PLACEMENT, "device")
+def test_an_empty_view_warns_on_the_device_too():
     scene = _scene("default")
     away = dataclasses.replace(scene.camera, target=tuple(2 * np.asarray(scene.camera.eye)))
     with pytest.warns(hj.EmptyViewWarning):
-        prepare(scene.replace(camera=away))
+        prepare(scene.replace(camera=away), placement="device")

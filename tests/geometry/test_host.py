@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 from helpers import small_furball_scene
 
-from hairjax._geometry._device_raster import SETUP_PLACEMENT
 from hairjax._geometry._host import (
     _MALLOC_TRIM,
     ALIGNMENT,
@@ -16,6 +15,7 @@ from hairjax._geometry._host import (
     release_heap,
     to_device,
 )
+from hairjax._geometry._placement import PLACEMENT_VARIABLE
 from hairjax._geometry._setup import prepare
 from hairjax._geometry._stage import geometry_stage
 
@@ -25,7 +25,7 @@ cpu_only = pytest.mark.skipif(jax.default_backend() != "cpu", reason="the CPU ba
 @pytest.fixture
 def host_setup(monkeypatch):
     """The set-up's loops on the host, whatever HAIRJAX_SETUP says: what shares buffers."""
-    monkeypatch.setenv(SETUP_PLACEMENT, "host")
+    monkeypatch.setenv(PLACEMENT_VARIABLE, "host")
 
 
 @pytest.mark.parametrize("n", [1, 7, 1000])  # (an empty array has no data to align)

@@ -14,7 +14,7 @@ and set-up on extreme and degenerate inputs, and the guards that keep them finit
 | coordinates ~1e4 and ~1e-4      | coordinates_around_1e4_and_1e_minus_4   | = unscaled image and gradients |
 
 Found here: (1) a point light at the hair's bounding-box centre raised a RuntimeWarning
-(texel cast of ~1e300): fixed in _shadows.shadow_setup. (2) A camera up of length < 1e-9
+(texel cast of ~1e300): fixed in _shadows.light_fragments. (2) A camera up of length < 1e-9
 (or within 1e-9 rad of forward, which Camera accepts) turned the image by 90°: fixed in
 _projection._basis.
 
@@ -32,9 +32,9 @@ _projection._basis.
 | _shadows: map_margin initial=1.0                | map_margin_without_strands                  |
 | _shadows: light_frame span fallback             | light_sees_all_points_at_one_depth          |
 | _shadows: light_frame, no point seen            | no_point_in_front_of_a_point_light          |
-| _shadows: shadow_setup texel clip (new)         | test_point_light_at_the_hairs_centre        |
-| _shadows: shadow_setup slice clip [0, N]        | fragment_below_the_nearest_plane (rounding) |
-| _shadows: shadow_setup exact key clip, valid    | no_point_in_front_of_a_point_light          |
+| _shadows: light_fragments texel clip (new)     | test_point_light_at_the_hairs_centre        |
+| _shadows: OpacityMaps.setup slice clip [0, N]  | fragment_below_the_nearest_plane (rounding) |
+| _shadows: ExactShadows.setup key clip, valid   | no_point_in_front_of_a_point_light          |
 | _shadows: point_planes clips                    | plane_clamps                                |
 | _shadows: point_opacity maximum/where           | points_outside_the_light_map                |
 | _shadows: exact_opacity, no fragments           | exact_shadows_without_fragments             |
@@ -312,7 +312,7 @@ def test_guard_no_point_in_front_of_a_point_light():
     light_view looks down −y (axis fallback), near = 1e-3·max(0, 1e-300), the field of
     view falls back to ±80°; light_frame sees no point (zmin = 0, span 1); every point
     gets Ω = 0 (texel −1 for the maps, zero weights for `exact`)."""
-    from hairjax._geometry._shadows import exact_opacity, light_frame, point_opacity, shadow_setup
+    from hairjax._geometry._shadows import ShadowInputs, exact_opacity, light_frame, point_opacity
 
     pts = np.array([[-1.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
     segs = np.array([[0, 1]])
@@ -323,13 +323,14 @@ def test_guard_no_point_in_front_of_a_point_light():
     assert (frame.zmin, frame.span) == (0.0, 1.0) and frame.drawable.size == 0
     # usable = 16 − 2·margin(width 1) = 12 texels over ±80°.
     assert frame.view.focal == pytest.approx(6 / np.tan(np.radians(80.0)), rel=1e-12)
-    maps = shadow_setup(pts, segs, np.zeros(1, int), np.ones(1), light, hj.Shadows("opacity-maps", 2, 16))
+    inputs = ShadowInputs(pts, segs, np.zeros(1, int), np.ones(1), light)
+    maps = hj.Shadows("opacity-maps", 2, 16).setup(inputs)
     np.testing.assert_array_equal(maps.texel, -1)
     omega = point_opacity(
         jnp.ones((3, 16, 16)), jnp.asarray(maps.plane), jnp.asarray(maps.f), jnp.asarray(maps.texel)
     )
     np.testing.assert_array_equal(omega, 0.0)
-    exact = shadow_setup(pts, segs, np.zeros(1, int), np.ones(1), light, hj.Shadows("exact", resolution=16))
+    exact = hj.Shadows("exact", resolution=16).setup(inputs)
     np.testing.assert_array_equal(exact.weight, 0.0)
     np.testing.assert_array_equal(
         exact_opacity(jnp.zeros(0), jnp.zeros(0, bool), jnp.asarray(exact.index), jnp.asarray(exact.weight)),
@@ -378,7 +379,7 @@ def test_guard_plane_clamps():
 
 
 def test_guard_fragment_below_the_nearest_plane(monkeypatch):
-    """_shadows.shadow_setup's slice clip: a light-space fragment whose interpolated depth
+    """OpacityMaps.setup's slice clip: a light-space fragment whose interpolated depth
     rounds below D₀ (u slightly < 0, only through rounding) goes to slice 0 (it counts for
     planes 1 … N), never to slice −1; one at D_N to slice N (beyond the last plane)."""
     import dataclasses as dc
@@ -397,14 +398,10 @@ def test_guard_fragment_below_the_nearest_plane(monkeypatch):
     monkeypatch.setattr(frame_mod, "rasterize", nudged)
     hair = hj.furball(6, 4, seed=1)
     segs = hair.segments()
-    setup = shadows_mod.shadow_setup(
-        hair.points,
-        segs,
-        hair.strand_of_point[segs[:, 0]],
-        hair.width,
-        hj.Light(direction=(0.3, -1.0, 0.2)),
-        hj.Shadows("opacity-maps", 4, 16),
+    inputs = shadows_mod.ShadowInputs(
+        hair.points, segs, hair.strand_of_point[segs[:, 0]], hair.width, hj.Light(direction=(0.3, -1.0, 0.2))
     )
+    setup = hj.Shadows("opacity-maps", 4, 16).setup(inputs)
     slices = setup.frag_cell // 16**2
     assert slices.min() == 0 and slices.max() <= 4
 
@@ -478,18 +475,12 @@ def test_guard_light_sees_all_points_at_one_spot():
     """_projection.light_view: hair along a directional light projects to one point of the
     light's view (extent 0): focal falls back to 1, every point lands on the map centre,
     no light-space fragment (zero-length ribbons), Ω = 0."""
-    from hairjax._geometry._shadows import shadow_setup
+    from hairjax._geometry._shadows import ShadowInputs
 
     pts = np.array([[0.2, 1.0, 0.3], [0.2, 0.0, 0.3], [0.2, -1.0, 0.3]])
     segs = np.array([[0, 1], [1, 2]])
-    setup = shadow_setup(
-        pts,
-        segs,
-        np.zeros(2, int),
-        np.ones(1),
-        hj.Light(direction=(0.0, -1.0, 0.0)),
-        hj.Shadows("exact", resolution=16),
-    )
+    inputs = ShadowInputs(pts, segs, np.zeros(2, int), np.ones(1), hj.Light(direction=(0.0, -1.0, 0.0)))
+    setup = hj.Shadows("exact", resolution=16).setup(inputs)
     assert setup.view.focal == 1.0 and setup.frag_strand.size == 0
     np.testing.assert_allclose(setup.view.project(pts)[0], 8.0, atol=1e-15)
 

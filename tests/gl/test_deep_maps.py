@@ -11,7 +11,7 @@ from helpers import MAX_BAND, PIXEL_TOL, unexplained_pixels
 
 import hairjax as hj
 from hairjax._disagreement import omega_uncertainty
-from hairjax._geometry._shadows import light_fragments
+from hairjax._geometry._shadows import ShadowInputs, light_fragments
 
 SPHERE = hj.Occluder(center=(0.0, 0.0, 0.0), radius=0.3, color=(0.8, 0.6, 0.5))
 
@@ -40,7 +40,7 @@ def rounding_bound(scene, omega):
     3 × 3 average of the texels' summed alpha (by hand here from the light's fragments)."""
     s, r = scene.strands, scene.shadows.resolution
     segs = s.segments()
-    lf = light_fragments(s.points, segs, s.strand_of_point[segs[:, 0]], s.width, scene.light, r)
+    lf = light_fragments(ShadowInputs(s.points, segs, s.strand_of_point[segs[:, 0]], s.width, scene.light), r)
     total = np.bincount(lf.frags.pixel, s.alpha[lf.frag_strand] * lf.frag_coverage, r * r).reshape(r, r)
     padded = np.pad(total, 1)
     box = sum(padded[i : i + r, j : j + r] for i in range(3) for j in range(3)) / 9

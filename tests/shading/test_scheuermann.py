@@ -551,19 +551,14 @@ def test_a_scene_may_hold_traced_parameters():
 def test_numpy_exact_omega_equals_the_renderers():
     """exact_omega_numpy (hair_occlusion's Ω) against _shadows.exact_opacity (the renderer's
     `exact` Ω, float64) on the same light-space set-up: equal to rounding."""
-    from hairjax._geometry._shadows import exact_opacity, shadow_setup
+    from hairjax._geometry._shadows import ShadowInputs, exact_opacity
     from hairjax._shading._scheuermann_inputs import exact_omega_numpy
 
     s = scheuermann_scene(strands=60).strands
     segs = s.segments()
-    setup = shadow_setup(
-        s.points,
-        segs,
-        s.strand_of_point[segs[:, 0]],
-        s.width,
-        hj.Light(direction=(0.3, -1.0, 0.2)),
-        hj.Shadows("exact", resolution=32),
-    )
+    light = hj.Light(direction=(0.3, -1.0, 0.2))
+    inputs = ShadowInputs(s.points, segs, s.strand_of_point[segs[:, 0]], s.width, light)
+    setup = hj.Shadows("exact", resolution=32).setup(inputs)
     alpha = s.alpha[setup.frag_strand] * setup.frag_coverage
     ref = np.asarray(
         jax.jit(exact_opacity)(

@@ -20,6 +20,7 @@ from ._exact import ExactShadows as ExactShadows
 from ._exact import exact_opacity as exact_opacity
 from ._frame import LightFragments as LightFragments
 from ._frame import LightFrame as LightFrame
+from ._frame import ShadowInputs as ShadowInputs
 from ._frame import light_fragments as light_fragments
 from ._frame import light_frame as light_frame
 from ._frame import light_raster as light_raster
@@ -33,29 +34,3 @@ from ._opacity_maps import box_filter as box_filter
 from ._opacity_maps import opacity_maps as opacity_maps
 from ._opacity_maps import point_opacity as point_opacity
 from ._opacity_maps import point_planes as point_planes
-
-
-def shadow_setup(
-    points,
-    segments,
-    seg_strand,
-    width,
-    light,
-    shadows: AbstractShadowMethod,
-    *,
-    receivers=None,
-    segment_alpha=None,
-    width_units: str = "pixels",
-):
-    """`shadows.setup(...)`: what Ω needs from the geometry alone, for the strand points
-    and then the `receivers` (docs/model.md §7, §13)."""
-    return shadows.setup(
-        points,
-        segments,
-        seg_strand,
-        width,
-        light,
-        receivers=receivers,
-        segment_alpha=segment_alpha,
-        width_units=width_units,
-    )

@@ -13,11 +13,11 @@ import abc
 import dataclasses
 from typing import Any, ClassVar
 
-import numpy as np
 from jaxtyping import Array, Float
 
 from ..._errors import SceneError
 from ..._registry import Registry
+from ._frame import ShadowInputs
 
 __all__ = [
     "AbstractShadowMethod",
@@ -43,21 +43,10 @@ class AbstractShadowMethod(abc.ABC):
     rasterizes_on_device: ClassVar[bool] = False
 
     @abc.abstractmethod
-    def setup(
-        self,
-        points,
-        segments,
-        seg_strand,
-        width,
-        light,
-        *,
-        receivers: np.ndarray | None = None,
-        segment_alpha: np.ndarray | None = None,
-        width_units: str = "pixels",
-    ) -> Any:
+    def setup(self, inputs: ShadowInputs) -> Any:
         """What Ω needs that does not depend on opacity (NumPy; the fragments may be JAX
-        arrays on an accelerator, docs/model.md §5), for the strand points and then the
-        `receivers` (`[Q, 3]`, the occluder's surface points, §13)."""
+        arrays on an accelerator, docs/model.md §5), for `inputs`' strand points and then
+        its receivers (the occluder's surface points, §13)."""
 
     @abc.abstractmethod
     def omega(self, setup, alpha: Float[Array, " S"]) -> Float[Array, " PQ"]:

@@ -38,7 +38,7 @@ from ..._constants import SHADOW_FILTER_RADIUS
 from ..._errors import SceneError
 from .._projection import View
 from ._base import AbstractShadowMethod, check_resolution, register_shadow_method
-from ._frame import LightFrame, light_fragments
+from ._frame import LightFrame, ShadowInputs, light_fragments
 from ._opacity_maps import MAX_MAP_CELLS, accumulated_maps, opacity_maps, point_opacity
 
 __all__ = [
@@ -132,35 +132,14 @@ class DeepOpacityMaps(AbstractShadowMethod):
         hair's light-depth extent D_N − D₀ (`frame.span`)."""
         return self.layers * self.layer_spacing if self.layer_spacing > 0 else frame.span
 
-    def setup(
-        self,
-        points,
-        segments,
-        seg_strand,
-        width,
-        light,
-        *,
-        receivers=None,
-        segment_alpha=None,
-        width_units="pixels",
-    ) -> DeepSetup:
+    def setup(self, inputs: ShadowInputs) -> DeepSetup:
         layers, resolution = self.layers, self.resolution
         if (layers + 2) * resolution**2 > MAX_MAP_CELLS:
             raise ValueError(
                 f"{layers} layers of {resolution}² exceed {MAX_MAP_CELLS} map cells; "
                 "use fewer layers or a lower resolution"
             )
-        lf = light_fragments(
-            points,
-            segments,
-            seg_strand,
-            width,
-            light,
-            resolution,
-            receivers=receivers,
-            segment_alpha=segment_alpha,
-            width_units=width_units,
-        )
+        lf = light_fragments(inputs, resolution)
         depth_range = self.depth_range(lf.frame)
         pixel, depths = np.asarray(lf.frags.pixel), np.asarray(lf.frags.depths)  # planned on the host
         first = first_depths(pixel, depths, resolution)

@@ -16,7 +16,7 @@ from ..._composite import segmented_scan
 from ..._constants import SHADOW_FILTER_RADIUS
 from .._projection import View
 from ._base import AbstractShadowMethod, check_resolution, register_shadow_method
-from ._frame import light_fragments
+from ._frame import ShadowInputs, light_fragments
 
 __all__ = ["ExactShadows", "ExactSetup", "exact_opacity"]
 
@@ -50,30 +50,9 @@ class ExactShadows(AbstractShadowMethod):
     def point_lookups(self) -> int:
         return (2 * SHADOW_FILTER_RADIUS + 1) ** 2  # `index`, `weight`: one per texel of the filter
 
-    def setup(
-        self,
-        points,
-        segments,
-        seg_strand,
-        width,
-        light,
-        *,
-        receivers=None,
-        segment_alpha=None,
-        width_units="pixels",
-    ) -> ExactSetup:
+    def setup(self, inputs: ShadowInputs) -> ExactSetup:
         resolution = self.resolution
-        lf = light_fragments(
-            points,
-            segments,
-            seg_strand,
-            width,
-            light,
-            resolution,
-            receivers=receivers,
-            segment_alpha=segment_alpha,
-            width_units=width_units,
-        )
+        lf = light_fragments(inputs, resolution)
         frags, frame, tx, ty = lf.frags, lf.frame, lf.tx, lf.ty
         depth, seen, zmin, span = frame.depth, frame.seen, frame.zmin, frame.span
         common = dict(frag_strand=np.asarray(lf.frag_strand), frag_coverage=np.asarray(lf.frag_coverage))

@@ -6,17 +6,20 @@ ribbons rasterised from the light, and the receivers' texels (`LightFragments`).
 from __future__ import annotations
 
 import dataclasses
+from typing import NamedTuple
 
 import jax.numpy as jnp
 import numpy as np
 
 from ..._constants import PIXEL_HALF_EXTENT, SHADOW_FILTER_RADIUS
 from .._device_raster import rasterize_on_device
+from .._placement import Placement
 from .._projection import View, light_view
 from .._raster import Arrays, Fragments, rasterize
 from .._raster_plan import ribbon_widths
 
 __all__ = [
+    "ShadowInputs",
     "LightFrame",
     "light_frame",
     "light_raster",
@@ -25,6 +28,30 @@ __all__ = [
     "LightFragments",
     "light_fragments",
 ]
+
+
+class ShadowInputs(NamedTuple):
+    """What a shadow method plans Ω from (`AbstractShadowMethod.setup`): the geometry
+    alone, no opacity (docs/model.md §7).
+
+    - `points` `[P, 3]`, `segments` `[E, 2]` (point indices), `seg_strand` `[E]` (each
+      segment's strand), `width` `[S]` (per strand, in `width_units`: "pixels" or "world");
+    - `light`: the scene's `Light`;
+    - `receivers` `[Q, 3]`: more points Ω is wanted at (the occluder's surface, §13): the
+      per-point results get P + Q entries;
+    - `segment_alpha` `[E]`: a factor on each segment's opacity (the alpha texture, §17);
+    - `placement`: where the light's raster runs, for a method that can run it on the
+      device (`rasterizes_on_device`; `_placement`)."""
+
+    points: np.ndarray
+    segments: np.ndarray
+    seg_strand: np.ndarray
+    width: np.ndarray
+    light: object
+    receivers: np.ndarray | None = None
+    segment_alpha: np.ndarray | None = None
+    width_units: str = "pixels"
+    placement: Placement = "host"
 
 
 def map_margin(width: np.ndarray) -> int:
@@ -164,27 +191,15 @@ def light_raster(points, segments, seg_strand, width, light, resolution: int, wi
     )
 
 
-def light_fragments(
-    points,
-    segments,
-    seg_strand,
-    width,
-    light,
-    resolution: int,
-    *,
-    receivers: np.ndarray | None = None,
-    segment_alpha: np.ndarray | None = None,
-    width_units: str = "pixels",
-    on_device: bool = False,
-) -> LightFragments:
-    """Rasterise the strands from the light (same ribbons as the camera pass; width in
+def light_fragments(inputs: ShadowInputs, resolution: int, *, on_device: bool = False) -> LightFragments:
+    """Rasterise `inputs`' strands from the light (same ribbons as the camera pass; width in
     texels = the strand's width in pixels, or its world width seen from the light,
-    `ribbon_widths`), then find the texel of every point and of every point of
-    `receivers` (`[Q, 3]`, optional: the per-point arrays get P + Q entries).
-    `segment_alpha` (optional, `[E]`): a factor on each segment's opacity (the alpha
-    texture, §17). `on_device`: rasterise as an XLA program on JAX's default device
+    `ribbon_widths`) on a `resolution`² raster, then find the texel of every point and of
+    every receiver (the per-point arrays get P + Q entries), with the segments' alpha
+    texture applied. `on_device`: rasterise as an XLA program on JAX's default device
     (`_device_raster`): the fragments are then JAX arrays there, the per-point arrays
     NumPy still."""
+    points, segments, seg_strand, width, light, receivers, segment_alpha, width_units, _ = inputs
     frame, raster = light_raster(points, segments, seg_strand, width, light, resolution, width_units)
     seg_ids = frame.drawable
     frags = (rasterize_on_device if on_device else rasterize)(*raster)

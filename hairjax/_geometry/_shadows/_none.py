@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 
 from ._base import AbstractShadowMethod, register_shadow_method
+from ._frame import ShadowInputs
 
 __all__ = ["NoShadows"]
 
@@ -17,18 +18,7 @@ class NoShadows(AbstractShadowMethod):
     method = "none"
     casts = False
 
-    def setup(
-        self,
-        points,
-        segments,
-        seg_strand,
-        width,
-        light,
-        *,
-        receivers=None,
-        segment_alpha=None,
-        width_units="pixels",
-    ):
+    def setup(self, inputs: ShadowInputs):
         return None
 
     def omega(self, setup, alpha):

@@ -23,11 +23,10 @@ import numpy as np
 from jaxtyping import Array, Float, Int
 
 from ..._constants import SHADOW_FILTER_RADIUS
-from .._device_raster import setup_on_device
 from .._projection import View
 from .._raster import Arrays
 from ._base import AbstractShadowMethod, check_resolution, register_shadow_method
-from ._frame import LightFrame, light_fragments
+from ._frame import LightFrame, ShadowInputs, light_fragments
 
 __all__ = [
     "OpacityMaps",
@@ -83,36 +82,15 @@ class OpacityMaps(AbstractShadowMethod):
         r = self.resolution
         return (self.maps + 1) * r * r, f"shadows.maps = {self.maps} maps of shadows.resolution = {r}²"
 
-    def setup(
-        self,
-        points,
-        segments,
-        seg_strand,
-        width,
-        light,
-        *,
-        receivers=None,
-        segment_alpha=None,
-        width_units="pixels",
-    ) -> OpacityMapSetup:
+    def setup(self, inputs: ShadowInputs) -> OpacityMapSetup:
         maps, resolution = self.maps, self.resolution
         if (maps + 1) * resolution**2 > MAX_MAP_CELLS:
             raise ValueError(
                 f"{maps} maps of {resolution}² exceed {MAX_MAP_CELLS} cells; "
                 "use fewer maps or a lower resolution"
             )
-        lf = light_fragments(
-            points,
-            segments,
-            seg_strand,
-            width,
-            light,
-            resolution,
-            receivers=receivers,
-            segment_alpha=segment_alpha,
-            width_units=width_units,
-            on_device=self.rasterizes_on_device and setup_on_device(),
-        )
+        on_device = self.rasterizes_on_device and inputs.placement == "device"
+        lf = light_fragments(inputs, resolution, on_device=on_device)
         xp = jnp if isinstance(lf.frags.depths, jax.Array) else np  # where the light's fragments are
         # A fragment in [D_j, D_{j+1}) counts towards planes j + 1 … N (strictly nearer).
         # The clip fires only through rounding (a depth ulps below D₀ → slice 0); D_N gives N.
