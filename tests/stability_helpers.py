@@ -397,7 +397,7 @@ LIGHT_POINT = 7  # an interior point of strand 1
 def centre_light_scene() -> hj.Scene:
     """A point light at the fur ball's bounding-box centre: light_view looks down −y with
     near ≈ 1e-303, and the points level with the light project to ~1e300 (they raised a
-    RuntimeWarning casting to texels before the clip in shadow_setup)."""
+    RuntimeWarning casting to texels before the clip in light_fragments)."""
     hair = hj.furball(30, 5, seed=6, alpha=0.5).transformed(0.6)
     centre = 0.5 * (hair.points.min(axis=0) + hair.points.max(axis=0))
     return hj.Scene(
