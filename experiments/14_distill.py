@@ -166,8 +166,9 @@ STARTS = {
     ),
 }
 # The same start, with dual scattering on, or with only the pigments and β_m fitted.
-for _m in ("marschner-dual", "marschner-pigments", "marschner-dual-pigments"):
-    STARTS[_m] = STARTS["marschner"]
+STARTS.update(
+    dict.fromkeys(("marschner-dual", "marschner-pigments", "marschner-dual-pigments"), STARTS["marschner"])
+)
 
 
 # The views are hj.distill's: front, side (the camera turned 60°) and back-lit train;
@@ -461,6 +462,18 @@ CSV_COLUMNS = (
 )
 
 
+def _path_length(text: str) -> int:
+    """`--max-depth`: an integer ≥ 2 (Mitsuba's `max_depth` 1 shows the light sources only,
+    and a directional light is never seen), or argparse's one-line error."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 2, got {text!r}")
+    return value
+
+
 def _choices(text: str, allowed, what: str) -> list:
     items = [type(next(iter(allowed)))(x) for x in text.split(",")]
     unknown = [x for x in items if x not in allowed]
@@ -485,7 +498,7 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--max-steps", type=int, default=100)
     p.add_argument(
         "--max-depth",
-        type=int,
+        type=_path_length,
         default=DEFAULT_MAX_DEPTH,
         help=f"the reference's longest path (default {DEFAULT_MAX_DEPTH}); 2 is direct light only, "
         "one scattering event per path, for separating the light scattered between fibres",

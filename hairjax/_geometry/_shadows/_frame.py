@@ -199,11 +199,13 @@ def light_fragments(inputs: ShadowInputs, resolution: int, *, on_device: bool = 
     texture applied. `on_device`: rasterise as an XLA program on JAX's default device
     (`_device_raster`): the fragments are then JAX arrays there, the per-point arrays
     NumPy still."""
-    points, segments, seg_strand, width, light, receivers, segment_alpha, width_units, _ = inputs
-    frame, raster = light_raster(points, segments, seg_strand, width, light, resolution, width_units)
+    seg_strand = inputs.seg_strand
+    frame, raster = light_raster(
+        inputs.points, inputs.segments, seg_strand, inputs.width, inputs.light, resolution, inputs.width_units
+    )
     seg_ids = frame.drawable
     frags = (rasterize_on_device if on_device else rasterize)(*raster)
-    frame = with_receivers(frame, receivers)
+    frame = with_receivers(frame, inputs.receivers)
     xy, seen = frame.xy, frame.seen
     # Clip fires for a light at the hair's centre (near ≈ 1e-303: xy ~1e300, no int64); outside stays outside.
     tx = np.floor(np.clip(xy[:, 0], -1, resolution)).astype(np.int64)
@@ -212,7 +214,7 @@ def light_fragments(inputs: ShadowInputs, resolution: int, *, on_device: bool = 
     coverage = frags.coverage
     # Per drawn segment first (small tables), then one gather per fragment.
     strand: Arrays = seg_strand[seg_ids].astype(np.int32)  # int32: the plan keeps it
-    factor: Arrays | None = None if segment_alpha is None else segment_alpha[seg_ids]
+    factor: Arrays | None = None if inputs.segment_alpha is None else inputs.segment_alpha[seg_ids]
     if on_device:  # the tables go to the fragments' device, the factor in their precision
         strand = jnp.asarray(strand)
         factor = None if factor is None else jnp.asarray(factor, coverage.dtype)
