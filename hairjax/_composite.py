@@ -19,7 +19,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float, Int
 
 if TYPE_CHECKING:
-    from ._geometry._stage import Geometry
+    from ._geometry_stage._stage import Geometry
 
 __all__ = ["segmented_scan", "over_weights", "pixel_weights", "composite", "COMPOSITE_CHUNK"]
 

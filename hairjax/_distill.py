@@ -23,10 +23,10 @@ from ._fit import FitError, FitResult, fit
 from ._progress import Progress
 from ._reference._render import check_sampling, settings_of
 from ._reference._support import check_supported, import_mitsuba
-from ._scene._camera import Camera
-from ._scene._light import Light
 from ._scene._scene import Scene
 from ._shading import AbstractShadingModel, shading_model_class
+from ._values._camera import Camera
+from ._values._light import Light
 
 __all__ = ["DistillView", "DISTILL_VIEWS", "Distillation", "distill"]
 

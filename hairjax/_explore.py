@@ -25,12 +25,12 @@ import jax
 import numpy as np
 
 from ._errors import SceneError
-from ._geometry._stage import Geometry, geometry_stage
+from ._geometry_stage._stage import Geometry, geometry_stage
 from ._io._image import write_image
-from ._scene._light import Light
 from ._scene._scene import Scene
 from ._shading import shading_stage
 from ._shading._transforms import LOG
+from ._values._light import Light
 
 if TYPE_CHECKING:
     import ipywidgets as widgets  # type: ignore[import-untyped]

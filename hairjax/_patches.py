@@ -36,11 +36,11 @@ from ._geometry._occluder import drawable_triangles, occluder_hits
 from ._geometry._ordering import hair_centre, static_order
 from ._geometry._projection import View, camera_view
 from ._geometry._snapped import snapped_fragments
-from ._geometry._stage import geometry_stage
+from ._geometry_stage._stage import geometry_stage
 from ._patch_texture import patch_alpha, patch_texture, strand_hash
-from ._scene._strands import tangents
 from ._shading import occluder_colors, point_colors
 from ._shading._scheuermann_inputs import strand_normals
+from ._values._strands import tangents
 
 __all__ = [
     "scene_patches",

@@ -20,10 +20,10 @@ from jaxtyping import Array, Float
 
 from ._cache import forget
 from ._geometry._capacity import refuses_out_of_memory
-from ._geometry._estimate import check_capacity
 from ._geometry._placement import Placement
-from ._geometry._setup import prepare
-from ._geometry._stage import geometry_stage
+from ._geometry_stage._estimate import check_capacity
+from ._geometry_stage._setup import prepare
+from ._geometry_stage._stage import geometry_stage
 from ._progress import Progress
 from ._scene._scene import Scene
 from ._shading import shading_stage

@@ -23,11 +23,11 @@ import numpy as np
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
 from jaxtyping import Array, Float
 
-from ._geometry._stage import Geometry, geometry_stage
-from ._scene._camera import Camera
-from ._scene._light import Light
+from ._geometry_stage._stage import Geometry, geometry_stage
 from ._scene._scene import Scene
 from ._shading import shading_stage
+from ._values._camera import Camera
+from ._values._light import Light
 
 __all__ = [
     "render_views",

@@ -23,7 +23,13 @@ the measure can fail.
    re-exporting it) — i.e. an SCC of one `__init__` and its own submodules in which
    every edge into the `__init__` comes from one of those submodules. (No such SCC
    exists in hairjax today; the rule keeps the re-export idiom legal.)
-2. No module over 400 physical lines in `hairjax/`.
+1b. No import cycles between the packages of `hairjax/`: the same graph with each module
+   replaced by its top-level part (`hairjax._geometry._shadows._exact` is
+   `hairjax._geometry`; a top-level module is its own part), edges inside a part dropped.
+   Layers read one way (docs/architecture.md, "Layers"): a package never imports a
+   package that imports it back, at run time.
+2. No module over 400 physical lines in `hairjax/`, and no function over 80 (from its `def`
+   line to its last, the functions nested in it included).
 3. No private name taken across modules of `hairjax/`: `from X import _name`, X another
    hairjax module, `_name` not itself a module. A private *module* (`from . import
    _opacity_maps`, `from ._shading import point_colors`) is fine; dunders are not private.
@@ -64,6 +70,7 @@ REPO = Path(__file__).resolve().parents[1]
 PACKAGE = "hairjax"
 
 MAX_MODULE_LINES = 400
+MAX_FUNCTION_LINES = 80
 OLD_NAMES = frozenset(
     {"shading_model", "lookup_size", "scheuermann_maps", "SHADING_MODEL_IDS", "LOOKUP_MODELS"}
 )
@@ -232,6 +239,37 @@ def import_cycles(root: Path, package: str = PACKAGE) -> list[str]:
     return offenders
 
 
+def _part(module: str, package: str = PACKAGE) -> str:
+    """The top-level part of `package` that `module` belongs to (itself if top-level)."""
+    return ".".join(module.split(".")[:2])
+
+
+def package_graph(root: Path, package: str = PACKAGE) -> dict[str, dict[str, list[str]]]:
+    """Top-level part → {imported part: the module edges behind it}, as measure 1b draws it."""
+    graph: dict[str, dict[str, list[str]]] = {}
+    for module, imported in import_graph(root, package).items():
+        a = _part(module, package)
+        graph.setdefault(a, {})
+        for target, lines in imported.items():
+            b = _part(target, package)
+            if a != b:
+                where = ", ".join(map(str, sorted(set(lines))))
+                graph[a].setdefault(b, []).append(f"{module} -> {target} (line {where})")
+    return graph
+
+
+def package_cycles(root: Path, package: str = PACKAGE) -> list[str]:
+    graph = package_graph(root, package)
+    offenders = []
+    for component in strongly_connected(graph):  # type: ignore[arg-type]
+        if len(component) < 2:
+            continue
+        members = set(component)
+        edges = "; ".join(e for a in component for b in sorted(graph[a]) if b in members for e in graph[a][b])
+        offenders.append(f"cycle of {len(component)} packages {component}: {edges}")
+    return offenders
+
+
 # --- 2. module size --------------------------------------------------------------------
 
 
@@ -248,6 +286,19 @@ def long_modules(root: Path, package: str = PACKAGE, limit: int = MAX_MODULE_LIN
         for path, n in sorted(module_lines(root, package).items(), key=lambda kv: -kv[1])
         if n > limit
     ]
+
+
+def long_functions(root: Path, package: str = PACKAGE, limit: int = MAX_FUNCTION_LINES) -> list[str]:
+    offenders = []
+    for path in sorted(package_modules(root, package).values()):
+        for node in ast.walk(_parse(path)):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                n = (node.end_lineno or node.lineno) - node.lineno + 1
+                if n > limit:
+                    offenders.append(
+                        f"{path.relative_to(root)}:{node.lineno} {node.name}: {n} lines (limit {limit})"
+                    )
+    return offenders
 
 
 # --- 3. private names across modules ---------------------------------------------------
@@ -612,9 +663,19 @@ def test_no_import_cycles():
     assert not offenders, _message("import cycles between modules of hairjax/", offenders)
 
 
+def test_no_package_cycles():
+    offenders = package_cycles(REPO)
+    assert not offenders, _message("import cycles between packages of hairjax/", offenders)
+
+
 def test_no_long_modules():
     offenders = long_modules(REPO)
     assert not offenders, _message(f"modules over {MAX_MODULE_LINES} lines", offenders)
+
+
+def test_no_long_functions():
+    offenders = long_functions(REPO)
+    assert not offenders, _message(f"functions over {MAX_FUNCTION_LINES} lines", offenders)
 
 
 def test_no_private_names_across_modules():
@@ -691,12 +752,56 @@ def test_cycles_are_found(tmp_path):
     assert not any("hairjax.sub" in o or "hairjax._c" in o for o in offenders), offenders
 
 
+def test_package_cycles_are_found(tmp_path):
+    _write(
+        tmp_path,
+        {
+            "hairjax/__init__.py": "",
+            # _scene's values module is read by _stage, and _scene's file reader reads
+            # _stage's options: no module cycle, but the two packages import each other.
+            "hairjax/_scene/__init__.py": "",
+            "hairjax/_scene/_values.py": "x = 1\n",
+            "hairjax/_scene/_file.py": "from .._stage._options import o\n",
+            "hairjax/_stage/__init__.py": "",
+            "hairjax/_stage/_options.py": "o = 1\n",
+            "hairjax/_stage/_run.py": "from .._scene._values import x\n",
+            # One way only, through a top-level module: fine.
+            "hairjax/_io/__init__.py": "from .._top import t\n",
+            "hairjax/_top.py": "t = 1\n",
+            # A type-only import back does not run: fine.
+            "hairjax/_low/__init__.py": (
+                "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from .._io import t\n"
+            ),
+        },
+    )
+    assert import_cycles(tmp_path) == []  # every module cycle is absent ...
+    offenders = package_cycles(tmp_path)  # ... yet the packages form one
+    assert len(offenders) == 1, offenders
+    assert "['hairjax._scene', 'hairjax._stage']" in offenders[0], offenders
+    assert "hairjax._stage._run -> hairjax._scene._values" in offenders[0], offenders
+    assert "hairjax._scene._file -> hairjax._stage._options" in offenders[0], offenders
+
+
 def test_long_modules_are_found(tmp_path):
     _write(
         tmp_path,
         {"hairjax/__init__.py": "", "hairjax/_long.py": "x = 1\n" * 401, "hairjax/_ok.py": "x = 1\n" * 400},
     )
     assert long_modules(tmp_path) == ["hairjax/_long.py: 401 lines (limit 400)"]
+
+
+def test_long_functions_are_found(tmp_path):
+    body = "    x = 1\n"
+    _write(
+        tmp_path,
+        {
+            "hairjax/__init__.py": "",
+            # 1 def line + 80 body lines: at the limit; the nested one makes the outer 82.
+            "hairjax/_ok.py": "def ok():\n" + body * 80,
+            "hairjax/_long.py": "def outer():\n" + body * 79 + "    def inner():\n        pass\n",
+        },
+    )
+    assert long_functions(tmp_path) == ["hairjax/_long.py:1 outer: 82 lines (limit 80)"]
 
 
 def test_private_imports_are_found(tmp_path):
@@ -852,11 +957,13 @@ def report(root: Path = REPO, verbose: bool = False) -> list[str]:
     names = {n for group in registered_names(root).values() for n in group}
     metrics = [
         ("import cycles", import_cycles(root), None),
+        ("package cycles", package_cycles(root), None),
         (
             f"modules over {MAX_MODULE_LINES} lines",
             long_modules(root),
             f"longest {longest[0]} {longest[1]} lines, limit {MAX_MODULE_LINES}",
         ),
+        (f"functions over {MAX_FUNCTION_LINES} lines", long_functions(root), None),
         ("private names across modules", private_imports(root), None),
         ("string dispatch / old names", string_dispatch(root, names), None),
         ("experiments not numbered/indexed", experiment_index(root), None),

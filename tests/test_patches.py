@@ -27,8 +27,8 @@ from hairjax._patches import (
     scene_patches,
     strand_hash,
 )
-from hairjax._scene._strands import tangents
 from hairjax._shading._scheuermann_inputs import strand_normals
+from hairjax._values._strands import tangents
 
 BG = np.array([0.1, 0.2, 0.3])
 RED, GREEN, BLUE = np.eye(3)

@@ -7,9 +7,9 @@ import pytest
 from helpers import central_difference, small_furball_scene
 
 import hairjax as hj
-import hairjax._geometry._setup as setup_mod
 import hairjax._geometry._shadows._frame as frame_mod
-import hairjax._geometry._stage as stage_mod
+import hairjax._geometry_stage._setup as setup_mod
+import hairjax._geometry_stage._stage as stage_mod
 
 
 def stacked_hairs(ordering="bins", front_first=False):

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._cache import cached
-from .._geometry._stage import geometry_stage
+from .._geometry_stage._stage import geometry_stage
 from .._scene._scene import Scene
 from ._camera import camera_risk
 from ._light import omega_uncertainty, transmittance_uncertainty

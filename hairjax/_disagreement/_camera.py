@@ -9,7 +9,7 @@ import numpy as np
 from .._cache import cached
 from .._geometry._occluder import interpolation_bound, occluder_hits, silhouette_pixels
 from .._geometry._raster import Fragments, rasterize, ribbon_widths
-from .._geometry._setup import prepare, visibility_order
+from .._geometry_stage._setup import prepare, visibility_order
 from .._scene._scene import Scene
 from ._tolerances import OCCLUDER_EDGE_DELTA, OCCLUDER_VERTEX_STEP, PIXEL_TOL, s_delta
 

@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 
 from .._geometry._occluder import occluder_hits, occluder_light_view, shadow_bias, silhouette_pixels
-from .._geometry._setup import prepare
 from .._geometry._shadows import light_frame, with_receivers
+from .._geometry_stage._setup import prepare
 from ._light import light_band
 from ._tolerances import OCCLUDER_EDGE_DELTA
 

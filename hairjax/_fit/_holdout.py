@@ -15,7 +15,7 @@ from collections.abc import Sequence
 import jax.numpy as jnp
 import numpy as np
 
-from .._geometry._stage import geometry_stage
+from .._geometry_stage._stage import geometry_stage
 from .._render import render
 from .._scene._scene import Scene
 from .._shading import shading_stage

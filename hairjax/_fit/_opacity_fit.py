@@ -24,8 +24,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._geometry._host import to_device
-from .._geometry._setup import prepare
-from .._geometry._stage import composite_weights, geometry_stage
+from .._geometry_stage._setup import prepare
+from .._geometry_stage._stage import composite_weights, geometry_stage
 from .._scene._scene import Scene
 from .._shading import AbstractShadingModel
 from .._shading._transforms import LOGIT

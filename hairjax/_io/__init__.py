@@ -25,7 +25,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._errors import HairFormatError
-from .._scene._strands import Strands, distinct_strands, select_strands
+from .._values._strands import Strands, distinct_strands, select_strands
 from ._files import atomic_path
 from ._hair import parse_hair
 from ._ply import parse_ply

@@ -32,7 +32,7 @@ import struct
 import numpy as np
 
 from .._errors import HairFormatError
-from .._scene._strands import first_outside
+from .._values._strands import first_outside
 
 __all__ = ["parse_hair"]
 

@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from .._errors import HairFormatError, MissingDependency
-from .._scene._strands import first_outside
+from .._values._strands import first_outside
 
 __all__ = ["read_usd", "write_usd", "USD_SUFFIXES"]
 

@@ -33,8 +33,8 @@ from __future__ import annotations
 import numpy as np
 
 from .._geometry._projection import camera_view
-from .._scene._camera import Camera
-from .._scene._strands import Strands
+from .._values._camera import Camera
+from .._values._strands import Strands
 
 __all__ = ["fibre_curves", "bspline_control_points", "curve_file_text", "REPEATS", "SPREAD"]
 

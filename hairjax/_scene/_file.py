@@ -31,11 +31,11 @@ from .._errors import SceneError
 from .._geometry._ordering import ordering_class, ordering_names
 from .._geometry._shadows import shadow_method_class, shadow_method_names
 from .._shading import Streaks, shading_model_class, shading_model_names
-from ._camera import Camera
+from .._values._camera import Camera
+from .._values._light import Light
 from ._framing import WIDTH_FRACTION, bounding_sphere, frame_camera, key_light
 from ._hair_table import PROCEDURAL_SOURCES, read_hair, read_patches
 from ._keys import PATCH_KEYS, TOP_LEVEL_KEYS, field_names, scene_tables
-from ._light import Light
 from ._occluder import OCCLUDER_KINDS, Occluder
 from ._overrides import UNSET, blamed_on, with_overrides
 from ._reference import ReferenceSettings, read_reference

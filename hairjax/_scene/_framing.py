@@ -14,9 +14,9 @@ import numpy as np
 
 from .._errors import SceneError
 from .._geometry._projection import camera_view
-from ._camera import Camera
-from ._light import Light
-from ._strands import Strands
+from .._values._camera import Camera
+from .._values._light import Light
+from .._values._strands import Strands
 
 __all__ = [
     "frame_camera",

@@ -7,9 +7,9 @@ from pathlib import Path
 
 from .._errors import SceneError
 from .._io import FORMATS
+from .._values._strands import WIDTH_UNITS, Strands
 from ._procedural import combed, furball, scalp
 from ._scene import PatchGeometry
-from ._strands import WIDTH_UNITS, Strands
 from ._table import Table, given
 
 __all__ = ["read_hair", "read_patches", "HAIR_KEYS", "HAIR_FILE_SUFFIXES", "PROCEDURAL_SOURCES"]

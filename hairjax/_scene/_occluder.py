@@ -9,8 +9,8 @@ from typing import Literal
 import numpy as np
 
 from .._errors import SceneError
-from ._light import RGBInput, Vec3Like, rgb, vec3
-from ._strands import ArrayInput
+from .._values._light import RGBInput, Vec3Like, rgb, vec3
+from .._values._strands import ArrayInput
 
 __all__ = ["Occluder", "OCCLUDER_KINDS"]
 

@@ -8,7 +8,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from .._geometry._capacity import check_generated
-from ._strands import Strands
+from .._values._strands import Strands
 
 __all__ = ["furball", "scalp", "combed"]
 

@@ -14,7 +14,7 @@ import math
 from typing import Any
 
 from .._errors import SceneError
-from ._light import RGBInput, rgb
+from .._values._light import RGBInput, rgb
 from ._table import Table, given
 
 __all__ = [

@@ -18,11 +18,11 @@ from .._errors import SceneError
 from .._geometry._ordering import AbstractOrdering, DepthBins
 from .._geometry._shadows import AbstractShadowMethod, OpacityMaps
 from .._shading import AbstractShadingModel, KajiyaKay, Streaks
-from ._camera import Camera
-from ._light import Light, rgb
+from .._values._camera import Camera
+from .._values._light import Light, rgb
+from .._values._strands import Strands
 from ._occluder import Occluder
 from ._reference import ReferenceSettings
-from ._strands import Strands
 
 __all__ = ["PatchGeometry", "Scene"]
 

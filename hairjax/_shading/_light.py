@@ -23,8 +23,8 @@ from .._vectors import safe_normalize
 from ._model import RGBLike, values_repr  # RGBLike: an array, a number or 3 numbers
 
 if TYPE_CHECKING:
-    from .._geometry._stage import Geometry
-    from .._scene._light import Light
+    from .._geometry_stage._stage import Geometry
+    from .._values._light import Light
 
 __all__ = ["LightParams", "directional_to_light", "light_rgb", "lit_to_light", "occluder_direct"]
 

@@ -17,7 +17,7 @@ from jaxtyping import ArrayLike, Float
 from .._errors import SceneError
 from .._geometry._ordering import hair_centre
 from .._geometry._shadows import ExactShadows, ShadowInputs
-from .._scene._light import Light, Vec3Like
+from .._values._light import Light, Vec3Like
 
 __all__ = [
     "ScheuermannMaps",
@@ -28,7 +28,6 @@ __all__ = [
     "segment_alpha",
     "hair_occlusion",
     "sphere_directions",
-    "exact_omega_numpy",
     "HAIR_OCCLUSION_RESOLUTION",
     "HAIR_OCCLUSION_DIRECTIONS",
 ]
@@ -231,19 +230,6 @@ def hair_occlusion(strands, density: float, seg_alpha: np.ndarray | None = None)
             width_units=strands.width_units,
         )
         setup = exact.setup(inputs)
-        omega = exact_omega_numpy(setup, strands.alpha[setup.frag_strand] * setup.frag_coverage)
+        omega = exact.omega_numpy(setup, strands.alpha)
         total += np.exp(-density * omega)
     return total / HAIR_OCCLUSION_DIRECTIONS
-
-
-def exact_omega_numpy(setup, frag_alpha: np.ndarray) -> np.ndarray:
-    """`_shadows.exact_opacity` in NumPy, for an `ExactSetup` (`[P]`): per-texel
-    inclusive prefix sums of the fragments' alpha, nearest first, read at each point's
-    (2r + 1)² texels. (One set-up, many shapes: no JAX compilation per direction.)"""
-    if frag_alpha.size == 0:  # fires when no segment reaches the raster: Ω = 0
-        return np.zeros(setup.index.shape[0])
-    cum = np.cumsum(frag_alpha)
-    group = np.cumsum(setup.frag_first) - 1
-    starts = np.flatnonzero(setup.frag_first)
-    prefix = cum - (cum[starts] - frag_alpha[starts])[group]
-    return np.sum(setup.weight * prefix[setup.index], axis=1)

@@ -25,16 +25,18 @@ from jaxtyping import Array, Float
 from .._composite import composite
 from ._light import LightParams, light_rgb, lit_to_light, occluder_direct
 from ._model import Reflectance, ShadingPoints
+from ._streaks import streak_factors
 from ._transmittance import transmittance
 
 if TYPE_CHECKING:
-    from .._geometry._stage import Geometry
+    from .._geometry_stage._stage import Geometry
 
 __all__ = [
     "shading_points",
     "light_factor",
     "scattered_factor",
     "combine",
+    "point_streaks",
     "point_colors",
     "occluder_colors",
     "shading_stage",
@@ -89,6 +91,15 @@ def combine(
     return colors
 
 
+def point_streaks(geometry: Geometry) -> Float[Array, " P"] | None:
+    """§16: each point's streak factor (`streak_factors`), None without streaks."""
+    if geometry.streaks is None or geometry.strand_of_point is None:
+        return None
+    return streak_factors(
+        geometry.streaks, geometry.strand_of_point, geometry.num_strands, geometry.tangent.dtype
+    )
+
+
 def point_colors(geometry: Geometry, params, light: LightParams | None = None) -> Float[Array, "P 3"]:
     """Shaded colour at every strand point (Gouraud, kim-2003 §5): the model's reflectance
     lit by `light_factor`, times the streak factor (§16) where the scene has streaks.
@@ -105,8 +116,9 @@ def point_colors(geometry: Geometry, params, light: LightParams | None = None) -
         light_factor(geometry, params.kappa, light),
         scattered_factor(geometry, light) if reflectance.scattered else None,
     )
-    if geometry.streak is not None:  # §16: the streak texture modulates the whole colour
-        colors = colors * geometry.streak[:, None]
+    streak = point_streaks(geometry)
+    if streak is not None:  # §16: the streak texture modulates the whole colour
+        colors = colors * streak[:, None]
     return colors
 
 

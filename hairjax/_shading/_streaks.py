@@ -102,15 +102,16 @@ def streak_factor(
     return (_antiderivative(texture, prefix, b) - _antiderivative(texture, prefix, a)) / (width * m)
 
 
-def streak_factors(streaks: Streaks, strands, dtype) -> Float[Array, " P"]:
-    """§16: each point's streak factor, the texture's mean over its hair's [u_i, u_i + Δ]."""
+def streak_factors(streaks: Streaks, strand_of_point, num_strands: int, dtype) -> Float[Array, " P"]:
+    """§16: each point's streak factor, the texture's mean over its hair's [u_i, u_i + Δ];
+    `strand_of_point` `[P]` (NumPy or JAX), `num_strands` the number of hairs S."""
     import jax  # the rest of this module is NumPy and one pure function
 
     texture = streak_texture(streaks)
-    u = strand_coordinates(streaks, strands.num_strands)[strands.strand_of_point]
+    u = jnp.asarray(strand_coordinates(streaks, num_strands), dtype)[strand_of_point]
     return jax.vmap(streak_factor, in_axes=(None, None, 0, None))(
         jnp.asarray(texture, dtype),
         jnp.asarray(streak_prefix(texture), dtype),
-        jnp.asarray(u, dtype),
+        u,
         streaks.width,
     )

@@ -50,7 +50,7 @@ def scene_path(path: Path | None) -> Path:
 
 def _camera_size(path: Path, overrides: dict[str, Any]) -> tuple[int, int]:
     """The camera's width and height before --size: from --set, the file, or the default."""
-    from .._scene._camera import Camera
+    from .._values._camera import Camera
 
     camera: dict[str, Any] = {}
     if path.suffix.lower() not in HAIR_FILE_SUFFIXES:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._scene._scene import Scene
-from .._scene._strands import tangents
+from .._values._strands import tangents
 from ._shading import point_inputs
 
 __all__ = ["Points", "Strands"]

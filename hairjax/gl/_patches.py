@@ -22,7 +22,7 @@ import numpy as np
 
 from .._geometry._occluder import drawable_triangles
 from .._geometry._projection import View
-from .._geometry._stage import geometry_stage
+from .._geometry_stage._stage import geometry_stage
 from .._patches import Patches
 from .._scene._scene import Scene
 from ._camera_pass import camera_depth_far

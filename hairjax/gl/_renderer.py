@@ -19,8 +19,8 @@ import time
 import numpy as np
 
 from .._geometry._projection import camera_view
-from .._geometry._setup import visibility_order
 from .._geometry._shadows import light_frame, with_receivers
+from .._geometry_stage._setup import visibility_order
 from .._patches import scene_patches, scene_point_colors
 from .._scene._scene import Scene
 from . import _deep_maps, _exact_opacity, _opacity_maps  # noqa: F401 (they register their passes)

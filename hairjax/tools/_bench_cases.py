@@ -80,11 +80,11 @@ def config_name(cfg: dict) -> str:
 def bench_scene(cfg: dict):
     from .._geometry._ordering import Ordering
     from .._geometry._shadows import Shadows
-    from .._scene._camera import Camera
-    from .._scene._light import Light
     from .._scene._procedural import furball
     from .._scene._scene import Scene
     from .._shading import KajiyaKay, ShadingParams
+    from .._values._camera import Camera
+    from .._values._light import Light
 
     hair = furball(strands=cfg["strands"], points=POINTS)
     return Scene(

@@ -106,7 +106,7 @@ def _jax_costs(scene, repeats: int, progress) -> dict:
     import jax
     import jax.numpy as jnp
 
-    from .._geometry._stage import geometry_stage
+    from .._geometry_stage._stage import geometry_stage
     from .._shading import shading_stage
 
     model, params = scene.shading, scene.params

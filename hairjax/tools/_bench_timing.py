@@ -118,8 +118,8 @@ def _measure_jax(scene, repeats: int, progress) -> dict:
     import jax.numpy as jnp
 
     from .._geometry._ordering import Ordering, draw_order, segment_depth
-    from .._geometry._setup import prepare
-    from .._geometry._stage import geometry_stage
+    from .._geometry_stage._setup import prepare
+    from .._geometry_stage._stage import geometry_stage
     from .._render import render_profiled
     from .._shading import ShadingParams, shading_stage
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from .._cache import forget
 from .._disagreement import PIXEL_TOL, renderer_band
-from .._geometry._stage import geometry_stage
+from .._geometry_stage._stage import geometry_stage
 from .._io._image import linear_to_srgb, write_image, write_png_codes
 from .._progress import Progress
 from .._render import render

@@ -55,7 +55,7 @@ def renderer(path: str) -> Renderer:
     """A function rendering a scene with one path to (image [H, W, 4], Ω per point)."""
     if path == "jax":
         from .._cache import forget
-        from .._geometry._stage import geometry_stage
+        from .._geometry_stage._stage import geometry_stage
         from .._render import render
 
         def run(scene):

@@ -8,7 +8,7 @@ from helpers import real_fragments, small_furball_scene
 
 import hairjax as hj
 from hairjax._geometry._capacity import MIN_BUCKET, fragment_bucket
-from hairjax._geometry._setup import prepare
+from hairjax._geometry_stage._setup import prepare
 
 
 def test_buckets_are_eight_to_an_octave_and_pad_by_at_most_an_eighth():

@@ -24,8 +24,8 @@ from hairjax._geometry._device_raster import (
 from hairjax._geometry._group import group_by_pixel
 from hairjax._geometry._placement import PLACEMENT_VARIABLE, default_placement, placement_of
 from hairjax._geometry._raster import rasterize
-from hairjax._geometry._setup import prepare
-from hairjax._geometry._stage import geometry_stage
+from hairjax._geometry_stage._setup import prepare
+from hairjax._geometry_stage._stage import geometry_stage
 
 W, H = 90, 70
 

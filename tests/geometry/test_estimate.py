@@ -13,11 +13,12 @@ from helpers import small_furball_scene
 
 import hairjax as hj
 from hairjax._errors import SceneTooLarge
-from hairjax._geometry import _capacity, _device_raster, _setup
+from hairjax._geometry import _capacity, _device_raster
 from hairjax._geometry._device_raster import rasterize_on_device
-from hairjax._geometry._estimate import fixed_needs, ribbon_pixel_bound
 from hairjax._geometry._raster import rasterize
 from hairjax._geometry._shadows import DeepOpacityMaps, ExactShadows, OpacityMaps
+from hairjax._geometry_stage import _setup
+from hairjax._geometry_stage._estimate import fixed_needs, ribbon_pixel_bound
 from hairjax._scene import _procedural
 from hairjax.cli import main
 

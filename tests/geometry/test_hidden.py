@@ -9,8 +9,8 @@ from helpers import FRAGMENT_FIELDS, real_fragments, small_furball_scene
 
 from hairjax._geometry._hidden import drawn_cutoff, keep_on_device, keep_on_host, keep_visible
 from hairjax._geometry._host import ALIGNMENT
-from hairjax._geometry._setup import prepare
-from hairjax._geometry._stage import geometry_stage
+from hairjax._geometry_stage._setup import prepare
+from hairjax._geometry_stage._stage import geometry_stage
 from hairjax._shading._stage import point_colors, shading_stage
 
 cpu_only = pytest.mark.skipif(jax.default_backend() != "cpu", reason="the CPU backend aliases host arrays")

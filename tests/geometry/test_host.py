@@ -16,8 +16,8 @@ from hairjax._geometry._host import (
     to_device,
 )
 from hairjax._geometry._placement import PLACEMENT_VARIABLE
-from hairjax._geometry._setup import prepare
-from hairjax._geometry._stage import geometry_stage
+from hairjax._geometry_stage._setup import prepare
+from hairjax._geometry_stage._stage import geometry_stage
 
 cpu_only = pytest.mark.skipif(jax.default_backend() != "cpu", reason="the CPU backend aliases host arrays")
 

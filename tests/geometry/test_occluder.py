@@ -287,7 +287,7 @@ def test_a_scene_without_occluder_does_no_occluder_work(monkeypatch):
     carries no occluder fields (the image is the one of tests/test_render.py)."""
     from helpers import small_furball_scene
 
-    from hairjax._geometry import _setup as setup_mod
+    from hairjax._geometry_stage import _setup as setup_mod
 
     def forbidden(*args, **kwargs):
         raise AssertionError("occluder work in a scene without occluder")

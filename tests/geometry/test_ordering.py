@@ -106,7 +106,7 @@ def test_static_order_is_the_same_from_every_view():
     import dataclasses
 
     import hairjax as hj
-    from hairjax._geometry._setup import visibility_order
+    from hairjax._geometry_stage._setup import visibility_order
 
     scene = hj.Scene(
         hj.furball(30, 5, seed=1),
@@ -132,7 +132,7 @@ def test_static_order_is_the_same_from_every_view():
 
 def test_static_order_skips_segments_behind_the_near_plane():
     import hairjax as hj
-    from hairjax._geometry._setup import visibility_order
+    from hairjax._geometry_stage._setup import visibility_order
 
     # A camera inside the ball: some segments have an end nearer than `near` or behind it.
     scene = hj.Scene(

@@ -13,7 +13,7 @@ from helpers import small_furball_scene
 import hairjax as hj
 from hairjax._errors import EmptyViewWarning
 from hairjax._scene._file import default_scene_path, load_scene
-from hairjax._scene._strands import Strands
+from hairjax._values._strands import Strands
 
 
 def looking_away():

@@ -161,7 +161,7 @@ def test_slice_clipping_draws_less_and_changes_nothing(gl, tmp_path, monkeypatch
 def test_render_gl_takes_a_given_draw_order(gl, tmp_path):
     """`render_gl(..., order=…)`: the scene's own order gives the identical image; the
     order of the same scene sorted otherwise gives that scene's image."""
-    from hairjax._geometry._setup import visibility_order
+    from hairjax._geometry_stage._setup import visibility_order
     from hairjax.gl import render_gl
 
     scene = small_scene(tmp_path)

@@ -16,7 +16,7 @@ from helpers import DATA
 
 from hairjax._errors import HairFormatError
 from hairjax._io import format_info, hair_info, load_hair
-from hairjax._scene._strands import Strands
+from hairjax._values._strands import Strands
 
 needs_data = pytest.mark.skipif(not DATA.is_dir(), reason=f"shared hair assets not found at {DATA}")
 

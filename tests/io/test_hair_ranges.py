@@ -15,7 +15,7 @@ from hairjax._constants import COORDINATE_BOUND
 from hairjax._errors import HairFormatError, MeshFormatError
 from hairjax._io import load_hair
 from hairjax._io._obj import load_obj
-from hairjax._scene._strands import Strands, distinct_strands, select_strands
+from hairjax._values._strands import Strands, distinct_strands, select_strands
 
 THREE = [
     np.array([[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 2.0, 0.5]]),

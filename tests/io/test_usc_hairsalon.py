@@ -22,7 +22,7 @@ import pytest
 import hairjax as hj
 from hairjax._errors import HairFormatError
 from hairjax._io import load_hair, save_hair
-from hairjax._scene._strands import Strands
+from hairjax._values._strands import Strands
 
 assert sys.byteorder == "little"  # struct's native 'i' and 'f' are then the file's '<i', '<f'
 

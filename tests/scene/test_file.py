@@ -18,7 +18,7 @@ from hairjax import Camera, Light, Occluder, Ordering, Shadows
 from hairjax._errors import HairFormatError, SceneError
 from hairjax._scene._file import default_scene_path, load_scene, scene_from_dict
 from hairjax._scene._procedural import combed, furball, scalp
-from hairjax._scene._strands import Strands
+from hairjax._values._strands import Strands
 
 PONYTAIL_TAIL = DATA / "tressfx" / "ponytail_tail.tfx"  # read in place (shared/data/README.md)
 

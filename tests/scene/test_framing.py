@@ -15,7 +15,7 @@ from hairjax._errors import SceneError
 from hairjax._geometry._projection import camera_view
 from hairjax._scene._file import scene_for_hair
 from hairjax._scene._framing import frame_camera, key_light
-from hairjax._scene._strands import Strands
+from hairjax._values._strands import Strands
 
 ASSETS = (
     sorted(DATA.glob("hair/*.hair")) + sorted(DATA.glob("hair/*.ply")) + sorted(DATA.glob("tressfx/*.tfx"))

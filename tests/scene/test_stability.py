@@ -22,7 +22,7 @@ import hairjax as hj
 def test_guard_zero_tangent_of_repeated_points():
     """_scene/_strands.tangents/unit_rows: a zero central difference (repeated points, one-point
     strands) gives the zero tangent, exactly; other tangents are unit vectors."""
-    from hairjax._scene._strands import tangents
+    from hairjax._values._strands import tangents
 
     hair = hj.Strands.from_list(
         [

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import hairjax as hj
-from hairjax._scene._strands import tangents
+from hairjax._values._strands import tangents
 
 
 def test_ragged_strands_segments_and_tangents():

@@ -549,16 +549,16 @@ def test_a_scene_may_hold_traced_parameters():
 
 
 def test_numpy_exact_omega_equals_the_renderers():
-    """exact_omega_numpy (hair_occlusion's Ω) against _shadows.exact_opacity (the renderer's
-    `exact` Ω, float64) on the same light-space set-up: equal to rounding."""
+    """`ExactShadows.omega_numpy` (hair_occlusion's Ω) against `exact_opacity` (the
+    renderer's `exact` Ω, float64) on the same light-space set-up: equal to rounding."""
     from hairjax._geometry._shadows import ShadowInputs, exact_opacity
-    from hairjax._shading._scheuermann_inputs import exact_omega_numpy
 
     s = scheuermann_scene(strands=60).strands
     segs = s.segments()
     light = hj.Light(direction=(0.3, -1.0, 0.2))
     inputs = ShadowInputs(s.points, segs, s.strand_of_point[segs[:, 0]], s.width, light)
-    setup = hj.Shadows("exact", resolution=32).setup(inputs)
+    method = hj.Shadows("exact", resolution=32)
+    setup = method.setup(inputs)
     alpha = s.alpha[setup.frag_strand] * setup.frag_coverage
     ref = np.asarray(
         jax.jit(exact_opacity)(
@@ -569,7 +569,7 @@ def test_numpy_exact_omega_equals_the_renderers():
         )
     )
     assert ref.max() > 1.0  # the points are really occluded
-    np.testing.assert_allclose(exact_omega_numpy(setup, alpha), ref, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(method.omega_numpy(setup, s.alpha), ref, rtol=1e-12, atol=1e-12)
 
 
 def test_hair_occlusion_darkens_the_inside_of_the_hair():

@@ -194,7 +194,7 @@ def test_compare_refuses_bad_repeats_before_rendering(monkeypatch, repeats):
 
 @pytest.mark.parametrize("shadows", ["opacity-maps", "none"])
 def test_compare_on_a_tiny_scene(gl, shadows):
-    from hairjax._geometry._stage import geometry_stage
+    from hairjax._geometry_stage._stage import geometry_stage
     from hairjax.gl import render_gl
 
     scene = small_furball_scene(strands=40, size=24, shadows=shadows).replace(name="tiny")

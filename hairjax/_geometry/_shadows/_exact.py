@@ -101,6 +101,21 @@ class ExactShadows(AbstractShadowMethod):
             jnp.asarray(setup.weight, dtype),
         )
 
+    def omega_numpy(self, setup: ExactSetup, alpha: np.ndarray) -> np.ndarray:
+        """`omega` in NumPy and float64, for precomputed inputs that are not differentiated
+        (the Scheuermann model's hair occlusion, docs/model.md §17): `exact_opacity`'s
+        per-texel inclusive prefix sums, nearest first, read at each point's (2r + 1)²
+        texels. One set-up per light direction, each of its own fragment count: NumPy
+        compiles nothing per shape, where the jitted `omega` would compile once per count."""
+        frag_alpha = np.asarray(alpha, np.float64)[setup.frag_strand] * setup.frag_coverage
+        if frag_alpha.size == 0:  # fires when no segment reaches the raster: Ω = 0
+            return np.zeros(setup.index.shape[0])
+        cum = np.cumsum(frag_alpha)
+        group = np.cumsum(setup.frag_first) - 1
+        starts = np.flatnonzero(setup.frag_first)
+        prefix = cum - (cum[starts] - frag_alpha[starts])[group]
+        return np.sum(setup.weight * prefix[setup.index], axis=1)
+
 
 @eqx.filter_jit
 def _exact_opacity(alpha, frag_strand, frag_coverage, frag_first, index, weight):

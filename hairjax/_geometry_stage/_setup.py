@@ -21,20 +21,20 @@ import numpy as np
 
 from .._cache import cached
 from .._errors import EmptyViewWarning
+from .._geometry._capacity import fragment_bucket, refuses_out_of_memory
+from .._geometry._device_raster import device_candidates, group_on_device
+from .._geometry._group import group_parts
+from .._geometry._host import release_heap, release_shared
+from .._geometry._occluder import occluder_hits, occluder_light_view, occluder_visibility
+from .._geometry._ordering import segment_depth
+from .._geometry._placement import Placement, placement_of
+from .._geometry._projection import View, camera_view
+from .._geometry._raster import Arrays, rasterize_parts, ribbon_widths
+from .._geometry._shadows import ShadowInputs
 from .._scene._scene import Scene
-from .._scene._strands import tangents, unit_rows
 from .._shading import PointInputs
-from ._capacity import fragment_bucket, refuses_out_of_memory
-from ._device_raster import device_candidates, group_on_device
+from .._values._strands import tangents, unit_rows
 from ._estimate import check_capacity
-from ._group import group_parts
-from ._host import release_heap, release_shared
-from ._occluder import occluder_hits, occluder_light_view, occluder_visibility
-from ._ordering import segment_depth
-from ._placement import Placement, placement_of
-from ._projection import View, camera_view
-from ._raster import Arrays, rasterize_parts, ribbon_widths
-from ._shadows import ShadowInputs
 
 __all__ = ["GeometrySetup", "prepare", "visibility_order", "to_light", "warn_empty_view"]
 

@@ -31,14 +31,14 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._errors import SceneTooLarge
+from .._geometry import _capacity, _device_raster
+from .._geometry._capacity import fragment_bytes, memory_size
+from .._geometry._device_raster import candidate_bytes
+from .._geometry._placement import Placement
+from .._geometry._raster import count_fragments
+from .._geometry._raster_plan import raster_plan
+from .._geometry._shadows import MAX_MAP_CELLS, light_raster
 from .._scene._scene import Scene
-from . import _capacity, _device_raster
-from ._capacity import fragment_bytes, memory_size
-from ._device_raster import candidate_bytes
-from ._placement import Placement
-from ._raster import count_fragments
-from ._raster_plan import raster_plan
-from ._shadows import MAX_MAP_CELLS, light_raster
 
 __all__ = ["Need", "fixed_needs", "fragment_needs", "check_capacity", "ribbon_pixel_bound"]
 

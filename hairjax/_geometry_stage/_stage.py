@@ -11,17 +11,17 @@ from typing import Any
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-from jaxtyping import Array, Float
+from jaxtyping import Array, Float, Int
 
 from .._cache import cached
 from .._composite import pixel_weights
+from .._geometry._capacity import refuses_out_of_memory
+from .._geometry._hidden import drawn_cutoff, keep_visible
+from .._geometry._host import release_heap, to_device
+from .._geometry._placement import Placement, placement_of
 from .._scene._scene import Scene
 from .._shading import AbstractShadingModel
-from .._shading._streaks import streak_factors
-from ._capacity import refuses_out_of_memory
-from ._hidden import drawn_cutoff, keep_visible
-from ._host import release_heap, to_device
-from ._placement import Placement, placement_of
+from .._shading._streaks import Streaks
 from ._setup import prepare
 
 __all__ = ["Geometry", "composite_weights", "fragment_alpha", "geometry_stage"]
@@ -56,7 +56,11 @@ class Geometry(eqx.Module):
     shading: AbstractShadingModel
     height: int = eqx.field(static=True)
     width: int = eqx.field(static=True)
-    streak: Float[Array, " P"] | None = None  # §16's factor per point; None without streaks
+    # §16's streaks, applied by the shading stage (`point_streaks`); None without streaks,
+    # and then no `strand_of_point` either.
+    streaks: Streaks | None = eqx.field(static=True, default=None)
+    strand_of_point: Int[Array, " P"] | None = None
+    num_strands: int = eqx.field(static=True, default=0)
     shading_inputs: Any = None
 
 
@@ -179,6 +183,8 @@ def _geometry_stage(scene: Scene, alpha, order, cutoff: float, placement: Placem
         shading=scene.shading,
         height=scene.camera.height,
         width=scene.camera.width,
-        streak=None if scene.streaks is None else streak_factors(scene.streaks, scene.strands, dtype),
+        streaks=scene.streaks,
+        strand_of_point=None if scene.streaks is None else jnp.asarray(setup.strand_of_point),
+        num_strands=scene.strands.num_strands,
         shading_inputs=None if extra is None else jax.tree.map(lambda x: jnp.asarray(x, dtype), extra),
     )
