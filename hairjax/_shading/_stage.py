@@ -100,10 +100,13 @@ def point_streaks(geometry: Geometry) -> Float[Array, " P"] | None:
     )
 
 
-def point_colors(geometry: Geometry, params, light: LightParams | None = None) -> Float[Array, "P 3"]:
+def point_colors(
+    geometry: Geometry, params, light: LightParams | None = None, streak: Float[Array, " P"] | None = None
+) -> Float[Array, "P 3"]:
     """Shaded colour at every strand point (Gouraud, kim-2003 §5): the model's reflectance
     lit by `light_factor`, times the streak factor (§16) where the scene has streaks.
-    `light`: the light's direction and colour instead of the geometry's (module docstring)."""
+    `light`: the light's direction and colour instead of the geometry's (module docstring).
+    `streak`: `point_streaks(geometry)`, if already computed."""
     model = geometry.shading
     if not isinstance(params, model.params_type):
         raise TypeError(
@@ -116,7 +119,7 @@ def point_colors(geometry: Geometry, params, light: LightParams | None = None) -
         light_factor(geometry, params.kappa, light),
         scattered_factor(geometry, light) if reflectance.scattered else None,
     )
-    streak = point_streaks(geometry)
+    streak = point_streaks(geometry) if streak is None else streak
     if streak is not None:  # §16: the streak texture modulates the whole colour
         colors = colors * streak[:, None]
     return colors
@@ -136,7 +139,6 @@ def occluder_colors(geometry: Geometry, params, light: LightParams | None = None
     return params.ambient[None, :] * color[None, :] + direct
 
 
-@eqx.filter_jit
 def shading_stage(geometry: Geometry, params, light: LightParams | None = None) -> Float[Array, "H W 4"]:
     """The image from the geometry stage and the shading parameters (`[H, W, 4]`):
     the composite of the point colours over the backdrop (the occluder's colour where it
@@ -150,7 +152,15 @@ def shading_stage(geometry: Geometry, params, light: LightParams | None = None) 
     and not for one with an occluder (ValueError). Ω and V stay the scene light's
     (docs/model.md §3). `light=None`: the scene's light, exactly as without the argument.
     """
-    rgb = composite(geometry, point_colors(geometry, params, light), paired=True)
+    # The streak factors are computed before the compiled stage, op by op: compiled into
+    # it, XLA's fused arithmetic rounds them differently, and furball_animated's image
+    # moved by up to 9 float32 ulp (measured). Under an outer trace they are traced too.
+    return _shading_stage(geometry, params, light, point_streaks(geometry))
+
+
+@eqx.filter_jit
+def _shading_stage(geometry: Geometry, params, light: LightParams | None, streak) -> Float[Array, "H W 4"]:
+    rgb = composite(geometry, point_colors(geometry, params, light, streak), paired=True)
     backdrop = geometry.backdrop
     if geometry.occluder_pixel is not None:
         backdrop = backdrop.at[geometry.occluder_pixel].set(occluder_colors(geometry, params, light))
