@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from helpers import small_furball_scene
 
-import hairjax.tools._joint as joint_mod
+import hairjax.tools._search as search_mod
 from hairjax import cli
 from hairjax._geometry._shadows import shadow_method_names
 from hairjax.tools import (
@@ -253,7 +253,7 @@ def test_a_search_in_a_finished_folder_renders_nothing(grid, tmp_path, monkeypat
     scene, out, points = grid
     by_key = {setting_key(p["settings"]): p for p in points}
     expected = pareto_search(knob_space(scene, SMALL), lambda s: by_key[setting_key(s)])
-    monkeypatch.setattr(joint_mod, "measure", lambda *a: pytest.fail("rendered a stored point"))
+    monkeypatch.setattr(search_mod, "measure", lambda *a: pytest.fail("rendered a stored point"))
     calls = []
     found = run_joint(
         scene, out, knobs=SMALL, paths=("gl",), cost=_model_cost, progress=lambda *a: calls.append(a)
@@ -265,7 +265,7 @@ def test_a_search_in_a_finished_folder_renders_nothing(grid, tmp_path, monkeypat
 def test_an_interrupted_search_continues(tmp_path, monkeypatch, gl):
     scene = small_furball_scene(strands=40, size=16, maps=4, resolution=16)
     knobs = {"shadows": ("none", "opacity-maps"), "maps": (2, 4), "bins": (1, "exact")}
-    original = joint_mod.measure
+    original = search_mod.measure
     renders = []
 
     def interrupt_after_three(*args):
@@ -274,12 +274,12 @@ def test_an_interrupted_search_continues(tmp_path, monkeypatch, gl):
             raise KeyboardInterrupt
         return original(*args)
 
-    monkeypatch.setattr(joint_mod, "measure", interrupt_after_three)
+    monkeypatch.setattr(search_mod, "measure", interrupt_after_three)
     with pytest.raises(KeyboardInterrupt):
         run_joint(scene, tmp_path, knobs=knobs, paths=("gl",), cost=_model_cost)
     assert len(load_joint(tmp_path)) == 3
     (tmp_path / "joint.jsonl").write_text((tmp_path / "joint.jsonl").read_text() + '{"path": "gl", "sett')
-    monkeypatch.setattr(joint_mod, "measure", lambda *a: renders.append(a[1]) or original(*a))
+    monkeypatch.setattr(search_mod, "measure", lambda *a: renders.append(a[1]) or original(*a))
     renders.clear()
     resumed = run_joint(scene, tmp_path, knobs=knobs, paths=("gl",), cost=_model_cost)
     assert len(renders) == len(resumed) - 3  # only the points not yet measured (the reference is kept)
@@ -450,7 +450,7 @@ def test_bad_arguments_are_refused_before_any_render(tmp_path, kwargs, message, 
     def no_render(path):
         raise AssertionError("a renderer was made before the arguments were checked")
 
-    monkeypatch.setattr(joint_mod, "renderer", no_render)
+    monkeypatch.setattr(search_mod, "renderer", no_render)
     with pytest.raises(SweepError, match=message):
         run_joint(small_furball_scene(), tmp_path / "out", **{"knobs": {"bins": (1,)}, **kwargs})
     assert not (tmp_path / "out").exists()
