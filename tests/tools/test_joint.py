@@ -23,7 +23,7 @@ from hairjax.tools import (
     pareto_front,
     pareto_search,
     run_joint,
-    write_joint_report,
+    write_report,
 )
 from hairjax.tools._knob_space import setting_key
 from hairjax.tools._pareto import near_front
@@ -308,7 +308,7 @@ def test_a_small_search_with_real_renders(tmp_path, gl):
     assert calls[0] == (0, 1, "jax reference") and calls[1][:2] == (1, 3)
     assert calls[1][2].startswith("jax bins=1 maps=2: ")
     config = json.loads((tmp_path / "joint.json").read_text())
-    files = write_joint_report(tmp_path, points, config)
+    files = write_report(tmp_path, points, config)
     assert files["pareto"].read_text().splitlines()[0] == "path,bins,maps,time_s,rel_rmse,rmse,max_abs"
     assert files["plot"].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "the budget (3 points per path) ran out" in files["summary"].read_text()
@@ -365,7 +365,7 @@ REPORT_CONFIG = {
 
 
 def test_the_report(tmp_path):
-    files = write_joint_report(tmp_path, REPORT_POINTS, REPORT_CONFIG)
+    files = write_report(tmp_path, REPORT_POINTS, REPORT_CONFIG)
     assert files["pareto"].read_text().splitlines() == [
         "path,shadows,maps,supersampling,time_s,rel_rmse,rmse,max_abs",
         "jax,none,,1,1.0,0.2,0.2,1.0",

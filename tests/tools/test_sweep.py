@@ -11,8 +11,15 @@ from helpers import small_furball_scene
 import hairjax as hj
 import hairjax.tools._search as search_mod
 from hairjax import cli
-from hairjax.tools import SweepError, knob_scene, load_points, run_sweep
-from hairjax.tools._sweep_report import cheapest, summary_markdown, write_report
+from hairjax.tools import (
+    SweepError,
+    cheapest,
+    knob_scene,
+    load_points,
+    run_sweep,
+    summary_markdown,
+    write_report,
+)
 
 KNOBS = {"bins": (1, "exact"), "maps": (2, 8)}
 
