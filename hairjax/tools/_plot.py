@@ -86,6 +86,8 @@ def pareto_plot(points: list[dict], config: dict, path) -> Path:
             x,
             y,
             line,
+            marker="o",
+            ms=3,
             color=color,
             drawstyle="steps-post",
             label=f"{name}: front ({len(front)} of {len(mine)})",
