@@ -135,10 +135,9 @@ def run_search(
     scene: Scene,
     out,
     space: Space,
-    *,
     store: Store,
-    paths: Sequence[str],
-    repeats: int,
+    paths: Sequence[str] = PATHS,
+    repeats: int = 3,
     search: SearchConfig | None = None,
     restart: bool = False,
     progress: Progress | bool | None = None,
@@ -157,6 +156,8 @@ def run_search(
     `SearchConfig` (a `KnobSpace` only) the Pareto search's. `target`: a
     `target_reference`, every point's reference instead of each path's own (none is
     rendered). Arguments are checked by the caller (`check_run`)."""
+    if search is not None and not isinstance(space, KnobSpace):
+        raise TypeError("the Pareto search steps through a KnobSpace; pass search=None")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     config = {
@@ -175,10 +176,8 @@ def run_search(
     store.rewrite(out, stored)
     with progress_of(progress, store.title) as report:
         run = _Run(scene, out, space, store, repeats, cost, target, report)
-        if search is None:
+        if search is None or not isinstance(space, KnobSpace):
             return _every_setting(run, paths, stored)
-        if not isinstance(space, KnobSpace):
-            raise TypeError("the Pareto search steps through a KnobSpace; pass search=None")
         return _pareto(run, space, paths, stored, search)
 
 
@@ -260,28 +259,17 @@ def run_sweep(
     repeats = check_run(knobs, paths, repeats)
     given = None if target is None else target_reference(scene, target)
     space = one_knob_space(scene, knobs)
-    return run_search(
-        scene,
-        out,
-        space,
-        store=SWEEP_STORE,
-        paths=paths,
-        repeats=repeats,
-        restart=restart,
-        progress=progress,
-        cost=cost,
-        target=given,
-    )
+    return run_search(scene, out, space, SWEEP_STORE, paths, repeats, None, restart, progress, cost, given)
 
 
 def run_joint(
     scene: Scene,
     out,
     *,
+    search: SearchConfig | None = SearchConfig(),
     knobs: Mapping[str, Sequence] | None = None,
     paths: Sequence[str] = PATHS,
     repeats: int = 3,
-    search: SearchConfig | None = SearchConfig(),
     restart: bool = False,
     progress: Progress | None = None,
     cost: Cost | None = None,
@@ -294,15 +282,4 @@ def run_joint(
     knobs = dict(JOINT_KNOBS if knobs is None else knobs)
     repeats = check_run(knobs, paths, repeats, empty_values=False)
     space = knob_space(scene, knobs)
-    return run_search(
-        scene,
-        out,
-        space,
-        store=JOINT_STORE,
-        paths=paths,
-        repeats=repeats,
-        search=search,
-        restart=restart,
-        progress=progress,
-        cost=cost,
-    )
+    return run_search(scene, out, space, JOINT_STORE, paths, repeats, search, restart, progress, cost)

@@ -1,4 +1,4 @@
-"""The joint search (hairjax/tools/_knob_space.py, _pareto.py, _joint.py, _joint_report.py):
+"""The joint search (hairjax/tools/_knob_space.py, _pareto.py, _search.py run_joint, _report.py):
 its space, its algorithm on hand-made tables, the front it finds against the full grid of
 a small space, resuming, the report and the command line."""
 

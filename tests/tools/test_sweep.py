@@ -1,4 +1,4 @@
-"""`hairjax sweep` (hairjax/tools/_sweep.py, _sweep_report.py): points, resuming, the report."""
+"""`hairjax sweep` (hairjax/tools/_search.py run_sweep, _report.py): points, resuming, the report."""
 
 import dataclasses
 import json
@@ -157,7 +157,17 @@ def test_cheapest_settings():
     assert cheapest(POINTS, 1e-3, "jax", "maps") is None
     text = summary_markdown(POINTS, CONFIG)
     assert "| jax | bins = 64 (1.5 s) | 16 (2 s) | 64 (1.5 s) |" in text
+    # 0.5 %: maps = 16 reaches it exactly (0.005), at 2 s before bins = exact's 3 s.
+    after = text.split("## Cheapest settings reaching 0.5% relative RMSE")[1]
+    assert after.split("\n\n")[1].splitlines()[2] == "| jax | maps = 16 (2 s) | 16 (2 s) | exact (3 s) |"
     assert "| jax | bins = exact (3 s) | not reached | exact (3 s) |" in text
+
+
+def test_of_two_points_as_fast_the_lower_error_is_the_cheapest():
+    """Such a point dominates the other (it is the front's), whatever their order."""
+    slow = {"path": "jax", "knob": "maps", "value": 4, "time_s": 1.0, "rel_rmse": 0.008}
+    good = {"path": "jax", "knob": "bins", "value": 16, "time_s": 1.0, "rel_rmse": 0.002}
+    assert cheapest([slow, good], 1e-2, "jax") is good and cheapest([good, slow], 1e-2, "jax") is good
 
 
 def test_report_files(tmp_path):
