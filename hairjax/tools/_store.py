@@ -131,6 +131,7 @@ class Store:
         write_json(path, config)
 
 
+# (config, points, one_knob, space, title, other): the files each command has always written.
 SWEEP_STORE = Store("sweep.json", "points.jsonl", True, "knobs", "sweep", other="joint.json")
 JOINT_STORE = Store("joint.json", "joint.jsonl", False, "space", "joint search", other="sweep.json")
 
