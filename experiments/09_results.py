@@ -37,13 +37,11 @@ from hairjax.tools import (
     QUICK_JOINT_KNOBS,
     QUICK_KNOBS,
     SearchConfig,
-    joint_markdown,
     load_points,
     median_time,
     run_joint,
     run_sweep,
     summary_markdown,
-    write_joint_report,
     write_report,
     write_text,
 )
@@ -141,10 +139,10 @@ def joint_section(
         scene, out, knobs=knobs, repeats=repeats, search=search, progress=None if quick else progress
     )
     config = json.loads((out / "joint.json").read_text())
-    files = write_joint_report(out, points, config)
+    files = write_report(out, points, config)
     shutil.copy(files["plot"], figures / "joint_pareto.png")
     # Without its title; its sections one level down, under this one.
-    summary = joint_markdown(points, config).split("\n", 2)[2].replace("\n## ", "\n### ")
+    summary = summary_markdown(points, config).split("\n", 2)[2].replace("\n## ", "\n### ")
     size = f"{scene.camera.width}×{scene.camera.height}"
     return f"""## 7. The cheapest combination of settings (`hairjax sweep --joint`)
 
@@ -153,8 +151,9 @@ holds fixed. `hairjax sweep --joint` searches their combinations instead (the sh
 method and its options, bins, ribbon width, supersampling) for the Pareto front of error
 against time, per renderer: a greedy descent from the cheapest setting to 0.05 % error,
 taking the step with the largest error reduction per added second, then a Pareto local
-search closing the front above it (`hairjax/tools/_pareto.py`). Each point is measured as
-in section 1, against the same reference. `{scene.name}` ({scene.strands.num_strands} strands)
+search closing the front above it (`hairjax/tools/_pareto.py`). The same engine as section
+1's sweep (`hairjax/tools/_search.py`), over another space: each point is measured, stored
+and reported as there, against the same reference. `{scene.name}` ({scene.strands.num_strands} strands)
 at {size}, timed renders per point: {repeats}; this step took {time.perf_counter() - started:.0f} s
 (for a resumed run, the time since it resumed).
 

@@ -6,10 +6,15 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ._main import EXIT_INTERRUPTED
 from ._outputs import Output, check_outputs
+
+if TYPE_CHECKING:
+    from .._progress import Progress
 
 __all__ = ["run"]
 
@@ -57,8 +62,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run_sweep(args: argparse.Namespace) -> int:
-    from .._progress import reporter
-    from ..tools import KNOBS, QUICK_KNOBS, load_points, run_sweep, write_report
+    from ..tools import KNOBS, QUICK_KNOBS, run_sweep
     from ._scenes import load_cli_scene
 
     out = args.out or Path("out/sweep")
@@ -71,39 +75,12 @@ def _run_sweep(args: argparse.Namespace) -> int:
         from .._io._image import read_image
 
         target = read_image(args.target)
-    try:
-        with reporter("sweep", quiet=args.quiet) as progress:
-            points = run_sweep(
-                scene,
-                out,
-                knobs=knobs,
-                paths=paths,
-                repeats=args.repeats,
-                restart=args.restart,
-                progress=progress,
-                target=target,
-            )
-    except KeyboardInterrupt:
-        return _interrupted(len(load_points(out)), out)
-    config = json.loads((out / "sweep.json").read_text())
-    files = write_report(out, points, config)
-    print((out / "summary.md").read_text().split("## All points")[0].rstrip())
-    if not args.quiet:
-        for f in files.values():
-            print(f"wrote {f}")
-    return 0
+    options = dict(knobs=knobs, paths=paths, repeats=args.repeats, restart=args.restart, target=target)
+    return _search(args, out, lambda progress: run_sweep(scene, out, progress=progress, **options))
 
 
 def _run_joint(args: argparse.Namespace) -> int:
-    from .._progress import reporter
-    from ..tools import (
-        JOINT_KNOBS,
-        QUICK_JOINT_KNOBS,
-        SearchConfig,
-        load_joint,
-        run_joint,
-        write_joint_report,
-    )
+    from ..tools import JOINT_KNOBS, QUICK_JOINT_KNOBS, SearchConfig, run_joint
     from ._scenes import load_cli_scene
 
     out = args.out or Path("out/joint")
@@ -113,23 +90,27 @@ def _run_joint(args: argparse.Namespace) -> int:
     stop_at = 5e-4 if args.stop_at is None else args.stop_at
     search = SearchConfig(stop_at=stop_at, budget=args.budget, budget_s=args.budget_s)
     scene = load_cli_scene(args, args.scene)
+    options = dict(knobs=knobs, paths=paths, repeats=args.repeats, search=search, restart=args.restart)
+    return _search(args, out, lambda progress: run_joint(scene, out, progress=progress, **options))
+
+
+def _search(args: argparse.Namespace, out: Path, run: Callable[[Progress], list[dict]]) -> int:
+    """`run(progress)` (`run_sweep` or `run_joint` into `out`), then its report: the
+    summary printed up to its table, the files written named."""
+    from .._progress import reporter
+    from ..tools import write_report
+    from ..tools._store import JOINT_STORE, SWEEP_STORE
+
+    store = JOINT_STORE if args.joint else SWEEP_STORE
     try:
-        with reporter("joint search", quiet=args.quiet) as progress:
-            points = run_joint(
-                scene,
-                out,
-                knobs=knobs,
-                paths=paths,
-                repeats=args.repeats,
-                search=search,
-                restart=args.restart,
-                progress=progress,
-            )
+        with reporter(store.title, quiet=args.quiet) as progress:
+            points = run(progress)
     except KeyboardInterrupt:
-        return _interrupted(len(load_joint(out)), out)
-    config = json.loads((out / "joint.json").read_text())
-    files = write_joint_report(out, points, config)
-    print((out / "joint.md").read_text().split("## The fronts")[0].rstrip())
+        return _interrupted(len(store.load(out)), out)
+    config = json.loads((out / store.config).read_text())
+    files = write_report(out, points, config)
+    table = "## The fronts" if args.joint else "## All points"
+    print(files["summary"].read_text().split(table)[0].rstrip())
     if not args.quiet:
         for f in files.values():
             print(f"wrote {f}")

@@ -1,5 +1,5 @@
-"""hairjax.tools: the benchmark, the sweep, the joint search and their reports, and the
-compare report.
+"""hairjax.tools: the benchmark, the settings search (the one-knob sweep and the joint
+search, one engine) and its report, and the compare report.
 
 Built on the library (`import hairjax`), which never imports them: `hairjax bench`,
 `hairjax sweep` and `hairjax compare` import them when they run, and so do experiments/
@@ -20,14 +20,10 @@ from ._compare import compare as compare
 from ._compare import format_report as format_report
 from ._compare import image_stats as image_stats
 from ._compare import median_time as median_time
-from ._joint import load_joint as load_joint
-from ._joint import run_joint as run_joint
-from ._joint_report import JOINT_THRESHOLDS as JOINT_THRESHOLDS
-from ._joint_report import joint_markdown as joint_markdown
-from ._joint_report import joint_plot as joint_plot
-from ._joint_report import write_joint_report as write_joint_report
 from ._knob_space import KnobSpace as KnobSpace
+from ._knob_space import OneKnobSpace as OneKnobSpace
 from ._knob_space import knob_space as knob_space
+from ._knob_space import one_knob_space as one_knob_space
 from ._knobs import JOINT_KNOBS as JOINT_KNOBS
 from ._knobs import KNOBS as KNOBS
 from ._knobs import QUICK_JOINT_KNOBS as QUICK_JOINT_KNOBS
@@ -38,11 +34,14 @@ from ._knobs import settings_scene as settings_scene
 from ._pareto import SearchConfig as SearchConfig
 from ._pareto import pareto_front as pareto_front
 from ._pareto import pareto_search as pareto_search
-from ._sweep import PATHS as PATHS
-from ._sweep import load_points as load_points
-from ._sweep import run_sweep as run_sweep
-from ._sweep_report import THRESHOLDS as THRESHOLDS
-from ._sweep_report import cheapest as cheapest
-from ._sweep_report import pareto_plot as pareto_plot
-from ._sweep_report import summary_markdown as summary_markdown
-from ._sweep_report import write_report as write_report
+from ._plot import THRESHOLDS as THRESHOLDS
+from ._plot import pareto_plot as pareto_plot
+from ._report import cheapest as cheapest
+from ._report import summary_markdown as summary_markdown
+from ._report import write_report as write_report
+from ._search import PATHS as PATHS
+from ._search import run_joint as run_joint
+from ._search import run_search as run_search
+from ._search import run_sweep as run_sweep
+from ._store import load_joint as load_joint
+from ._store import load_points as load_points

@@ -1,5 +1,8 @@
-"""The joint search's space (docs/results.md, "Joint search"): every combination of the
-sweep's knobs, the single-knob steps between combinations, and each one's key.
+"""The spaces the settings search walks (docs/results.md §1 and §7), and a setting's key.
+
+`KnobSpace`, the joint search's: every combination of the knobs, and the single-knob steps
+between combinations. `OneKnobSpace`, the one-knob sweep's: each setting changes one knob
+from the scene's settings, the others keep them. The search (`_search.py`) takes either.
 
 A setting is a dict knob → value. The knob `shadows` names the shadow method; a knob that
 sets a field of the method (`SHADOW_OPTIONS`: `maps`, `map_resolution`, `layers`) is in a
@@ -20,7 +23,15 @@ from collections.abc import Iterator, Mapping, Sequence
 from .._scene._scene import Scene
 from ._knobs import SHADOW_KNOBS, SHADOW_OPTIONS, method_options
 
-__all__ = ["METHOD", "KnobSpace", "knob_space", "setting_key", "setting_label"]
+__all__ = [
+    "METHOD",
+    "KnobSpace",
+    "OneKnobSpace",
+    "knob_space",
+    "one_knob_space",
+    "setting_key",
+    "setting_label",
+]
 
 METHOD = "shadows"  # the knob naming the shadow method
 
@@ -95,6 +106,10 @@ class KnobSpace:
             math.prod(1 if k == METHOD else len(self.knobs[k]) for k in self.active(m)) for m in self.methods
         )
 
+    def label(self, setting: Mapping) -> str:
+        """A setting in a progress line: `bins=16 maps=4`."""
+        return setting_label(setting)
+
     def to_json(self) -> dict:
         return {
             "knobs": {k: list(v) for k, v in self.knobs.items()},
@@ -122,6 +137,50 @@ def knob_space(scene: Scene, knobs: Mapping[str, Sequence]) -> KnobSpace:
     taken = {k for m in options.values() for k in m}
     searched = {k: v for k, v in kept.items() if k not in SHADOW_OPTIONS or k in taken}
     return KnobSpace(searched, options, method)
+
+
+@dataclasses.dataclass(frozen=True)
+class OneKnobSpace:
+    """The one-knob sweep's space: `knobs`, name → values in the order swept; a setting is
+    `{knob: value}`, one knob changed from the scene's settings (`settings_scene` sets only
+    the knobs a setting names)."""
+
+    knobs: Mapping[str, tuple]
+
+    def grid(self) -> Iterator[dict]:
+        """Every setting: each knob's values in turn, the knobs in the space's order."""
+        for knob, values in self.knobs.items():
+            for value in values:
+                yield {knob: value}
+
+    def size(self) -> int:
+        return sum(len(values) for values in self.knobs.values())
+
+    def label(self, setting: Mapping) -> str:
+        """A setting in a progress line or a report: `bins = 16`."""
+        ((knob, value),) = setting.items()
+        return f"{knob} = {value}"
+
+    def to_json(self) -> dict:
+        return {k: list(v) for k, v in self.knobs.items()}
+
+    @classmethod
+    def from_json(cls, data: Mapping) -> OneKnobSpace:
+        return cls({k: tuple(v) for k, v in data.items()})
+
+
+def one_knob_space(scene: Scene, knobs: Mapping[str, Sequence]) -> OneKnobSpace:
+    """The knobs of `knobs` that turn something in `scene`: a scene without shadows has no
+    shadow knobs, and a knob setting a field the scene's shadow method lacks (`maps` of
+    exact shadows) is dropped."""
+    takes = method_options(scene.shadows.method)
+    return OneKnobSpace(
+        {
+            k: tuple(v)
+            for k, v in knobs.items()
+            if (scene.shadows.casts or k not in SHADOW_KNOBS) and (k not in SHADOW_OPTIONS or k in takes)
+        }
+    )
 
 
 def setting_key(setting: Mapping) -> str:

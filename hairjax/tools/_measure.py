@@ -1,11 +1,11 @@
-"""One point of a sweep (docs/results.md §1): render a setting with one path, time it and
-measure its error against that path's reference.
+"""One point of the settings search (docs/results.md §1): render a setting with one path,
+time it and measure its error against that path's reference.
 
-Shared by the one-knob sweep (`_sweep.py`) and the joint search (`_joint.py`), so that
-both measure a point the same way: the same reference per path (exact shadows at the
-scene's map resolution, exact ordering, the finest supersampling searched), the same
-relative RMSE (RMSE over the reference's peak), the same timing (the median of `repeats`
-renders after an untimed warm-up).
+The search (`_search.py`) measures every point of the one-knob sweep and of the joint
+search here: the same reference per path (exact shadows at the scene's map resolution,
+exact ordering, the finest supersampling searched), the same relative RMSE (RMSE over the
+reference's peak), the same timing (the median of `repeats` renders after an untimed
+warm-up).
 """
 
 from __future__ import annotations

@@ -3,7 +3,7 @@
 
 Pure: the search sees a setting's time and error only through `evaluate(setting)`, a
 point dict with `time_s` and `rel_rmse` (or `skipped`: a setting the renderer refused).
-The run (`_joint.py`) measures them; a test hands in times from a cost model, so that it
+The run (`_search.py`) measures them; a test hands in times from a cost model, so that it
 checks the algorithm exactly.
 
 The search, in two phases, never evaluating a setting twice:

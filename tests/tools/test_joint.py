@@ -1,4 +1,4 @@
-"""The joint search (hairjax/tools/_knob_space.py, _pareto.py, _joint.py, _joint_report.py):
+"""The joint search (hairjax/tools/_knob_space.py, _pareto.py, _search.py run_joint, _report.py):
 its space, its algorithm on hand-made tables, the front it finds against the full grid of
 a small space, resuming, the report and the command line."""
 
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from helpers import small_furball_scene
 
-import hairjax.tools._joint as joint_mod
+import hairjax.tools._search as search_mod
 from hairjax import cli
 from hairjax._geometry._shadows import shadow_method_names
 from hairjax.tools import (
@@ -23,7 +23,7 @@ from hairjax.tools import (
     pareto_front,
     pareto_search,
     run_joint,
-    write_joint_report,
+    write_report,
 )
 from hairjax.tools._knob_space import setting_key
 from hairjax.tools._pareto import near_front
@@ -253,7 +253,7 @@ def test_a_search_in_a_finished_folder_renders_nothing(grid, tmp_path, monkeypat
     scene, out, points = grid
     by_key = {setting_key(p["settings"]): p for p in points}
     expected = pareto_search(knob_space(scene, SMALL), lambda s: by_key[setting_key(s)])
-    monkeypatch.setattr(joint_mod, "measure", lambda *a: pytest.fail("rendered a stored point"))
+    monkeypatch.setattr(search_mod, "measure", lambda *a: pytest.fail("rendered a stored point"))
     calls = []
     found = run_joint(
         scene, out, knobs=SMALL, paths=("gl",), cost=_model_cost, progress=lambda *a: calls.append(a)
@@ -265,7 +265,7 @@ def test_a_search_in_a_finished_folder_renders_nothing(grid, tmp_path, monkeypat
 def test_an_interrupted_search_continues(tmp_path, monkeypatch, gl):
     scene = small_furball_scene(strands=40, size=16, maps=4, resolution=16)
     knobs = {"shadows": ("none", "opacity-maps"), "maps": (2, 4), "bins": (1, "exact")}
-    original = joint_mod.measure
+    original = search_mod.measure
     renders = []
 
     def interrupt_after_three(*args):
@@ -274,12 +274,12 @@ def test_an_interrupted_search_continues(tmp_path, monkeypatch, gl):
             raise KeyboardInterrupt
         return original(*args)
 
-    monkeypatch.setattr(joint_mod, "measure", interrupt_after_three)
+    monkeypatch.setattr(search_mod, "measure", interrupt_after_three)
     with pytest.raises(KeyboardInterrupt):
         run_joint(scene, tmp_path, knobs=knobs, paths=("gl",), cost=_model_cost)
     assert len(load_joint(tmp_path)) == 3
     (tmp_path / "joint.jsonl").write_text((tmp_path / "joint.jsonl").read_text() + '{"path": "gl", "sett')
-    monkeypatch.setattr(joint_mod, "measure", lambda *a: renders.append(a[1]) or original(*a))
+    monkeypatch.setattr(search_mod, "measure", lambda *a: renders.append(a[1]) or original(*a))
     renders.clear()
     resumed = run_joint(scene, tmp_path, knobs=knobs, paths=("gl",), cost=_model_cost)
     assert len(renders) == len(resumed) - 3  # only the points not yet measured (the reference is kept)
@@ -308,7 +308,7 @@ def test_a_small_search_with_real_renders(tmp_path, gl):
     assert calls[0] == (0, 1, "jax reference") and calls[1][:2] == (1, 3)
     assert calls[1][2].startswith("jax bins=1 maps=2: ")
     config = json.loads((tmp_path / "joint.json").read_text())
-    files = write_joint_report(tmp_path, points, config)
+    files = write_report(tmp_path, points, config)
     assert files["pareto"].read_text().splitlines()[0] == "path,bins,maps,time_s,rel_rmse,rmse,max_abs"
     assert files["plot"].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "the budget (3 points per path) ran out" in files["summary"].read_text()
@@ -365,7 +365,7 @@ REPORT_CONFIG = {
 
 
 def test_the_report(tmp_path):
-    files = write_joint_report(tmp_path, REPORT_POINTS, REPORT_CONFIG)
+    files = write_report(tmp_path, REPORT_POINTS, REPORT_CONFIG)
     assert files["pareto"].read_text().splitlines() == [
         "path,shadows,maps,supersampling,time_s,rel_rmse,rmse,max_abs",
         "jax,none,,1,1.0,0.2,0.2,1.0",
@@ -450,7 +450,7 @@ def test_bad_arguments_are_refused_before_any_render(tmp_path, kwargs, message, 
     def no_render(path):
         raise AssertionError("a renderer was made before the arguments were checked")
 
-    monkeypatch.setattr(joint_mod, "renderer", no_render)
+    monkeypatch.setattr(search_mod, "renderer", no_render)
     with pytest.raises(SweepError, match=message):
         run_joint(small_furball_scene(), tmp_path / "out", **{"knobs": {"bins": (1,)}, **kwargs})
     assert not (tmp_path / "out").exists()

@@ -10,9 +10,8 @@ from helpers import small_furball_scene
 import hairjax as hj
 from hairjax._geometry._shadows import AbstractShadowMethod, register_shadow_method, shadow_method_names
 from hairjax._geometry._shadows._base import SHADOW_METHODS
-from hairjax.tools import KNOBS, knob_scene, knob_space, settings_scene
+from hairjax.tools import KNOBS, knob_scene, knob_space, one_knob_space, settings_scene
 from hairjax.tools._knobs import method_options
-from hairjax.tools._sweep import sweep_knobs
 
 
 @pytest.fixture(scope="module")
@@ -46,10 +45,10 @@ def test_a_setting_of_several_knobs(scene):
 
 def test_the_one_knob_sweep_drops_knobs_the_scene_s_method_lacks(scene):
     knobs = {"maps": (1,), "map_resolution": (16,), "layers": (2,), "shadows": ("none",), "bins": (1,)}
-    assert list(sweep_knobs(scene, knobs)) == ["maps", "map_resolution", "shadows", "bins"]
+    assert list(one_knob_space(scene, knobs).knobs) == ["maps", "map_resolution", "shadows", "bins"]
     exact = scene.replace(shadows=hj.Shadows("exact", resolution=16))
-    assert list(sweep_knobs(exact, knobs)) == ["map_resolution", "shadows", "bins"]
-    assert list(sweep_knobs(scene.replace(shadows=hj.Shadows("none")), knobs)) == ["bins"]
+    assert list(one_knob_space(exact, knobs).knobs) == ["map_resolution", "shadows", "bins"]
+    assert list(one_knob_space(scene.replace(shadows=hj.Shadows("none")), knobs).knobs) == ["bins"]
 
 
 @pytest.fixture

@@ -1,4 +1,4 @@
-"""`hairjax sweep` (hairjax/tools/_sweep.py, _sweep_report.py): points, resuming, the report."""
+"""`hairjax sweep` (hairjax/tools/_search.py run_sweep, _report.py): points, resuming, the report."""
 
 import dataclasses
 import json
@@ -9,11 +9,17 @@ import pytest
 from helpers import small_furball_scene
 
 import hairjax as hj
-import hairjax.tools._sweep as sweep_mod
+import hairjax.tools._search as search_mod
 from hairjax import cli
-from hairjax.tools import SweepError
-from hairjax.tools._sweep import knob_scene, load_points, run_sweep
-from hairjax.tools._sweep_report import cheapest, summary_markdown, write_report
+from hairjax.tools import (
+    SweepError,
+    cheapest,
+    knob_scene,
+    load_points,
+    run_sweep,
+    summary_markdown,
+    write_report,
+)
 
 KNOBS = {"bins": (1, "exact"), "maps": (2, 8)}
 
@@ -56,15 +62,15 @@ def test_resume_redoes_nothing_and_drops_a_cut_line(scene, tmp_path, monkeypatch
     (tmp_path / "points.jsonl").write_text("\n".join(lines[:2]) + "\n" + lines[2][:15])
     assert len(load_points(tmp_path)) == 2
     calls = []
-    original = sweep_mod.measure
-    monkeypatch.setattr(sweep_mod, "measure", lambda *a: calls.append(a[1]) or original(*a))
+    original = search_mod.measure
+    monkeypatch.setattr(search_mod, "measure", lambda *a: calls.append(a[1]) or original(*a))
     points = run_sweep(scene, tmp_path, knobs=knobs, paths=("jax",), repeats=1, progress=False)
     assert len(calls) == 1 and len(points) == 3  # only the cut point, reference kept on disk
     assert sorted(str(p["value"]) for p in points) == ["1", "4", "exact"]
 
 
 def test_interrupted_sweep_keeps_finished_points(scene, tmp_path, monkeypatch):
-    original = sweep_mod.measure
+    original = search_mod.measure
     count = {"n": 0}
 
     def flaky(*args):
@@ -73,11 +79,11 @@ def test_interrupted_sweep_keeps_finished_points(scene, tmp_path, monkeypatch):
             raise KeyboardInterrupt
         return original(*args)
 
-    monkeypatch.setattr(sweep_mod, "measure", flaky)
+    monkeypatch.setattr(search_mod, "measure", flaky)
     with pytest.raises(KeyboardInterrupt):
         run_sweep(scene, tmp_path, knobs={"bins": (1, 4, 16)}, paths=("jax",), repeats=1, progress=False)
     assert [p["value"] for p in load_points(tmp_path)] == [1]
-    monkeypatch.setattr(sweep_mod, "measure", original)
+    monkeypatch.setattr(search_mod, "measure", original)
     points = run_sweep(scene, tmp_path, knobs={"bins": (1, 4, 16)}, paths=("jax",), repeats=1, progress=False)
     assert [p["value"] for p in points] == [1, 4, 16]
 
@@ -105,7 +111,7 @@ def test_bad_arguments(scene, tmp_path, kwargs, message, monkeypatch):
     def no_render(path):
         raise AssertionError("a renderer was made before the arguments were checked")
 
-    monkeypatch.setattr(sweep_mod, "renderer", no_render)
+    monkeypatch.setattr(search_mod, "renderer", no_render)
     with pytest.raises(SweepError, match=message):
         run_sweep(scene, tmp_path, **{"knobs": {"bins": (1,)}, **kwargs})
 
@@ -151,7 +157,17 @@ def test_cheapest_settings():
     assert cheapest(POINTS, 1e-3, "jax", "maps") is None
     text = summary_markdown(POINTS, CONFIG)
     assert "| jax | bins = 64 (1.5 s) | 16 (2 s) | 64 (1.5 s) |" in text
+    # 0.5 %: maps = 16 reaches it exactly (0.005), at 2 s before bins = exact's 3 s.
+    after = text.split("## Cheapest settings reaching 0.5% relative RMSE")[1]
+    assert after.split("\n\n")[1].splitlines()[2] == "| jax | maps = 16 (2 s) | 16 (2 s) | exact (3 s) |"
     assert "| jax | bins = exact (3 s) | not reached | exact (3 s) |" in text
+
+
+def test_of_two_points_as_fast_the_lower_error_is_the_cheapest():
+    """Such a point dominates the other (it is the front's), whatever their order."""
+    slow = {"path": "jax", "knob": "maps", "value": 4, "time_s": 1.0, "rel_rmse": 0.008}
+    good = {"path": "jax", "knob": "bins", "value": 16, "time_s": 1.0, "rel_rmse": 0.002}
+    assert cheapest([slow, good], 1e-2, "jax") is good and cheapest([good, slow], 1e-2, "jax") is good
 
 
 def test_report_files(tmp_path):
@@ -186,14 +202,14 @@ def test_cli_sweep(tmp_path, capsys):
 
 
 def test_a_refused_setting_is_recorded_and_the_sweep_goes_on(scene, tmp_path, monkeypatch):
-    original = sweep_mod.measure
+    original = search_mod.measure
 
     def refuse_four(run, variant, s, repeats):
         if variant.ordering == hj.Ordering("bins", 4):
             raise ValueError("4 bins exceed the test's budget")
         return original(run, variant, s, repeats)
 
-    monkeypatch.setattr(sweep_mod, "measure", refuse_four)
+    monkeypatch.setattr(search_mod, "measure", refuse_four)
     points = run_sweep(scene, tmp_path, knobs={"bins": (1, 4, 16)}, paths=("jax",), repeats=1, progress=False)
     assert [p["value"] for p in points] == [1, 4, 16]
     assert points[1]["skipped"] == "4 bins exceed the test's budget" and "rmse" not in points[1]
@@ -269,15 +285,13 @@ def test_a_damaged_store_is_named_on_resume(case, tmp_path, monkeypatch, capsys)
     joint = name.startswith("joint")
     (tmp_path / name).write_text(content)
     if name.endswith(".jsonl"):  # settings taken as matching, so the points are read
-        monkeypatch.setattr(sweep_mod, "check_config", lambda *a, **k: None)
-        monkeypatch.setattr("hairjax.tools._joint.check_config", lambda *a, **k: None)
+        monkeypatch.setattr("hairjax.tools._store.Store.check_config", lambda *a, **k: None)
 
     def no_render(*args):
         raise AssertionError("a renderer was made before the store was checked")
 
     monkeypatch.setattr("hairjax.tools._measure.renderer", no_render)
-    monkeypatch.setattr(sweep_mod, "renderer", no_render)
-    monkeypatch.setattr("hairjax.tools._joint.renderer", no_render)
+    monkeypatch.setattr(search_mod, "renderer", no_render)
     toml = tmp_path / "tiny.toml"
     toml.write_text('[hair]\nsource = "furball"\nstrands = 20\npoints = 4\n[camera]\nwidth = 8\nheight = 8\n')
     argv = ["sweep", str(toml), "--out", str(tmp_path), "--paths", "jax", "--knobs", "bins", "--quick"]
