@@ -4,7 +4,7 @@ For N random hidden parameter sets (Kd ∈ [0.05, 1] RGB, Ks ∈ [0, 1], shinine
 κ ∈ [0.1, 20]) the GL renderer draws a target; each solver fits all four parameters with
 the JAX renderer from one fixed start, without noise and with Gaussian pixel noise of 1 %
 of the target's peak, masking the pixels where GL and JAX may differ by a discontinuity
-within float32 rounding (`hj.renderer_band`, docs/fitting.md). Prints median and worst
+within float32 rounding (`hj.experimental.renderer_band`, docs/fitting.md). Prints median and worst
 relative errors per parameter and solver, over the parameters the data identify (not
 undetermined, and with a standard error below half the bound: 1e-3 without noise, 2e-2
 with it), and writes every fit as CSV.
@@ -97,7 +97,7 @@ def main(argv=None) -> int:
         for k, truth in enumerate(hidden_sets(args.sets, args.seed)):
             target = render_gl(scene, truth).image
             # The band's geometry is computed once per scene (cached); the peak sets its threshold.
-            mask = ~hj.renderer_band(scene, colour_bound=float(target[..., :3].max()))
+            mask = ~hj.experimental.renderer_band(scene, colour_bound=float(target[..., :3].max()))
             rng = np.random.default_rng(1000 + k)
             for noise in noises:
                 noisy = target.copy()

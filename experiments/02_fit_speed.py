@@ -87,7 +87,7 @@ def unstaged(scene, target):
     rgb = jnp.asarray(target[..., :3])
 
     def fn(v, args):
-        hj.forget(scene)
+        hj.experimental.forget(scene)
         v = jnp.exp(v)
         p = hj.ShadingParams(kd=v[:3], ks=v[3:6], shininess=v[6], kappa=v[7], ambient=TRUE.ambient)
         return (hj.render(scene, p)[..., :3] - rgb).ravel()

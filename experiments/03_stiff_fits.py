@@ -398,7 +398,7 @@ def main(argv=None) -> int:
 
     text = table(rows, [c.name for c in cases], solvers, header)
     csv_path, md_path = args.out / "stiff_fits.csv", args.out / "stiff_fits.md"
-    from hairjax.tools import write_csv, write_text
+    from hairjax.experimental import write_csv, write_text
 
     write_csv(csv_path, CSV_COLUMNS, rows, float_format=".6g")
     write_text(md_path, text)

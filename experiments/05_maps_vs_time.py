@@ -207,7 +207,7 @@ def main(argv=None) -> int:
     }
 
     args.out.mkdir(parents=True, exist_ok=True)
-    from hairjax.tools import write_csv
+    from hairjax.experimental import write_csv
 
     csv_path = write_csv(args.out / "maps_vs_time.csv", CSV_COLUMNS, rows, float_format=".6f")
     png_path = args.out / "maps_vs_time.png"

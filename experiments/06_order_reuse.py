@@ -253,7 +253,7 @@ def main(argv=None) -> int:
     csv_path = args.out / "order_reuse.csv"
     timings_path = args.out / "order_reuse_timings.csv"
     png_path = args.out / "order_reuse.png"
-    from hairjax.tools import write_csv
+    from hairjax.experimental import write_csv
 
     write_csv(csv_path, CSV_COLUMNS, rows, float_format=".6g")
     write_csv(timings_path, TIMING_COLUMNS, timing_rows, float_format=".6g")

@@ -288,7 +288,7 @@ def main(argv=None) -> int:
             )
         timing_rows += _timings(name, scene, args.bins, args.repeats)
 
-    from hairjax.tools import write_csv
+    from hairjax.experimental import write_csv
 
     csv_path = args.out / "static_order.csv"
     timings_path = args.out / "static_order_timings.csv"

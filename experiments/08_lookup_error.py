@@ -136,7 +136,7 @@ def plot(rows, path: Path, gl: bool) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from hairjax.tools import atomic_path
+    from hairjax.experimental import atomic_path
 
     n = [r["size"] for r in rows]
     fig, ax = plt.subplots(figsize=(5.5, 4))
@@ -158,7 +158,7 @@ def plot(rows, path: Path, gl: bool) -> None:
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
     import hairjax as hj
-    from hairjax.tools import write_csv
+    from hairjax.experimental import write_csv
 
     scene = hj.load_scene(args.scene or hj.default_scene_path())
     camera = dataclasses.replace(scene.camera, width=args.size, height=args.size)

@@ -108,9 +108,12 @@ def ordering_throughput(strand_counts, points: int, repeats: int) -> list[dict]:
     rows = []
     for n in strand_counts:
         strands = hj.furball(n, points, seed=0)
-        _, depth = hj.camera_view(camera).project(strands.points)
+        _, depth = hj.experimental.camera_view(camera).project(strands.points)
         segments = strands.segments()
-        median = median_time(lambda: hj.draw_order(hj.segment_depth(depth, segments), "bins", 256), repeats)
+        median = median_time(
+            lambda: hj.experimental.draw_order(hj.experimental.segment_depth(depth, segments), "bins", 256),
+            repeats,
+        )
         rate = len(segments) / median
         rows.append(
             {

@@ -53,22 +53,25 @@ def main(argv=None) -> int:
         dataclasses.replace(cam, eye=(r * np.sin(a), cam.eye[1], r * np.cos(a)))
         for a in np.linspace(0.0, args.spread, args.views)
     ]
-    scenes = hj.view_scenes(scene, cameras)
+    scenes = hj.experimental.view_scenes(scene, cameras)
     firsts, geometries = [], []
     for s in scenes:  # each view's first render: its set-up, then cached
         t0 = time.perf_counter()
         geometries.append(hj.geometry_stage(s))
         jax.block_until_ready(hj.shading_stage(geometries[-1], scene.params))
         firsts.append(time.perf_counter() - t0)
-    counts = [hj.prepare(s).frag_pixel.size for s in scenes]
-    batch = hj.stack_geometries(geometries)
+    counts = [hj.experimental.prepare(s).frag_pixel.size for s in scenes]
+    batch = hj.experimental.stack_geometries(geometries)
     params = scene.params
     one_by_one = median_time(lambda: [hj.shading_stage(g, params) for g in geometries], args.repeats)
-    batched = median_time(lambda: hj.shade_views(batch, params), args.repeats)
+    batched = median_time(lambda: hj.experimental.shade_views(batch, params), args.repeats)
     devices, strands = len(jax.devices()), scene.strands.num_strands
     print(f"{devices} device(s), {args.views} views of {args.size}², {strands} strands")
     print("first render of each view   : " + ", ".join(f"{t * 1e3:.0f} ms" for t in firsts))
-    print("  its fragments (bucket)    : " + ", ".join(f"{n:,} ({hj.fragment_bucket(n):,})" for n in counts))
+    print(
+        "  its fragments (bucket)    : "
+        + ", ".join(f"{n:,} ({hj.experimental.fragment_bucket(n):,})" for n in counts)
+    )
     print(f"shading, one call per view : {one_by_one * 1e3:8.1f} ms")
     print(f"shading, one batched call  : {batched * 1e3:8.1f} ms   ({one_by_one / batched:.2f}x)")
     return 0 if one_by_one > 0 and batched > 0 else 1

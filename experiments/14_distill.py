@@ -23,7 +23,7 @@ in it). Swept:
 
 Each target is one `hj.distill` per model (docs/physically_based.md §4), its references
 rendered by the first and reused by the others. Per asset there are four views
-(`hj.DISTILL_VIEWS`): three train one fit (the asset's camera under its key light, the
+(`hj.experimental.DISTILL_VIEWS`): three train one fit (the asset's camera under its key light, the
 camera turned 60° about its up vector under the same light, and the first camera under a
 back light, which travels towards the eye from behind and above the hair), and one is
 held out: a camera turned −50° under a side light, a view and a light the fit never saw.
@@ -173,7 +173,7 @@ STARTS.update(
 
 # The views are hj.distill's: front, side (the camera turned 60°) and back-lit train;
 # held-out (the camera turned −50° under a side light) is held out.
-VIEWS = hj.DISTILL_VIEWS
+VIEWS = hj.experimental.DISTILL_VIEWS
 
 # (asset, colour, roughness, view): the figures, each target | fit | residual per model.
 FIGURES = (
@@ -588,7 +588,7 @@ def run_asset(args, asset: str, strands: int | None, colours, roughnesses, model
 
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
-    from hairjax.tools import write_csv, write_json, write_text
+    from hairjax.experimental import write_csv, write_json, write_text
 
     strands = dict(FULL["strands"])
     if args.quick:

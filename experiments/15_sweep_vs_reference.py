@@ -30,7 +30,8 @@ from pathlib import Path
 import numpy as np
 
 import hairjax as hj
-from hairjax.tools import KNOBS, QUICK_KNOBS, run_sweep, write_csv, write_json, write_report
+from hairjax.experimental import write_csv, write_json
+from hairjax.tools import KNOBS, QUICK_KNOBS, run_sweep, write_report
 
 NAMES = ("kd", "ks", "shininess", "kappa", "ambient", "alpha")
 QUICK_NAMES = ("kd", "ks", "kappa")  # --quick: no searched α (its step compiles for ~15 s)

@@ -371,7 +371,7 @@ def stripes_figure(path: Path, images: dict, lookups: list[str], title: str) -> 
 
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
-    from hairjax.tools import write_csv, write_text
+    from hairjax.experimental import write_csv, write_text
 
     if args.quick:
         scenes, args.size, args.resolution = ["tiny"], 48, 32

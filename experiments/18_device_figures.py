@@ -53,7 +53,8 @@ from pathlib import Path
 import numpy as np
 
 import hairjax as hj
-from hairjax.tools import bench_scene, write_json
+from hairjax.experimental import write_json
+from hairjax.tools import bench_scene
 
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "tressfx"
 
@@ -163,7 +164,7 @@ def machine_info() -> dict:
         "device_kind": jax.devices()[0].device_kind,
         "x64": bool(jax.config.jax_enable_x64),  # type: ignore[attr-defined]
         "numpy_version": np.__version__,
-        "setup_placement": hj.default_placement(),  # HAIRJAX_SETUP's default, docs/model.md §5
+        "setup_placement": hj.experimental.default_placement(),  # HAIRJAX_SETUP's default, docs/model.md §5
     }
     for name in (
         "jaxlib",
@@ -207,7 +208,7 @@ def time_jax(scene, repeats: int, label: str, placement=None) -> dict:
         for key, value in timings.items():
             runs.setdefault(key, []).append(value)
         progress(f"{label}: JAX run {i + 1}/{repeats}: {timings['total']:.3f} s")
-    setup = hj.prepare(scene, placement=placement)  # the last run's, cached
+    setup = hj.experimental.prepare(scene, placement=placement)  # the last run's, cached
     shadow = getattr(setup, "shadow", None)
     coverage = getattr(shadow, "frag_coverage", None)
     return {
@@ -290,7 +291,7 @@ def jax_and_gl(out: dict, scene, repeats: int, label: str, save, shading: bool) 
         out.setdefault("jax", {})["error"] = error_text(err)
         progress(f"{label}: JAX failed: {error_text(err)}")
     finally:
-        hj.forget(scene)  # frees the set-up and geometry before GL runs
+        hj.experimental.forget(scene)  # frees the set-up and geometry before GL runs
     out["device_memory"] = device_memory()
     save()
     out["gl"] = time_gl(scene, repeats, label)
@@ -307,8 +308,8 @@ def bench_case(out: dict, strands: int, size: int, sizes: dict, repeats: int, sa
     )
     out.update(strands=strands, size=size, segments=int(len(scene.strands.segments())))
     jax_and_gl(out, scene, repeats, label, save, shading=True)
-    if host_too and hj.default_placement() == "device":
-        hj.forget(scene)  # the device set-up's arrays, before the host's
+    if host_too and hj.experimental.default_placement() == "device":
+        hj.experimental.forget(scene)  # the device set-up's arrays, before the host's
         out["jax_host_setup"] = time_jax(scene.replace(), repeats, f"{label}, set-up on the host", "host")
         save()
 
@@ -355,7 +356,7 @@ def fit_case(strands: int, size: int, repeats: int) -> dict:
         progress(
             f"{label}: warm fit {i + 1}/{repeats}: {warm[-1]['time_s']:.3f} s, {warm[-1]['steps']} steps"
         )
-    hj.forget(scene)
+    hj.experimental.forget(scene)
     return {
         "strands": strands,
         "size": size,
@@ -393,8 +394,8 @@ def tfx_scene(paths: list[Path], width: int, height: int, name: str):
         width=np.full(hair.num_strands, WIDTH_FRACTION * radius),
         width_units="world",
     )
-    camera = hj.frame_camera(hair, width=width, height=height, fov=base.camera.fov)
-    return base.replace(strands=hair, camera=camera, light=hj.key_light(camera), name=name)
+    camera = hj.experimental.frame_camera(hair, width=width, height=height, fov=base.camera.fov)
+    return base.replace(strands=hair, camera=camera, light=hj.experimental.key_light(camera), name=name)
 
 
 def tfx_case(out: dict, name: str, paths: list[Path], width: int, height: int, repeats: int, save) -> None:

@@ -53,7 +53,7 @@ def placed_render(path: Path, where: str, repeats: int):
     per scene object)."""
     scene = hj.load_scene(path)
     image = np.asarray(hj.render(scene, placement=where))  # the warm-up: compiles
-    setup = hj.prepare(scene, placement=where)
+    setup = hj.experimental.prepare(scene, placement=where)
     fragments = tuple(np.asarray(x) for x in (setup.frag_pixel, setup.frag_i0, setup.frag_t))
     seconds = []
     for _ in range(repeats):

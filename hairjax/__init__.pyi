@@ -7,13 +7,11 @@ laid out, and how to add a shading model, shadow method or ordering, in
 docs/architecture.md.
 """
 
+from . import experimental as experimental
+from . import extend as extend
 from ._animate import load_animation as load_animation
 from ._animate import write_frames as write_frames
-from ._cache import forget as forget
-from ._disagreement import renderer_band as renderer_band
-from ._distill import DISTILL_VIEWS as DISTILL_VIEWS
 from ._distill import Distillation as Distillation
-from ._distill import DistillView as DistillView
 from ._distill import distill as distill
 from ._errors import EmptyViewWarning as EmptyViewWarning
 from ._errors import HairFormatError as HairFormatError
@@ -29,23 +27,8 @@ from ._fit import GaussNewton as GaussNewton
 from ._fit import fit as fit
 from ._fit import fit_solvers as fit_solvers
 from ._fit import fitted_image as fitted_image
-from ._geometry._capacity import fragment_bucket as fragment_bucket
-from ._geometry._ordering import AbstractOrdering as AbstractOrdering
 from ._geometry._ordering import Ordering as Ordering
-from ._geometry._ordering import draw_order as draw_order
-from ._geometry._ordering import hair_centre as hair_centre
-from ._geometry._ordering import register_ordering as register_ordering
-from ._geometry._ordering import segment_depth as segment_depth
-from ._geometry._ordering import static_order as static_order
-from ._geometry._placement import Placement as Placement
-from ._geometry._placement import default_placement as default_placement
-from ._geometry._projection import camera_view as camera_view
-from ._geometry._shadows import AbstractShadowMethod as AbstractShadowMethod
 from ._geometry._shadows import Shadows as Shadows
-from ._geometry._shadows import register_shadow_method as register_shadow_method
-from ._geometry_stage._setup import prepare as prepare
-from ._geometry_stage._setup import visibility_order as visibility_order
-from ._geometry_stage._stage import Geometry as Geometry
 from ._geometry_stage._stage import geometry_stage as geometry_stage
 from ._io import hair_info as hair_info
 from ._io import load_hair as load_hair
@@ -58,8 +41,6 @@ from ._render import render_profiled as render_profiled
 from ._scene._file import default_scene_path as default_scene_path
 from ._scene._file import load_scene as load_scene
 from ._scene._file import scene_for_hair as scene_for_hair
-from ._scene._framing import frame_camera as frame_camera
-from ._scene._framing import key_light as key_light
 from ._scene._occluder import Occluder as Occluder
 from ._scene._procedural import combed as combed
 from ._scene._procedural import furball as furball
@@ -68,39 +49,22 @@ from ._scene._reference import ReferenceSettings as ReferenceSettings
 from ._scene._save import save_scene as save_scene
 from ._scene._scene import PatchGeometry as PatchGeometry
 from ._scene._scene import Scene as Scene
-from ._shading import AbstractShadingModel as AbstractShadingModel
 from ._shading import KajiyaKay as KajiyaKay
 from ._shading import KajiyaKayLookup as KajiyaKayLookup
 from ._shading import KajiyaKayMirror as KajiyaKayMirror
 from ._shading import LightParams as LightParams
 from ._shading import Marschner as Marschner
 from ._shading import MarschnerParams as MarschnerParams
-from ._shading import PointInputs as PointInputs
-from ._shading import Reflectance as Reflectance
 from ._shading import Scheuermann as Scheuermann
 from ._shading import ScheuermannMaps as ScheuermannMaps
 from ._shading import ScheuermannParams as ScheuermannParams
 from ._shading import ShadingParams as ShadingParams
-from ._shading import ShadingPoints as ShadingPoints
 from ._shading import Streaks as Streaks
-from ._shading import kajiya_kay as kajiya_kay
-from ._shading import register_shading_model as register_shading_model
-from ._shading import shading_model_class as shading_model_class
 from ._shading import shading_stage as shading_stage
-from ._shading import transmittance as transmittance
-from ._shading._model import Plateau as Plateau
-from ._shading._model import check_params as check_params
-from ._shading._transforms import IDENTITY as IDENTITY
-from ._shading._transforms import LOG as LOG
-from ._shading._transforms import SOFTPLUS as SOFTPLUS
-from ._shading._transforms import Transform as Transform
 from ._supersample import supersample as supersample
 from ._values._camera import Camera as Camera
 from ._values._light import Light as Light
 from ._values._strands import Strands as Strands
 from ._views import render_views as render_views
-from ._views import shade_views as shade_views
-from ._views import stack_geometries as stack_geometries
-from ._views import view_scenes as view_scenes
 
 __version__: str

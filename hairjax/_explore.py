@@ -43,7 +43,7 @@ def slider_range(params: eqx.Module, name: str, model=None) -> tuple[str, float,
 
     Where the shading `model` (a class or an instance) declares a range for `name`
     (`AbstractShadingModel.ranges`), the slider spans it, widened to hold the current
-    value: logarithmic where the model searches `name` through `hj.LOG` (and the range is
+    value: logarithmic where the model searches `name` through `hj.extend.LOG` (and the range is
     positive), linear otherwise.
     Elsewhere the range comes from the parameter class's own validity check
     (`check_params`), probed with 0 and −1:

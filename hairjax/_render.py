@@ -1,8 +1,8 @@
 """The staged renderer: scene → geometry stage → shading stage → image (docs/model.md,
 docs/architecture.md).
 
-- `_geometry/_setup.prepare(scene)`: the set-up that depends on geometry, camera and light only.
-- `geometry_stage(scene, alpha)` (`_geometry/_stage.py`): compositing weights and Ω,
+- `_geometry_stage/_setup.prepare(scene)`: the set-up that depends on geometry, camera and light only.
+- `geometry_stage(scene, alpha)` (`_geometry_stage/_stage.py`): compositing weights and Ω,
   differentiable in the per-strand `alpha`.
 - `shading_stage(geometry, params)` (`_shading/_stage.py`): the model's colours at the
   points and their composite, differentiable in the shading parameters.

@@ -115,7 +115,7 @@ def refused(field: str, message: str):
 
 def cone(model: str):
     """The Kajiya-Kay cone (`seed_cone`, `mirror_cone`) of the registered model `model`."""
-    return hj.shading_model_class(model).cone
+    return hj.extend.shading_model_class(model).cone
 
 
 def shadow_method(method: str, maps: int = 8, resolution: int = 32):

@@ -516,7 +516,7 @@ def glsl_highlight(gl, t, light, eye, model: str, p: float) -> np.ndarray:
         np.concatenate([t, light, eye], axis=1),
         2,
         "uniform int model;\nuniform float p;",
-        model=hj.shading_model_class(model).gl_id,
+        model=hj.extend.shading_model_class(model).gl_id,
         p=p,
     )
 

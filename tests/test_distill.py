@@ -45,7 +45,7 @@ def test_views_turn_the_camera_about_its_up_vector_and_derive_the_lights():
     target = np.asarray(scene.camera.target)
     before = np.subtract(scene.camera.eye, target)
     for azimuth in (60.0, -50.0, 120.0):
-        turned = view_scene(scene, hj.DistillView("v", azimuth, "key"))
+        turned = view_scene(scene, hj.experimental.DistillView("v", azimuth, "key"))
         after = np.subtract(turned.camera.eye, target)
         assert np.linalg.norm(after) == pytest.approx(np.linalg.norm(before))
         assert after @ up == pytest.approx(before @ up)  # the height along up is kept
@@ -54,19 +54,19 @@ def test_views_turn_the_camera_about_its_up_vector_and_derive_the_lights():
         # The sign: a positive turn is counter-clockwise seen from above (right-handed).
         assert np.sign(np.cross(flat[0], flat[1]) @ up) == np.sign(azimuth)
         assert turned.light == scene.light and turned.camera.target == scene.camera.target
-    back = np.asarray(view_scene(scene, hj.DistillView("b", 0.0, "back")).light.direction)
+    back = np.asarray(view_scene(scene, hj.experimental.DistillView("b", 0.0, "back")).light.direction)
     to_eye = before / np.linalg.norm(before)
     assert np.linalg.norm(back) == pytest.approx(1.0)
     assert back @ to_eye > 0.8 and back @ up < 0  # towards the eye, and downwards: from above
-    side = np.asarray(view_scene(scene, hj.DistillView("s", 0.0, "side")).light.direction)
+    side = np.asarray(view_scene(scene, hj.experimental.DistillView("s", 0.0, "side")).light.direction)
     key = np.asarray(scene.light.direction) / np.linalg.norm(scene.light.direction)
     assert side @ up == pytest.approx(key @ up)
     assert _angle(key - (key @ up) * up, side - (side @ up) * up) == pytest.approx(90.0)
 
 
 def test_the_default_views_train_three_and_hold_one_out():
-    assert [v.name for v in hj.DISTILL_VIEWS] == ["front", "side", "back-lit", "held-out"]
-    assert [v.train for v in hj.DISTILL_VIEWS] == [True, True, True, False]
+    assert [v.name for v in hj.experimental.DISTILL_VIEWS] == ["front", "side", "back-lit", "held-out"]
+    assert [v.train for v in hj.experimental.DISTILL_VIEWS] == [True, True, True, False]
 
 
 def test_a_missing_mitsuba_is_refused_before_any_work(monkeypatch):
@@ -84,10 +84,14 @@ def test_a_missing_mitsuba_is_refused_before_any_work(monkeypatch):
 @pytest.mark.parametrize(
     ("kwargs", "error", "match"),
     [
-        (dict(views=[hj.DistillView("a"), hj.DistillView("a", 30.0)]), ValueError, "unique"),
-        (dict(views=[hj.DistillView("a", train=False)]), ValueError, "no training view"),
-        (dict(views=[hj.DistillView("a", light="top")]), ValueError, "key, back or side"),
-        (dict(views=[hj.DistillView("a", math.nan)]), ValueError, "azimuth"),
+        (
+            dict(views=[hj.experimental.DistillView("a"), hj.experimental.DistillView("a", 30.0)]),
+            ValueError,
+            "unique",
+        ),
+        (dict(views=[hj.experimental.DistillView("a", train=False)]), ValueError, "no training view"),
+        (dict(views=[hj.experimental.DistillView("a", light="top")]), ValueError, "key, back or side"),
+        (dict(views=[hj.experimental.DistillView("a", math.nan)]), ValueError, "azimuth"),
         (dict(references={"front": np.zeros((20, 20, 4))}), ValueError, "no view 'side'"),
         (dict(model="phong"), SceneError, "distill: shading.model must be one of"),
         (dict(roughness=0.0), SceneError, "distill: reference.longitudinal_roughness"),
@@ -115,14 +119,15 @@ def test_gains_are_recovered_from_the_models_own_renders():
     truth = dataclasses.replace(hj.KajiyaKay().params, kd=(0.3, 0.2, 0.1), ks=0.05, ambient=0.0)
     model = hj.KajiyaKay(truth)
     references = {
-        v.name: np.asarray(hj.render(view_scene(scene.replace(shading=model), v))) for v in hj.DISTILL_VIEWS
+        v.name: np.asarray(hj.render(view_scene(scene.replace(shading=model), v)))
+        for v in hj.experimental.DISTILL_VIEWS
     }
     d = hj.distill(scene, "kajiya-kay", references=references, fit_names=("kd", "ks"))
     # One least-squares solve in float64 on float32 targets (rounded to 6e-8 relative per
     # pixel): the gains come back within about 1e-8; 1e-6 says "found".
     np.testing.assert_allclose(np.asarray(d.params.kd), truth.kd, rtol=1e-6)
     np.testing.assert_allclose(np.asarray(d.params.ks), truth.ks, rtol=1e-6)
-    assert d.holdout_rmse < 1e-6 and set(d.rmse) == {v.name for v in hj.DISTILL_VIEWS}
+    assert d.holdout_rmse < 1e-6 and set(d.rmse) == {v.name for v in hj.experimental.DISTILL_VIEWS}
 
 
 @pytest.mark.slow
@@ -135,7 +140,8 @@ def test_a_model_is_recovered_from_its_own_renders():
     )
     model = hj.Marschner(truth)
     references = {
-        v.name: np.asarray(hj.render(view_scene(scene.replace(shading=model), v))) for v in hj.DISTILL_VIEWS
+        v.name: np.asarray(hj.render(view_scene(scene.replace(shading=model), v)))
+        for v in hj.experimental.DISTILL_VIEWS
     }
     start = hj.Marschner(
         hj.MarschnerParams(eumelanin=1.3, pheomelanin=0.2, longitudinal_roughness=0.3, ambient=0.0)

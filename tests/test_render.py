@@ -186,7 +186,7 @@ def test_occluder_hides_hair_behind_it():
     )
     img = np.asarray(hj.render(with_sphere))
     without = np.asarray(hj.render(hj.Scene(hair, **base)))
-    setup = hj.prepare(with_sphere)
+    setup = hj.experimental.prepare(with_sphere)
     # Every remaining fragment belongs to the front hair (points 2, 3).
     assert set(np.unique(setup.frag_i0)) == {2}
     # The sphere (black, lit or not) covers the centre: alpha 1, and hair colour only from the front hair.

@@ -105,7 +105,7 @@ def build_random_scene(spec) -> hj.Scene:
             eye=tuple(s * eye), target=(0.0, 0.0, 0.0), up=up, fov=spec["fov"], width=SIZE, height=SIZE
         ),
         light=light,
-        shading=hj.shading_model_class(spec["model"])(hj.ShadingParams(**spec["params"])),
+        shading=hj.extend.shading_model_class(spec["model"])(hj.ShadingParams(**spec["params"])),
         shadows=shadow_method(spec["shadows"], spec["maps"], SIZE),
     )
 

@@ -165,7 +165,7 @@ def warn_empty_view(scene: Scene) -> None:
         f"the hair covers no pixel of the {cam.width}x{cam.height} image: its bounding box is "
         f"{vec(points.min(axis=0))} .. {vec(points.max(axis=0))}, the camera's eye {vec(cam.eye)}, "
         f"target {vec(cam.target)}, fov {cam.fov:g} degrees; frame it with "
-        'hairjax.frame_camera(strands) or [camera] frame = "auto"',
+        'hairjax.experimental.frame_camera(strands) or [camera] frame = "auto"',
         EmptyViewWarning,
         stacklevel=2,
     )

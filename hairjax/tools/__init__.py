@@ -6,10 +6,6 @@ Built on the library (`import hairjax`), which never imports them: `hairjax benc
 and notebooks/.
 """
 
-from .._io._files import atomic_path as atomic_path
-from .._io._files import write_csv as write_csv
-from .._io._files import write_json as write_json
-from .._io._files import write_text as write_text
 from ._bench import bench_main as bench_main
 from ._bench_cases import GL_PASSES as GL_PASSES
 from ._bench_cases import STAGES as STAGES

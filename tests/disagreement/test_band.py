@@ -69,7 +69,7 @@ def differing(a, b) -> np.ndarray:
 def test_band_holds_every_difference(gl, renders, name):
     scene, result, jax_image = renders(name)
     peak = float(jax_image[..., :3].max())
-    band = hj.renderer_band(scene, colour_bound=peak)
+    band = hj.experimental.renderer_band(scene, colour_bound=peak)
     assert band.shape == (scene.camera.height, scene.camera.width) and band.dtype == bool
     assert not np.any(differing(result.image, jax_image) & ~band)
     # The camera part stays within issue 3's bound. The shadow part holds every pixel of
@@ -91,7 +91,7 @@ def test_shadow_part_catches_an_omega_difference(gl, renders):
     # Ω's doing: with JAX's Ω, GL differs nowhere outside the camera band.
     omega = np.asarray(hj.geometry_stage(scene).omega)
     assert not np.any(differing(render_gl(scene, omega=omega).image, jax_image) & ~camera)
-    assert np.all(hj.renderer_band(scene, colour_bound=peak)[missed])
+    assert np.all(hj.experimental.renderer_band(scene, colour_bound=peak)[missed])
     moved = np.abs(result.omega - omega) > 1e-4
     assert moved.any() and np.all(shadow_band(scene)[moved])
 
@@ -110,16 +110,18 @@ def test_no_shadow_part_without_shadows():
     scene = small_furball_scene(shadows="none")
     assert not omega_uncertainty(scene).any() and not shadow_band(scene).any()
     for bound in (0.5, 1e3):
-        np.testing.assert_array_equal(hj.renderer_band(scene, bound).ravel(), camera_band(scene, bound))
+        np.testing.assert_array_equal(
+            hj.experimental.renderer_band(scene, bound).ravel(), camera_band(scene, bound)
+        )
     # The same geometry with shadows: the camera part is the same, the band only grows.
     shadowed = small_furball_scene(shadows="opacity-maps")
     np.testing.assert_array_equal(camera_band(shadowed, 1e3), camera_band(scene, 1e3))
-    assert np.all(hj.renderer_band(shadowed, 1e3)[hj.renderer_band(scene, 1e3)])
+    assert np.all(hj.experimental.renderer_band(shadowed, 1e3)[hj.experimental.renderer_band(scene, 1e3)])
 
 
 def test_band_grows_with_the_colour_bound():
     scene = omega_scene()
-    bands = [hj.renderer_band(scene, bound) for bound in (0.01, 1.0, 100.0)]
+    bands = [hj.experimental.renderer_band(scene, bound) for bound in (0.01, 1.0, 100.0)]
     assert np.all(bands[1][bands[0]]) and np.all(bands[2][bands[1]])
     assert bands[2].sum() > bands[0].sum()
 

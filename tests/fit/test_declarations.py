@@ -35,10 +35,10 @@ class AbsorbingParams(eqx.Module):
         self.kappa, self.ambient = scalar_param(kappa), rgb_param(ambient)
 
     def __check_init__(self):
-        hj.check_params(self, colors=("kd", "ambient"), positive=("sigma",), non_negative=("kappa",))
+        hj.extend.check_params(self, colors=("kd", "ambient"), positive=("sigma",), non_negative=("kappa",))
 
 
-class Absorbing(hj.AbstractShadingModel):
+class Absorbing(hj.extend.AbstractShadingModel):
     """colour = ambient·c + τ·light·Kd ⊙ c ⊙ exp(−σ·sin(T, L)): σ an RGB absorption the
     colour is not linear in (as a fibre's σ_a)."""
 
@@ -48,12 +48,12 @@ class Absorbing(hj.AbstractShadingModel):
     params_type: ClassVar[type] = AbsorbingParams
     table_keys: ClassVar[tuple[str, ...]] = ("kd", "sigma", "kappa", "ambient")
     fittable: ClassVar[tuple[str, ...]] = ("kd", "sigma")
-    searched: ClassVar[dict] = {"sigma": hj.LOG, "kappa": hj.LOG}
+    searched: ClassVar[dict] = {"sigma": hj.extend.LOG, "kappa": hj.extend.LOG}
 
     def reflectance(self, points, params):
         sin_tl = jnp.linalg.norm(jnp.cross(points.tangent, points.to_light), axis=1)
         absorbed = jnp.exp(-params.sigma[None, :] * sin_tl[:, None])
-        return hj.Reflectance(
+        return hj.extend.Reflectance(
             ambient={"ambient": points.base_color}, lit={"kd": absorbed * points.base_color}
         )
 
@@ -163,17 +163,17 @@ class TwoLobeParams(eqx.Module):
         )
 
     def __check_init__(self):
-        hj.check_params(self, colors=("kd", "ks", "kt", "ambient"), positive=("p", "q"))
+        hj.extend.check_params(self, colors=("kd", "ks", "kt", "ambient"), positive=("p", "q"))
 
 
-class TwoLobes(hj.AbstractShadingModel):
+class TwoLobes(hj.extend.AbstractShadingModel):
     params: TwoLobeParams = eqx.field(default_factory=TwoLobeParams)
 
     name: ClassVar[str] = "test-two-lobes"
     params_type: ClassVar[type] = TwoLobeParams
     table_keys: ClassVar[tuple[str, ...]] = ()
     fittable: ClassVar[tuple[str, ...]] = ("kd", "ks", "kt", "p", "q")
-    searched: ClassVar[dict] = {"p": hj.LOG, "q": hj.LOG, "kappa": hj.LOG}
+    searched: ClassVar[dict] = {"p": hj.extend.LOG, "q": hj.extend.LOG, "kappa": hj.extend.LOG}
     plateaus: ClassVar[tuple[Plateau, ...]] = (
         Plateau("p", SHININESS_SCAN, gain="ks"),
         Plateau("q", SHININESS_SCAN, gain="kt"),
@@ -184,7 +184,7 @@ class TwoLobes(hj.AbstractShadingModel):
         sin_tl, seed_gap = terms(points.tangent, points.to_light, points.to_eye, seed_cone)
         _, mirror_gap = terms(points.tangent, points.to_light, points.to_eye, mirror_cone)
         c = points.base_color
-        return hj.Reflectance(
+        return hj.extend.Reflectance(
             ambient={"ambient": c},
             lit={
                 "kd": sin_tl[:, None] * c,

@@ -332,7 +332,7 @@ def test_transmittance_gradients_in_kappa_and_opacity_match_finite_differences(l
     τ; the shading and composite after it are the other methods' and tested with them)."""
     scene = small_furball_scene(strands=80, size=16, shadows="deep", resolution=32)
     scene = scene.replace(shadows=dataclasses.replace(scene.shadows, lookup=lookup))
-    plan = hj.prepare(scene).shadow
+    plan = hj.experimental.prepare(scene).shadow
     weights = jnp.asarray(np.random.default_rng(0).uniform(size=scene.strands.num_points))
 
     def loss(kappa, alpha):

@@ -1,4 +1,4 @@
-"""The render's capacity estimate (hairjax/_geometry/_estimate.py, docs/model.md §5
+"""The render's capacity estimate (hairjax/_geometry_stage/_estimate.py, docs/model.md §5
 "Capacity"): scenes beyond the memory are refused in one line naming the scene key and the
 bytes, before the arrays exist; ordinary scenes are not; the fragments' bound holds."""
 

@@ -274,7 +274,7 @@ def test_gl_agrees_with_jax(gl, name):
     # occluder pixels whose V or Ω may differ, occluder_light_uncertainty) or are the mesh
     # interpolation above.
     diff = np.abs(full.image - jax_image).max(axis=-1).ravel()
-    wide = hj.renderer_band(scene, float(jax_image[..., :3].max())).ravel()
+    wide = hj.experimental.renderer_band(scene, float(jax_image[..., :3].max())).ravel()
     assert np.flatnonzero((diff > 1e-4) & ~wide).size == 0
     assert np.mean(own.visibility != mine.visibility) <= 0.01
     covered = np.asarray(geom.alpha_channel).reshape(jax_image.shape[:2]) == 1.0
@@ -363,12 +363,12 @@ def test_guard_degenerate_triangles_and_a_mesh_behind_the_eye(gl):
     bad, _ = unexplained_pixels(scene, render_gl(scene).image, np.asarray(hj.render(scene)))
     assert bad.size == 0
     behind = scene.replace(occluder=hj.Occluder(kind="mesh", vertices=flat + [0, 0, 6], triangles=tris))
-    assert hj.prepare(behind).occluder_pixel.size == 0
+    assert hj.experimental.prepare(behind).occluder_pixel.size == 0
     gl_image = render_gl(behind).image
     assert np.all(gl_image[..., 3] < 1.0)
     np.testing.assert_allclose(gl_image, np.asarray(hj.render(behind)), atol=1e-4)
     # Off the map (and behind a point light's near plane): V = 1 whatever the map holds.
-    light_view = hj.prepare(scene).view  # any view: points far outside its raster
+    light_view = hj.experimental.prepare(scene).view  # any view: points far outside its raster
     far = np.array([[1e6, 0.0, 0.0], [0.0, 0.0, 10.0]])
     np.testing.assert_array_equal(occluder_visibility(light_view, np.zeros(16 * 16), far), 1.0)
 

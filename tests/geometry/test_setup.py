@@ -1,4 +1,4 @@
-"""The geometry set-up's warning for hair that covers no pixel (hairjax/_geometry/_setup.py):
+"""The geometry set-up's warning for hair that covers no pixel (hairjax/_geometry_stage/_setup.py):
 a black image never comes without a word, and a framed one comes without one."""
 
 from __future__ import annotations

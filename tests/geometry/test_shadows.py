@@ -42,7 +42,7 @@ def interior_points(scene):
 
 def test_map_framing_is_what_the_test_assumes():
     assert map_margin(np.ones(1)) == 2
-    setup = hj.prepare(slab("exact"))
+    setup = hj.experimental.prepare(slab("exact"))
     assert setup.shadow.view.focal == pytest.approx((R - 4) / (2 * X))
 
 

@@ -280,7 +280,9 @@ def test_coordinates_around_1e4_and_1e_minus_4(request, backend, scale):
         base = runner("point_light", backend)
         ref = base(base.scene.params, None, runner(case, backend).target)
         u = unit_roundoff(np.dtype(backend))
-        assert_same_setup(hj.prepare(runner(case, backend).scene), hj.prepare(base.scene), u)
+        assert_same_setup(
+            hj.experimental.prepare(runner(case, backend).scene), hj.experimental.prepare(base.scene), u
+        )
     rel = 1000 * (DEFAULT["shininess"] + 8) * u
     bound = channel_bound(base.scene, base.scene.params, np.dtype(backend)).max()
     assert np.abs(image - ref.image).max() <= rel * bound
@@ -577,5 +579,5 @@ def test_guard_sphere_rays_that_miss_and_an_eye_inside():
         occluder=occ,
         shadows=hj.Shadows("none"),
     )
-    setup = hj.prepare(scene)
+    setup = hj.experimental.prepare(scene)
     assert setup.opaque.any() and np.all(setup.occluder_direct == 0.0)  # lit from behind

@@ -65,7 +65,7 @@ def test_gl_matches_jax_outside_the_band(gl, occluder, lookup):
     slack = np.abs(result.omega - omega) - omega_uncertainty(scene)
     assert np.all(slack <= rounding_bound(scene, omega))
     # Pixels: every difference > PIXEL_TOL lies in the band (at most 0.1 % may not).
-    band = hj.renderer_band(scene, colour_bound=float(jax_image[..., :3].max()))
+    band = hj.experimental.renderer_band(scene, colour_bound=float(jax_image[..., :3].max()))
     differs = np.abs(result.image - jax_image).max(axis=-1) > PIXEL_TOL
     assert np.mean(differs & ~band) <= MAX_BAND
     # The camera pass with JAX's Ω (and occluder light): only the camera band differs.

@@ -130,7 +130,9 @@ def test_both_shading_conventions(gl, model):
     from hairjax.gl import render_gl
 
     scene = load("point_light")
-    scene = scene.replace(shading=hj.shading_model_class(model)(scene.params), shadows=hj.Shadows("none"))
+    scene = scene.replace(
+        shading=hj.extend.shading_model_class(model)(scene.params), shadows=hj.Shadows("none")
+    )
     jax_image = np.asarray(hj.render(scene))
     bad, _ = unexplained_pixels(scene, render_gl(scene).image, jax_image)
     assert bad.size == 0

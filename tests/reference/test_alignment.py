@@ -39,14 +39,14 @@ CENTROID_TOL = 0.25  # pixels
 
 def _world_widths(camera, strands, pixels):
     """The world width that is `pixels` wide at each strand's mean depth (docs/model.md §5)."""
-    view = hj.camera_view(camera)
+    view = hj.experimental.camera_view(camera)
     depth = [view.project(np.asarray(s))[1].mean() for s in strands]
     return np.asarray(pixels) * np.asarray(depth) / view.focal
 
 
 def _regions(camera, strands, margin=4):
     """Each strand's pixel box (its projected bounding box with a margin), as slices."""
-    view = hj.camera_view(camera)
+    view = hj.experimental.camera_view(camera)
     boxes = []
     for s in strands:
         xy, _ = view.project(np.asarray(s))
@@ -98,7 +98,7 @@ def test_fibres_cover_the_ribbons_pixels():
     scene = _scene(STRANDS, widths, reference=hj.ReferenceSettings(max_depth=2, spp=SPP))
     ribbons = np.asarray(hj.render(scene))[..., 3]
     fibres = hj.reference_image(scene, seed=1)[..., 3]
-    view = hj.camera_view(CAMERA)
+    view = hj.experimental.camera_view(CAMERA)
     for pixels, box, strand in zip(PIXEL_WIDTHS, _regions(CAMERA, STRANDS), STRANDS, strict=True):
         a, b = ribbons[box], fibres[box]
         assert _iou(_blocks(a), _blocks(b)) >= IOU_MIN, (pixels, _iou(_blocks(a), _blocks(b)))
@@ -118,7 +118,7 @@ def test_a_point_lands_in_the_pixel_hairjax_projects_it_to():
     same pixel (the points are placed away from pixel edges). Each coordinate is read across
     strands that lie along the other: a fibre's ends are Mitsuba's (docs/reference.md, "The
     mapping"), which shift a stub's centroid along it, by 0.35–0.45 px here."""
-    view = hj.camera_view(CAMERA)
+    view = hj.experimental.camera_view(CAMERA)
     targets = np.array([(14.3, 10.6), (50.7, 12.4), (31.5, 24.5), (9.6, 38.3), (55.4, 40.7)])
     depth = 4.2
     # Back-project each pixel position to depth D along its ray: x = W/2 + f·(p·r)/D, …
@@ -148,7 +148,7 @@ def test_a_point_lands_in_the_pixel_hairjax_projects_it_to():
 
 def _sphere_hits(camera, centre, radius):
     """Per pixel centre, the camera ray's first hit on the sphere: (point, unit normal, hit mask)."""
-    view = hj.camera_view(camera)
+    view = hj.experimental.camera_view(camera)
     origin, direction = view.pixel_rays()
     rel = origin - np.asarray(centre)
     b = np.einsum("ij,ij->i", rel, direction)

@@ -28,7 +28,7 @@ def test_world_width_is_the_diameter_and_the_ends_are_the_strands():
 def test_pixel_width_becomes_w_d_over_f_at_each_point():
     """A w-pixel ribbon is a fibre of diameter w·D/f: as wide on screen at every depth."""
     strands = _strands([[(0, 0, 1.0), (0.5, 0, -2.0), (1.0, 0, -6.0)]], 1.5, "pixels")
-    view = hj.camera_view(CAMERA)
+    view = hj.experimental.camera_view(CAMERA)
     points, _ = fibre_curves(strands, CAMERA)
     _, depth = view.project(points[:, :3])
     np.testing.assert_allclose(2 * points[:, 3] * view.focal / depth, 1.5, rtol=1e-12)

@@ -3,7 +3,7 @@ other stages: tests/stability_helpers.py): the guards in hairjax/_scene.
 
 | guard (file: function)                          | test_guard_… (or test_… in full)            |
 |-------------------------------------------------|---------------------------------------------|
-| _scene/_strands: tangents/unit_rows, zero diff. | zero_tangent_of_repeated_points             |
+| _values/_strands: tangents/unit_rows, zero diff. | zero_tangent_of_repeated_points             |
 | _scene/_procedural: _unit_vectors, _grow        | fur_sources                                 |
 | _scene/_procedural: scalp clip(1 − y², 0)       | unreachable: |y| ≤ 1 gives fl(y²) ≤ 1       |
 """
@@ -20,7 +20,7 @@ import hairjax as hj
 
 
 def test_guard_zero_tangent_of_repeated_points():
-    """_scene/_strands.tangents/unit_rows: a zero central difference (repeated points, one-point
+    """_values/_strands.tangents/unit_rows: a zero central difference (repeated points, one-point
     strands) gives the zero tangent, exactly; other tangents are unit vectors."""
     from hairjax._values._strands import tangents
 

@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 from helpers import cone
 
-from hairjax import ShadingParams, kajiya_kay
+from hairjax import ShadingParams
 from hairjax._shading import kajiya_kay_terms, specular_power
+from hairjax.extend import kajiya_kay
 
 PARAMS = ShadingParams(kd=(0.5, 0.25, 1.0), ks=2.0, shininess=3.0)
 
@@ -169,7 +170,7 @@ def test_unknown_model_raises():
     import hairjax as hj
 
     with pytest.raises(hj.SceneError, match="shading.model must be one of .*got 'phong'"):
-        hj.shading_model_class("phong")
+        hj.extend.shading_model_class("phong")
 
 
 @pytest.mark.parametrize(

@@ -61,7 +61,7 @@ def test_lookup_converges_to_the_formula():
     T, L, V = unit(2000), unit(2000), unit(2000)
     inner = (np.abs(np.sum(T * L, axis=1)) < 0.9) & (np.abs(np.sum(T * V, axis=1)) < 0.9)
     params = hj.ShadingParams(kd=1.0, ks=1.0, shininess=20.0)
-    exact = jax.jit(jax.vmap(hj.kajiya_kay, in_axes=(0, 0, 0, None)))(T, L, V, params)
+    exact = jax.jit(jax.vmap(hj.extend.kajiya_kay, in_axes=(0, 0, 0, None)))(T, L, V, params)
     err = {
         n: [
             np.asarray(a)[:, 0] - np.asarray(e)[:, 0]

@@ -32,10 +32,10 @@ class ToyParams(eqx.Module):
         self.kappa = jnp.asarray(kappa, dtype=float)
 
     def __check_init__(self):
-        hj.check_params(self, colors=("kd", "ambient"), positive=("power",), non_negative=("kappa",))
+        hj.extend.check_params(self, colors=("kd", "ambient"), positive=("power",), non_negative=("kappa",))
 
 
-class Toy(hj.AbstractShadingModel):
+class Toy(hj.extend.AbstractShadingModel):
     """colour = ambient·c + τ·light·Kd·c·exp(−power·(T·L)²): brightest across the light."""
 
     params: ToyParams = eqx.field(default_factory=ToyParams)
@@ -44,13 +44,13 @@ class Toy(hj.AbstractShadingModel):
     params_type: ClassVar[type] = ToyParams
     table_keys: ClassVar[tuple[str, ...]] = ("kd", "ambient", "power", "kappa")
     fittable: ClassVar[tuple[str, ...]] = ("kd", "power", "kappa")
-    searched: ClassVar[dict] = {"power": hj.LOG, "kappa": hj.LOG}
+    searched: ClassVar[dict] = {"power": hj.extend.LOG, "kappa": hj.extend.LOG}
     ranges: ClassVar[dict] = {"power": (0.1, 100.0)}
 
     def reflectance(self, points, params):
         cos = jnp.sum(points.tangent * points.to_light, axis=1)
         fall_off = jnp.exp(-params.power * cos * cos)
-        return hj.Reflectance(
+        return hj.extend.Reflectance(
             ambient={"ambient": points.base_color}, lit={"kd": fall_off[:, None] * points.base_color}
         )
 
@@ -72,7 +72,7 @@ class Toy(hj.AbstractShadingModel):
 def toy(monkeypatch):
     """The toy model registered for one test only (the registry restored afterwards)."""
     monkeypatch.setattr(_model.SHADING_MODELS, "classes", dict(_model.SHADING_MODELS.classes))
-    hj.register_shading_model(Toy)
+    hj.extend.register_shading_model(Toy)
     return Toy
 
 

@@ -23,7 +23,7 @@ from helpers import (
 )
 
 import hairjax as hj
-from hairjax import geometry_stage, prepare
+from hairjax import geometry_stage
 from hairjax._errors import EmptyViewWarning, SceneError
 from hairjax._scene._file import scene_from_dict
 from hairjax._shading import point_colors
@@ -41,6 +41,7 @@ from hairjax._shading._scheuermann_inputs import (
     strand_normals,
     strand_position,
 )
+from hairjax.experimental import prepare
 
 EXAMPLE = EXAMPLES / "scheuermann.toml"
 
@@ -307,7 +308,7 @@ def test_constant_alpha_texture_equals_scaled_hair_alpha():
 
 def test_kajiya_kay_scenes_build_none_of_it():
     scene = scheuermann_scene().replace(shading=hj.KajiyaKay(hj.ShadingParams()))
-    assert prepare(scene).shading_inputs == hj.PointInputs()
+    assert prepare(scene).shading_inputs == hj.extend.PointInputs()
     assert geometry_stage(scene).shading_inputs is None
 
 

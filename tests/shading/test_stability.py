@@ -230,14 +230,14 @@ def test_guard_safe_norm_at_zero(dtype):
         params = hj.ShadingParams(kd=0.7, ks=0.5, shininess=1e4)
 
         def shade(t, v):
-            d, s = hj.kajiya_kay(t, t, v, params)  # T ∥ L
+            d, s = hj.extend.kajiya_kay(t, t, v, params)  # T ∥ L
             return jnp.sum(d + s)
 
         grad_shade = jax.jit(jax.value_and_grad(shade))
         for v in (t, jnp.asarray([0.6, 0.8, 0.0])):  # also T ∥ V
             value, grad = grad_shade(t, v)
             assert np.isfinite(float(value)) and np.all(np.isfinite(np.asarray(grad)))
-        d, _ = hj.kajiya_kay(t, t, jnp.asarray([0.6, 0.8, 0.0]), params)
+        d, _ = hj.extend.kajiya_kay(t, t, jnp.asarray([0.6, 0.8, 0.0]), params)
         np.testing.assert_array_equal(d, 0.0)
 
 

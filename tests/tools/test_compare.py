@@ -234,7 +234,7 @@ def test_band_verdict_counts_what_lies_outside_the_band(gl):
     gl_image = render_gl(scene).image
     verdict, band = _compare.band_verdict(scene, gl_image, jax_image)
     peak = float(jax_image[..., :3].max())
-    np.testing.assert_array_equal(band, hj.renderer_band(scene, colour_bound=peak))
+    np.testing.assert_array_equal(band, hj.experimental.renderer_band(scene, colour_bound=peak))
     differ = np.abs(gl_image - jax_image)[..., :3].max(axis=-1) > PIXEL_TOL
     assert verdict == {
         "band_share": float(band.mean()),
