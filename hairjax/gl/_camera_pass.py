@@ -21,7 +21,8 @@ __all__ = ["camera_depth_far", "camera_pass"]
 def camera_depth_far(scene: Scene, view: View, depth: np.ndarray) -> float:
     """The camera depth mapped to 1 in the depth buffer: anything drawn lies in (near, far)."""
     cam = scene.camera
-    # No floor at 1 unit (was initial=1.0): depth/far is stored in 2⁻²⁴ steps, tiny scenes lost digits.
+    # No floor at 1 unit: depth/far is stored in 2⁻²⁴ steps, so a floor above a tiny scene's
+    # depths would spend its digits on empty range.
     far = 2.0 * float(max(np.max(depth, initial=0.0), cam.near))
     occ = scene.occluder
     if occ is not None and occ.kind == "sphere":
