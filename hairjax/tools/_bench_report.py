@@ -122,6 +122,11 @@ def _stage(key: str) -> Callable[[dict, dict], str]:
     return lambda c, r: _fmt_time(r["stages"].get(key, {}).get("median_s"))
 
 
+def _gl_pass(key: str) -> Callable[[dict, dict], str]:
+    """A cell: the median time of the GL pass `key` ("-" where the run has none)."""
+    return lambda c, r: _fmt_time(r["gl"]["passes"].get(key, {}).get("median_s"))
+
+
 def _marked(figure: Callable[[dict], str], target: str) -> Callable[[dict, dict], str]:
     """A cell: `figure(result)`, marked against `target` (a key of targets_met)."""
     return lambda c, r: figure(r) + _mark(r["targets_met"].get(target))
@@ -209,13 +214,7 @@ def _ordering_rows(columns: _Columns) -> list[_Row]:
 def _gl_rows(columns: _Columns, have_jax: bool) -> list[_Row]:
     """The GL passes and full render, with JAX's figures their ratio against the targets,
     and the GL runs' status."""
-    rows = [
-        _Row(
-            f"GL {key}",
-            columns.gl_cells(lambda c, r, key=key: _fmt_time(r["gl"]["passes"].get(key, {}).get("median_s"))),
-        )
-        for key in GL_PASSES
-    ]
+    rows = [_Row(f"GL {key}", columns.gl_cells(_gl_pass(key))) for key in GL_PASSES]
     rows.append(
         _Row("GL full render", columns.gl_cells(lambda c, r: _fmt_time(r["gl"]["full_render"]["median_s"])))
     )
