@@ -30,8 +30,8 @@ are skipped (and say so).
 Runtime: on the shared 2-core CPU (llvmpipe for GL) `--quick` (2k and 4k strands at 128² and
 192², TressFX at 320 × 180) about 30 s; `--bench 20000x512 --skip tressfx` (with the fit)
 45 s; `--bench 100000x1024 --skip fit --repeats 2` (with TressFX at 1280 × 720) 80 s. The
-default sizes were planned to take under 3 minutes on a 16-core machine with an H200,
-most of it the set-up at 100k / 1024² and XLA's compilation. On a machine whose default
+default sizes took 74 s on a 16-core machine with an H200 (BENCHMARKS.md, "GPU: one NVIDIA
+H200"), most of it the set-up at 100k / 1024² and XLA's compilation. On a machine whose default
 device is a GPU, each fur ball is timed again with the set-up on the host
 (`placement="host"`, docs/model.md §5); `HAIRJAX_SETUP=host` makes the host the default.
 """
