@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 import re
 import types
+import weakref
 
 import numpy as np
 import pytest
@@ -217,6 +218,26 @@ def test_timed_calls_records_warm_up_runs_and_the_last_result(monkeypatch):
     timed = timed_calls(fn, 3, lambda k, result, seconds: seen.append((k, result, seconds)))
     assert (timed.warm_up_s, timed.runs_s, timed.median_s, timed.last) == (100.0, [5.0, 1.0, 3.0], 3.0, 3)
     assert seen == [(0, 0, 100.0), (1, 1, 5.0), (2, 2, 1.0), (3, 3, 3.0)]
+
+
+def test_timed_calls_drops_each_result_before_the_next_call():
+    """Two calls' results never coexist (a render's arrays can fill the memory)."""
+
+    class Result:
+        pass
+
+    made: list[weakref.ref] = []
+    alive_at_call: list[int] = []
+
+    def fn():
+        alive_at_call.append(sum(ref() is not None for ref in made))
+        result = Result()
+        made.append(weakref.ref(result))
+        return result
+
+    timed = timed_calls(fn, 3)
+    assert alive_at_call == [0, 0, 0, 0]
+    assert made[-1]() is timed.last
 
 
 @pytest.mark.parametrize("repeats", [0, -1, 1.5, True, "3"])
