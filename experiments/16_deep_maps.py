@@ -150,14 +150,18 @@ def _render(scene, repeats: int):
     """(image, Ω, median shadow-pass seconds, median total seconds): one warm-up, then
     `repeats` timed GL renders."""
     from hairjax.gl import render_gl
+    from hairjax.tools import timed_calls
 
-    result = render_gl(scene)
-    shadow, total = [], []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        timed = render_gl(scene)
-        total.append(time.perf_counter() - start)
-        shadow.append(timed.timings["shadows"])
+    shadow, warm_up = [], []
+
+    def after(k, result, _seconds):
+        if k == 0:
+            warm_up.append(result)
+        else:
+            shadow.append(result.timings["shadows"])
+
+    total = timed_calls(lambda: render_gl(scene), repeats, after).runs_s
+    result = warm_up[0]
     return result.image, result.omega, statistics.median(shadow), statistics.median(total)
 
 

@@ -30,8 +30,8 @@ are skipped (and say so).
 Runtime: on the shared 2-core CPU (llvmpipe for GL) `--quick` (2k and 4k strands at 128² and
 192², TressFX at 320 × 180) about 30 s; `--bench 20000x512 --skip tressfx` (with the fit)
 45 s; `--bench 100000x1024 --skip fit --repeats 2` (with TressFX at 1280 × 720) 80 s. The
-default sizes were planned to take under 3 minutes on a 16-core machine with an H200,
-most of it the set-up at 100k / 1024² and XLA's compilation. On a machine whose default
+default sizes took 74 s on a 16-core machine with an H200 (BENCHMARKS.md, "GPU: one NVIDIA
+H200"), most of it the set-up at 100k / 1024² and XLA's compilation. On a machine whose default
 device is a GPU, each fur ball is timed again with the set-up on the host
 (`placement="host"`, docs/model.md §5); `HAIRJAX_SETUP=host` makes the host the default.
 """
@@ -54,7 +54,7 @@ import numpy as np
 
 import hairjax as hj
 from hairjax.experimental import write_json
-from hairjax.tools import bench_scene
+from hairjax.tools import bench_scene, timed_calls
 
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "tressfx"
 
@@ -111,12 +111,6 @@ def clean(value):
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return value
-
-
-def block(x):
-    import jax
-
-    return jax.block_until_ready(x)
 
 
 # --- the machine ---------------------------------------------------------------------------
@@ -197,17 +191,18 @@ def time_jax(scene, repeats: int, label: str, placement=None) -> dict:
     """`hairjax bench`'s JAX runs: `render_profiled` (forgets the scene's stages, then times
     the set-up, the opacity stage and the shading stage, blocking between them); one warm-up
     run, then `repeats`; the set-up at `placement` (None: the default)."""
-    progress(f"{label}: JAX warm-up render (compiles)")
-    t0 = time.perf_counter()
-    image, timings = hj.render_profiled(scene, placement=placement)
-    warm_up = time.perf_counter() - t0
     runs: dict[str, list[float]] = {}
-    for i in range(repeats):
-        del image  # two runs' arrays never coexist
-        image, timings = hj.render_profiled(scene, placement=placement)
-        for key, value in timings.items():
-            runs.setdefault(key, []).append(value)
-        progress(f"{label}: JAX run {i + 1}/{repeats}: {timings['total']:.3f} s")
+
+    def after(k, result, _seconds):
+        if k:
+            _, timings = result
+            for key, value in timings.items():
+                runs.setdefault(key, []).append(value)
+            progress(f"{label}: JAX run {k}/{repeats}: {timings['total']:.3f} s")
+
+    progress(f"{label}: JAX warm-up render (compiles)")
+    timed = timed_calls(lambda: hj.render_profiled(scene, placement=placement), repeats, after)
+    image, warm_up = timed.last[0], timed.warm_up_s
     setup = hj.experimental.prepare(scene, placement=placement)  # the last run's, cached
     shadow = getattr(setup, "shadow", None)
     coverage = getattr(shadow, "frag_coverage", None)
@@ -226,13 +221,7 @@ def time_shading(scene, repeats: int, label: str) -> dict:
     """The shading stage alone on the scene's cached geometry: warm calls, as the bench's."""
     geom = hj.geometry_stage(scene)
     params = scene.params
-    block(hj.shading_stage(geom, params))  # compiled by the renders already; one more warm call
-    runs = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        image = block(hj.shading_stage(geom, params))
-        runs.append(time.perf_counter() - t0)
-        del image
+    runs = timed_calls(lambda: hj.shading_stage(geom, params), repeats).runs_s  # compiled by the renders
     progress(f"{label}: shading stage alone {median(runs) * 1e3:.2f} ms")
     return stat(runs)
 
@@ -243,20 +232,17 @@ def time_gl(scene, repeats: int, label: str) -> dict:
     try:
         from hairjax.gl import render_gl
 
-        progress(f"{label}: GL warm-up render")
-        t0 = time.perf_counter()
-        result = render_gl(scene)
-        warm_up = time.perf_counter() - t0
-        total: list[float] = []
         passes: dict[str, list[float]] = {}
-        for i in range(repeats):
-            del result
-            t0 = time.perf_counter()
-            result = render_gl(scene)
-            total.append(time.perf_counter() - t0)
-            for key, value in result.timings.items():
-                passes.setdefault(key, []).append(value)
-            progress(f"{label}: GL run {i + 1}/{repeats}: {total[-1]:.3f} s")
+
+        def after(k, result, seconds):
+            if k:
+                for key, value in result.timings.items():
+                    passes.setdefault(key, []).append(value)
+                progress(f"{label}: GL run {k}/{repeats}: {seconds:.3f} s")
+
+        progress(f"{label}: GL warm-up render")
+        timed = timed_calls(lambda: render_gl(scene), repeats, after)
+        result, warm_up, total = timed.last, timed.warm_up_s, timed.runs_s
         return {
             "status": "ok",
             "error": None,
@@ -325,10 +311,7 @@ def fit_case(strands: int, size: int, repeats: int) -> dict:
     progress(f"{label}: target render")
     target = np.asarray(hj.render(scene, TRUE))
 
-    def one() -> dict:
-        t0 = time.perf_counter()
-        r = hj.fit(scene, target, init=START)  # Levenberg-Marquardt
-        wall = time.perf_counter() - t0
+    def record(r, wall: float) -> dict:
         err = max(
             float(
                 np.max(
@@ -347,15 +330,18 @@ def fit_case(strands: int, size: int, repeats: int) -> dict:
             "termination": str(r.termination),
         }
 
+    fits: list[dict] = []  # the cold fit, then the warm ones
+
+    def after(k, r, seconds):
+        fits.append(record(r, seconds))
+        if k == 0:
+            progress(f"{label}: cold fit {fits[0]['time_s']:.2f} s, {fits[0]['steps']} steps")
+        else:
+            progress(f"{label}: warm fit {k}/{repeats}: {fits[k]['time_s']:.3f} s, {fits[k]['steps']} steps")
+
     progress(f"{label}: cold fit (compiles)")
-    cold = one()
-    progress(f"{label}: cold fit {cold['time_s']:.2f} s, {cold['steps']} steps")
-    warm = []
-    for i in range(repeats):
-        warm.append(one())
-        progress(
-            f"{label}: warm fit {i + 1}/{repeats}: {warm[-1]['time_s']:.3f} s, {warm[-1]['steps']} steps"
-        )
+    timed_calls(lambda: hj.fit(scene, target, init=START), repeats, after)  # Levenberg-Marquardt
+    cold, warm = fits[0], fits[1:]
     hj.experimental.forget(scene)
     return {
         "strands": strands,

@@ -1,9 +1,10 @@
 """The one cache of the renderer: per `Scene` object, what its geometry stage computed.
 
 A scene's set-up (`_geometry_stage/_setup.prepare`), its geometry stage
-(`_geometry_stage/_stage.geometry_stage` with the scene's own opacity) and the renderers' disagreement band (`_disagreement`)
-depend on the scene alone, so they are kept per scene object, under one name each, while
-the scene lives (a weak reference), and `forget(scene)` drops all of them. Holding the
+(`_geometry_stage/_stage.geometry_stage` with the scene's own opacity) and the renderers'
+disagreement band (`_disagreement`) depend on the scene alone, so they are kept per scene
+object, under one name each, while the scene lives (a weak reference), and `forget(scene)`
+drops all of them. Holding the
 `Geometry` yourself (`geometry_stage(scene)`, then `shading_stage(geometry, params)`) is
 the explicit alternative; a render with a given `order` is never cached.
 """

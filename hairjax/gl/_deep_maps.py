@@ -7,6 +7,8 @@ texel's z₀ (lookup "depth")."""
 
 from __future__ import annotations
 
+from typing import Any, NamedTuple
+
 import numpy as np
 
 from .._geometry._shadows import DeepOpacityMaps, LightFrame
@@ -37,20 +39,12 @@ def deep_opacity_maps(
     if not isinstance(shadows, DeepOpacityMaps):  # the pass registered for it: never fires
         raise TypeError(f"the deep pass got shadows.method = {shadows.method!r}")
     k, r = shadows.layers, shadows.resolution
-    groups = -(-(k + 1) // BOUNDARIES_PER_TARGET)  # ⌈(K + 1)/4⌉
     ibo = strands.index_buffer(frame.drawable)
     draw = 2 * len(frame.drawable)
     seen = np.flatnonzero(frame.seen).astype("u4")
     ids = ctx.buffer(seen.tobytes() if seen.size else b"\0" * 4)  # fires when no point is seen
     omega_buf = ctx.buffer(np.zeros(points.count, "f4").tobytes())
-
-    first = ctx.texture((r, r), 1, dtype="f4")
-    targets = [ctx.texture((r, r), 4, dtype="f4") for _ in range(2)]
-    for tex in (first, *targets):
-        tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-    first_fbo = ctx.framebuffer(color_attachments=[first])
-    fbos = [ctx.framebuffer(color_attachments=[t]) for t in targets]
-    fbos[1].clear(0.0, 0.0, 0.0, 0.0)  # group 0's "group before": read, never used
+    maps = _DeepBuffers.make(ctx, r)
     depth_prog, layer_prog, comp = progs["deep_first"], progs["deep_layers"], progs["omega_deep"]
     depth_vao = strands.vertex_array(depth_prog, ibo)
     layer_vao = strands.vertex_array(layer_prog, ibo)
@@ -59,24 +53,12 @@ def deep_opacity_maps(
         ctx.viewport = (0, 0, r, r)
         ctx.disable(moderngl.DEPTH_TEST)
         ctx.enable(moderngl.BLEND)
-        # z₀: the nearest fragment per texel; +∞ stays where no hair is.
-        first_fbo.use()
-        first_fbo.clear(float("inf"), 0.0, 0.0, 0.0)
-        ctx.blend_equation = moderngl.MIN
-        set_uniforms(depth_prog, **light_pass_uniforms(scene, frame))
-        if draw:
-            depth_vao.render(moderngl.LINES, vertices=draw)
-        check(ctx, "deep opacity maps: depth pass")
-
+        _depth_pass(ctx, maps, depth_prog, depth_vao, draw, light_pass_uniforms(scene, frame))
         ctx.blend_equation = moderngl.FUNC_ADD
         ctx.blend_func = moderngl.ONE, moderngl.ONE
-        first.use(0)
+        maps.first.use(0)
         set_uniforms(
-            layer_prog,
-            first_map=0,
-            layers=k,
-            depth_range=depth_range,
-            **light_pass_uniforms(scene, frame),
+            layer_prog, first_map=0, layers=k, depth_range=depth_range, **light_pass_uniforms(scene, frame)
         )
         set_uniforms(
             comp,
@@ -93,23 +75,81 @@ def deep_opacity_maps(
         points.buffer.bind_to_storage_buffer(0)
         ids.bind_to_storage_buffer(1)
         omega_buf.bind_to_storage_buffer(2)
-        for g in range(groups):
-            cur, prev = g % 2, (g + 1) % 2  # the group before is in the other target
-            fbos[cur].use()
-            fbos[cur].clear(0.0, 0.0, 0.0, 0.0)
-            set_uniforms(layer_prog, group=g)
-            if draw:
-                layer_vao.render(moderngl.LINES, vertices=draw)
-            if len(seen):
-                first.use(0)
-                targets[prev].use(1)
-                targets[cur].use(2)
-                set_uniforms(comp, group=g)
-                comp.run(group_x=workgroups(len(seen)))
-                ctx.memory_barrier()
+        groups = -(-(k + 1) // BOUNDARIES_PER_TARGET)  # ⌈(K + 1)/4⌉
+        _layer_passes(ctx, maps, layer_prog, layer_vao, comp, draw, len(seen), groups)
         check(ctx, f"deep opacity maps: {groups} layer passes")
         return np.frombuffer(omega_buf.read(), dtype="f4").copy()
     finally:
         ctx.blend_equation = moderngl.FUNC_ADD
         ctx.disable(moderngl.BLEND)
-        release(ctx, depth_vao, layer_vao, ibo, ids, omega_buf, first_fbo, *fbos, first, *targets)
+        release(
+            ctx,
+            depth_vao,
+            layer_vao,
+            ibo,
+            ids,
+            omega_buf,
+            maps.first_fbo,
+            *maps.fbos,
+            maps.first,
+            *maps.targets,
+        )
+
+
+class _DeepBuffers(NamedTuple):
+    """`first`: each texel's z₀ (one float); `targets`: two RGBA targets of four boundaries
+    each, the current group's and the one before, alternating; `r × r` texels, read texel
+    by texel (nearest); and their framebuffers."""
+
+    first: Any
+    targets: list[Any]
+    first_fbo: Any
+    fbos: list[Any]
+
+    @classmethod
+    def make(cls, ctx, r: int) -> _DeepBuffers:
+        import moderngl
+
+        first = ctx.texture((r, r), 1, dtype="f4")
+        targets = [ctx.texture((r, r), 4, dtype="f4") for _ in range(2)]
+        for tex in (first, *targets):
+            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        first_fbo = ctx.framebuffer(color_attachments=[first])
+        fbos = [ctx.framebuffer(color_attachments=[t]) for t in targets]
+        fbos[1].clear(0.0, 0.0, 0.0, 0.0)  # group 0's "group before": read, never used
+        return cls(first, targets, first_fbo, fbos)
+
+
+def _depth_pass(ctx, maps: _DeepBuffers, prog, vao, draw: int, uniforms: dict) -> None:
+    """z₀: the nearest fragment per texel, by MIN blending; +∞ stays where no hair is."""
+    import moderngl
+
+    maps.first_fbo.use()
+    maps.first_fbo.clear(float("inf"), 0.0, 0.0, 0.0)
+    ctx.blend_equation = moderngl.MIN
+    set_uniforms(prog, **uniforms)
+    if draw:
+        vao.render(moderngl.LINES, vertices=draw)
+    check(ctx, "deep opacity maps: depth pass")
+
+
+def _layer_passes(ctx, maps: _DeepBuffers, prog, vao, comp, draw: int, seen: int, groups: int) -> None:
+    """Per group of four boundaries: the layers drawn additively into the group's target,
+    then Ω of the `seen` points whose upper boundary is in the group, between it and the
+    group before."""
+    import moderngl
+
+    for g in range(groups):
+        cur, prev = g % 2, (g + 1) % 2  # the group before is in the other target
+        maps.fbos[cur].use()
+        maps.fbos[cur].clear(0.0, 0.0, 0.0, 0.0)
+        set_uniforms(prog, group=g)
+        if draw:
+            vao.render(moderngl.LINES, vertices=draw)
+        if seen:
+            maps.first.use(0)
+            maps.targets[prev].use(1)
+            maps.targets[cur].use(2)
+            set_uniforms(comp, group=g)
+            comp.run(group_x=workgroups(seen))
+            ctx.memory_barrier()

@@ -4,6 +4,8 @@ maps that bound its slice."""
 
 from __future__ import annotations
 
+from typing import Any, NamedTuple
+
 import numpy as np
 
 from .._geometry._shadows import LightFrame, OpacityMaps, point_planes
@@ -29,47 +31,20 @@ def opacity_maps(
     if not isinstance(shadows, OpacityMaps):  # the pass registered for it: never fires
         raise TypeError(f"the opacity-maps pass got shadows.method = {shadows.method!r}")
     n, r = shadows.maps, shadows.resolution
-    segs = strands.segments[frame.drawable]
-    ids = frame.drawable
-    # Which slices each drawable segment's fragments can fall in (depth is monotone
-    # between the endpoints, so its range is the endpoints' range).
-    z = frame.depth
-    u0 = np.clip(np.floor(frame.slice_coordinate(np.minimum(z[segs[:, 0]], z[segs[:, 1]]), n)), 0, n)
-    u1 = np.clip(np.floor(frame.slice_coordinate(np.maximum(z[segs[:, 0]], z[segs[:, 1]]), n)), 0, n)
-    # The clips fire at D_N (slice N, drawn in no pass: such a segment gets no span) and by rounding.
-    u0, u1 = u0.astype(np.int64), np.minimum(u1.astype(np.int64), n - 1)
-    if clip_slices:
-        spans = np.maximum(u1 - u0 + 1, 0)
-        seg_rep = np.repeat(ids, spans)
-        within = np.arange(spans.sum()) - np.repeat(np.cumsum(spans) - spans, spans)
-        slice_rep = np.repeat(u0, spans) + within
-        order = np.argsort(slice_rep, kind="stable")
-        seg_rep, slice_rep = seg_rep[order], slice_rep[order]
-        starts = np.searchsorted(slice_rep, np.arange(n + 1))
-    else:
-        seg_rep = ids
-        starts = None
-    ibo = strands.index_buffer(seg_rep)
-
-    plane, _ = point_planes(frame, n)
-    seen = np.flatnonzero(frame.seen)
-    by_plane = seen[np.argsort(plane[seen], kind="stable")]
-    plane_starts = np.searchsorted(plane[by_plane], np.arange(n + 1))
-    id_buf = ctx.buffer(by_plane.astype("u4").tobytes() if by_plane.size else b"\0" * 4)  # no point seen
+    draws = _slice_draws(frame, strands.segments, n, clip_slices)
+    ibo = strands.index_buffer(draws.segments)
+    slices = _points_by_slice(frame, n)
+    id_buf = ctx.buffer(
+        slices.points.astype("u4").tobytes() if slices.points.size else b"\0" * 4
+    )  # none seen
     omega_buf = ctx.buffer(np.zeros(points.count, "f4").tobytes())
-
-    current = ctx.texture((r, r), 1, dtype="f4")
-    previous = ctx.texture((r, r), 1, dtype="f4")
-    for tex in (current, previous):
-        tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-    fbo = ctx.framebuffer(color_attachments=[current])
-    prev_fbo = ctx.framebuffer(color_attachments=[previous])
+    maps = _MapBuffers.make(ctx, r)
     prog, comp = progs["light_slice"], progs["omega_maps"]
     vao = strands.vertex_array(prog, ibo)
     try:
-        fbo.use()
+        maps.fbo.use()
         ctx.viewport = (0, 0, r, r)
-        fbo.clear(0.0, 0.0, 0.0, 0.0)
+        maps.fbo.clear(0.0, 0.0, 0.0, 0.0)
         ctx.disable(moderngl.DEPTH_TEST)
         ctx.enable(moderngl.BLEND)
         ctx.blend_func = moderngl.ONE, moderngl.ONE
@@ -89,30 +64,106 @@ def opacity_maps(
         points.buffer.bind_to_storage_buffer(0)
         id_buf.bind_to_storage_buffer(1)
         omega_buf.bind_to_storage_buffer(2)
-        drawn_since_copy = True
-        for i in range(n):
-            if drawn_since_copy:  # B_prev = Ω(D_i); unchanged if slice i − 1 drew nothing
-                ctx.copy_framebuffer(prev_fbo, fbo)
-                drawn_since_copy = False
-            fbo.use()
-            set_uniforms(prog, slice=i)
-            if starts is not None:  # clip_slices
-                count = starts[i + 1] - starts[i]
-                if count:
-                    vao.render(moderngl.LINES, vertices=2 * int(count), first=2 * int(starts[i]))
-                    drawn_since_copy = True
-            elif len(seg_rep):
-                vao.render(moderngl.LINES, vertices=2 * len(seg_rep))
-                drawn_since_copy = True
-            count = int(plane_starts[i + 1] - plane_starts[i])
-            if count:
-                previous.use(0)
-                current.use(1)
-                set_uniforms(comp, first=int(plane_starts[i]), count=count, plane=i)
-                comp.run(group_x=workgroups(count))
-                ctx.memory_barrier()
+        _slice_passes(ctx, prog, comp, vao, maps, draws, slices, n)
         check(ctx, f"{n} opacity-map passes")
         return np.frombuffer(omega_buf.read(), dtype="f4").copy()
     finally:
         ctx.disable(moderngl.BLEND)
-        release(ctx, vao, ibo, id_buf, omega_buf, fbo, prev_fbo, current, previous)
+        release(ctx, vao, ibo, id_buf, omega_buf, maps.fbo, maps.prev_fbo, maps.current, maps.previous)
+
+
+class _SliceDraws(NamedTuple):
+    """The segments drawn from the light, as index-buffer entries. With `clip_slices`, each
+    segment once per slice its depth range meets, by slice: slice i's run is
+    `starts[i]:starts[i + 1]`; without, every drawable segment once (`starts` None: all of
+    them drawn into every map, kim-2003's basic algorithm)."""
+
+    segments: np.ndarray
+    starts: np.ndarray | None
+
+
+def _slice_draws(frame: LightFrame, segments: np.ndarray, n: int, clip_slices: bool) -> _SliceDraws:
+    """Which slices each drawable segment's fragments can fall in (depth is monotone
+    between the endpoints, so its range is the endpoints' range): kim-2003 §4.2."""
+    ids = frame.drawable
+    if not clip_slices:
+        return _SliceDraws(ids, None)
+    segs = segments[ids]
+    z = frame.depth
+    u0 = np.clip(np.floor(frame.slice_coordinate(np.minimum(z[segs[:, 0]], z[segs[:, 1]]), n)), 0, n)
+    u1 = np.clip(np.floor(frame.slice_coordinate(np.maximum(z[segs[:, 0]], z[segs[:, 1]]), n)), 0, n)
+    # The clips fire at D_N (slice N, drawn in no pass: such a segment gets no span) and by rounding.
+    u0, u1 = u0.astype(np.int64), np.minimum(u1.astype(np.int64), n - 1)
+    spans = np.maximum(u1 - u0 + 1, 0)
+    seg_rep = np.repeat(ids, spans)
+    within = np.arange(spans.sum()) - np.repeat(np.cumsum(spans) - spans, spans)
+    slice_rep = np.repeat(u0, spans) + within
+    order = np.argsort(slice_rep, kind="stable")
+    seg_rep, slice_rep = seg_rep[order], slice_rep[order]
+    return _SliceDraws(seg_rep, np.searchsorted(slice_rep, np.arange(n + 1)))
+
+
+class _PointSlices(NamedTuple):
+    """The points seen from the light, by the slice their depth falls in (`point_planes`):
+    slice i's are `points[starts[i]:starts[i + 1]]`."""
+
+    points: np.ndarray
+    starts: np.ndarray
+
+
+def _points_by_slice(frame: LightFrame, n: int) -> _PointSlices:
+    plane, _ = point_planes(frame, n)
+    seen = np.flatnonzero(frame.seen)
+    by_plane = seen[np.argsort(plane[seen], kind="stable")]
+    return _PointSlices(by_plane, np.searchsorted(plane[by_plane], np.arange(n + 1)))
+
+
+class _MapBuffers(NamedTuple):
+    """kim-2003 Routine 2's two buffers: B_current, drawn into additively, and B_prev, its
+    copy before the slice; `r × r` float texels, read texel by texel (nearest)."""
+
+    current: Any
+    previous: Any
+    fbo: Any
+    prev_fbo: Any
+
+    @classmethod
+    def make(cls, ctx, r: int) -> _MapBuffers:
+        import moderngl
+
+        current = ctx.texture((r, r), 1, dtype="f4")
+        previous = ctx.texture((r, r), 1, dtype="f4")
+        for tex in (current, previous):
+            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        fbo = ctx.framebuffer(color_attachments=[current])
+        prev_fbo = ctx.framebuffer(color_attachments=[previous])
+        return cls(current, previous, fbo, prev_fbo)
+
+
+def _slice_passes(ctx, prog, comp, vao, maps: _MapBuffers, draws: _SliceDraws, slices: _PointSlices, n: int):
+    """For each slice i: B_prev = Ω(D_i), slice i's segments drawn into B_current, which
+    then holds Ω(D_{i+1}); and Ω of slice i's points, between the two."""
+    import moderngl
+
+    drawn_since_copy = True
+    for i in range(n):
+        if drawn_since_copy:  # B_prev = Ω(D_i); unchanged if slice i − 1 drew nothing
+            ctx.copy_framebuffer(maps.prev_fbo, maps.fbo)
+            drawn_since_copy = False
+        maps.fbo.use()
+        set_uniforms(prog, slice=i)
+        if draws.starts is not None:  # clip_slices
+            count = draws.starts[i + 1] - draws.starts[i]
+            if count:
+                vao.render(moderngl.LINES, vertices=2 * int(count), first=2 * int(draws.starts[i]))
+                drawn_since_copy = True
+        elif len(draws.segments):
+            vao.render(moderngl.LINES, vertices=2 * len(draws.segments))
+            drawn_since_copy = True
+        count = int(slices.starts[i + 1] - slices.starts[i])
+        if count:
+            maps.previous.use(0)
+            maps.current.use(1)
+            set_uniforms(comp, first=int(slices.starts[i]), count=count, plane=i)
+            comp.run(group_x=workgroups(count))
+            ctx.memory_barrier()

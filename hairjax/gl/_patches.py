@@ -16,7 +16,7 @@ pass (§13) writes its depths, then its colour fills the pixels it covers.
 from __future__ import annotations
 
 import dataclasses
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -64,14 +64,9 @@ def render_patches_gl(
 
     w, h = view.width, view.height
     progs = programs(ctx)
-    prog = progs["patch"]
     tri = patches.triangles[drawable_triangles(view, patches.vertices, patches.triangles)]
     _, depth = view.project(patches.vertices)
-    if head is None:
-        # Drawn depths lie in (0, max]: far = 2·max keeps them inside [0, 1) of the buffer.
-        far = 2.0 * float(max(np.max(depth[tri], initial=0.0), view.near if np.isfinite(view.near) else 1.0))
-    else:  # the same, with room for the head's depths
-        far = camera_depth_far(head.scene, view, depth[tri].ravel())
+    far = _depth_far(view, depth[tri], head)
     color = ctx.texture((w, h), 4, dtype="f4")
     surface = None if head is None else OccluderSurface(ctx, progs, head.scene.occluder, view, (0.0, far))
     depth_tex = ctx.depth_texture((w, h)) if surface is None else surface.depth
@@ -87,26 +82,9 @@ def render_patches_gl(
             ctx.disable(moderngl.BLEND | moderngl.DEPTH_TEST)
             draw_occluder_color(ctx, progs, head.scene, head.params, surface, head.light, objects)
         if tri.size:  # fires unless every triangle reaches the near plane
-            f4 = lambda a: ctx.buffer(np.ascontiguousarray(a, "f4").tobytes())  # noqa: E731
-            vbo, ubo, vvbo = f4(patches.vertices), f4(patches.u), f4(patches.along())
-            pbo = ctx.buffer(np.ascontiguousarray(patches.patch_of(), "u4").tobytes())
-            cbo = f4(np.asarray(point_colors, np.float64)[patches.point])
-            ibo = ctx.buffer(np.ascontiguousarray(tri, "u4").tobytes())
-            vao = ctx.vertex_array(
-                prog,
-                [
-                    (vbo, "3f", "in_position"),
-                    (ubo, "1f", "in_u"),
-                    (vvbo, "1f", "in_v"),
-                    (pbo, "1u", "in_patch"),
-                    (cbo, "3f", "in_color"),
-                ],
-                index_buffer=ibo,
-                index_element_size=4,
-            )
-            objects += [vao, vbo, ubo, vvbo, pbo, cbo, ibo]
+            vao = _patch_vertex_array(ctx, progs["patch"], patches, point_colors, tri, objects)
             set_uniforms(
-                prog,
+                progs["patch"],
                 raster_size=(float(w), float(h)),
                 depth_range=(0.0, far),
                 core=float(patches.core),
@@ -115,37 +93,7 @@ def render_patches_gl(
                 tips=float(patches.tips),
                 **view_uniforms("view", view),
             )
-            ctx.enable(moderngl.DEPTH_TEST)
-            ctx.front_face = "ccw"
-            passes = [  # (opaque fragments?, culled faces, Z writes, Z test, colour writes, blend)
-                (True, None, True, "<", False, False),  # 1. prime Z
-                (True, None, False, "==", True, False),  # 2. opaque parts
-                (False, "front", False, "<", True, True),  # 3. transparent back faces
-                (False, "back", True, "<", True, True),  # 4. transparent front faces
-            ]
-            for opaque, cull, z_write, z_test, colour, blend in passes:
-                set_uniforms(prog, opaque_pass=opaque)
-                if cull is None:
-                    ctx.disable(moderngl.CULL_FACE)
-                else:
-                    ctx.enable(moderngl.CULL_FACE)
-                    ctx.cull_face = cull
-                fbo.depth_mask = z_write
-                ctx.depth_func = z_test
-                fbo.color_mask = (colour,) * 4
-                if blend:
-                    ctx.enable(moderngl.BLEND)
-                    # "over": C ← a c + (1 − a) C, A ← a + (1 − a) A.
-                    ctx.blend_func = (
-                        moderngl.SRC_ALPHA,
-                        moderngl.ONE_MINUS_SRC_ALPHA,
-                        moderngl.ONE,
-                        moderngl.ONE_MINUS_SRC_ALPHA,
-                    )
-                else:
-                    ctx.disable(moderngl.BLEND)
-                vao.render(moderngl.TRIANGLES, vertices=tri.size)
-                check(ctx, "hair patch pass")
+            _four_passes(ctx, fbo, progs["patch"], vao, tri.size)
         image = np.frombuffer(color.read(), dtype="f4").reshape(h, w, 4)[::-1].copy()
     finally:
         ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE | moderngl.BLEND)
@@ -156,3 +104,90 @@ def render_patches_gl(
         if surface is not None:
             surface.release()
     return image
+
+
+def _depth_far(view: View, drawn_depths: np.ndarray, head: PatchHead | None) -> float:
+    """The far end of the depth buffer's range for the drawn triangles' depths (and the
+    head's): drawn depths lie in (0, max], and far = 2·max keeps them inside [0, 1)."""
+    if head is None:
+        near = view.near if np.isfinite(view.near) else 1.0
+        return 2.0 * float(max(np.max(drawn_depths, initial=0.0), near))
+    return camera_depth_far(head.scene, view, drawn_depths.ravel())
+
+
+def _patch_vertex_array(
+    ctx, prog, patches: Patches, point_colors: np.ndarray, tri: np.ndarray, objects: list
+):
+    """The patch mesh's vertices (position, u, v along the patch, patch, its strand point's
+    colour) and the drawn triangles' indices on the GPU; its objects appended to `objects`."""
+    f4 = lambda a: ctx.buffer(np.ascontiguousarray(a, "f4").tobytes())  # noqa: E731
+    vbo, ubo, vvbo = f4(patches.vertices), f4(patches.u), f4(patches.along())
+    pbo = ctx.buffer(np.ascontiguousarray(patches.patch_of(), "u4").tobytes())
+    cbo = f4(np.asarray(point_colors, np.float64)[patches.point])
+    ibo = ctx.buffer(np.ascontiguousarray(tri, "u4").tobytes())
+    vao = ctx.vertex_array(
+        prog,
+        [
+            (vbo, "3f", "in_position"),
+            (ubo, "1f", "in_u"),
+            (vvbo, "1f", "in_v"),
+            (pbo, "1u", "in_patch"),
+            (cbo, "3f", "in_color"),
+        ],
+        index_buffer=ibo,
+        index_element_size=4,
+    )
+    objects += [vao, vbo, ubo, vvbo, pbo, cbo, ibo]
+    return vao
+
+
+class _Pass(NamedTuple):
+    """One of slide 17's passes: which fragments the alpha test keeps (the opaque ones or
+    the others), the faces culled, whether Z is written, the Z test, whether colour is
+    written, and whether it blends "over"."""
+
+    opaque: bool
+    cull: str | None
+    z_write: bool
+    z_test: str
+    colour: bool
+    blend: bool
+
+
+_PASSES = (
+    _Pass(True, None, True, "<", False, False),  # 1. prime Z
+    _Pass(True, None, False, "==", True, False),  # 2. opaque parts
+    _Pass(False, "front", False, "<", True, True),  # 3. transparent back faces
+    _Pass(False, "back", True, "<", True, True),  # 4. transparent front faces
+)
+
+
+def _four_passes(ctx, fbo, prog, vao, vertices: int) -> None:
+    """Slide 17's four passes over the drawn triangles, in their order (module docstring)."""
+    import moderngl
+
+    ctx.enable(moderngl.DEPTH_TEST)
+    ctx.front_face = "ccw"
+    for p in _PASSES:
+        set_uniforms(prog, opaque_pass=p.opaque)
+        if p.cull is None:
+            ctx.disable(moderngl.CULL_FACE)
+        else:
+            ctx.enable(moderngl.CULL_FACE)
+            ctx.cull_face = p.cull
+        fbo.depth_mask = p.z_write
+        ctx.depth_func = p.z_test
+        fbo.color_mask = (p.colour,) * 4
+        if p.blend:
+            ctx.enable(moderngl.BLEND)
+            # "over": C ← a c + (1 − a) C, A ← a + (1 − a) A.
+            ctx.blend_func = (
+                moderngl.SRC_ALPHA,
+                moderngl.ONE_MINUS_SRC_ALPHA,
+                moderngl.ONE,
+                moderngl.ONE_MINUS_SRC_ALPHA,
+            )
+        else:
+            ctx.disable(moderngl.BLEND)
+        vao.render(moderngl.TRIANGLES, vertices=vertices)
+        check(ctx, "hair patch pass")

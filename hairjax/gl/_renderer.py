@@ -72,16 +72,7 @@ def render_gl(
         return _render_patches(scene, params, omega, order, occluder)
     ctx = get_context()
     progs = programs(ctx)
-    timings: dict[str, float] = {}
-    clock = time.perf_counter()
-
-    def lap(name):
-        nonlocal clock
-        ctx.finish()
-        now = time.perf_counter()
-        timings[name] = timings.get(name, 0.0) + now - clock
-        clock = now
-
+    lap = _Laps(ctx)
     view, _, depth, _, order = visibility_order(scene, order)
     depth_far = camera_depth_far(scene, view, depth)
     lighting = scene.occluder is not None and scene.shadows.casts
@@ -93,58 +84,79 @@ def render_gl(
             surface = OccluderSurface(ctx, progs, scene.occluder, view, (0.0, depth_far))
             lap("occluder surface")
         if omega is not None:
-            omega = np.asarray(omega, dtype="f4").reshape(strands.count)
-            strands.omega.write(omega.tobytes())
+            omega = _given_omega(strands, omega)
             if lighting and occluder is None:
                 raise ValueError(
                     "render_gl: with omega and a scene whose occluder takes part in "
                     "the light, pass occluder= too (occluder_light(scene, geometry))"
                 )
         elif scene.shadows.casts:
-            frame = light_frame(
-                scene.strands.points,
-                strands.segments,
-                scene.strands.width,
-                scene.light,
-                scene.shadows.resolution,
-                scene.strands.width_units,
-            )
-            points = Points(ctx, strands, None if surface is None else surface.points)
-            try:
-                frame = with_receivers(frame, points.receivers)
-                omega_all = gl_shadow_pass(scene.shadows.method)(
-                    ctx, progs, scene, strands, frame, points, clip_slices=clip_slices
-                )
-                omega = omega_all[: strands.count].copy()
-                strands.omega.write(omega.tobytes())
-                lap("shadows")
-                if lighting and surface is not None:  # lighting: the scene has an occluder
-                    occluder = occluder_shadow(
-                        ctx, progs, scene, strands, points, surface, omega_all[strands.count :]
-                    )
-                    lap("occluder shadow")
-            finally:
-                points.release()
+            omega, made = _shadows(ctx, progs, scene, strands, surface, clip_slices, lap)
+            if made is not None:  # the scene has an occluder: it takes part in the light
+                occluder = made
         if lighting and occluder is not None:  # lighting: given with omega, or made above
             strands.visibility.write(np.asarray(occluder.visibility, "f4").tobytes())
-        image = camera_pass(
-            ctx,
-            progs,
-            scene,
-            params,
-            strands,
-            view,
-            order,
-            depth_far,
-            surface,
-            occluder if lighting else None,
-        )
+        lit_by = occluder if lighting else None
+        image = camera_pass(ctx, progs, scene, params, strands, view, order, depth_far, surface, lit_by)
         lap("camera pass")
-        return GLResult(image, omega, timings, occluder if lighting else None)
+        return GLResult(image, omega, lap.timings, lit_by)
     finally:
         strands.release()
         if surface is not None:
             surface.release()
+
+
+class _Laps:
+    """Seconds by pass: each call `lap(name)` waits for GL to finish (glFinish) and adds the
+    time since the previous call to `timings[name]`."""
+
+    def __init__(self, ctx):
+        self.ctx, self.timings, self.clock = ctx, {}, time.perf_counter()
+
+    def __call__(self, name: str) -> None:
+        self.ctx.finish()
+        now = time.perf_counter()
+        self.timings[name] = self.timings.get(name, 0.0) + now - self.clock
+        self.clock = now
+
+
+def _given_omega(strands: Strands, omega) -> np.ndarray:
+    """`omega` as `float32[P]`, uploaded for the camera pass."""
+    omega = np.asarray(omega, dtype="f4").reshape(strands.count)
+    strands.omega.write(omega.tobytes())
+    return omega
+
+
+def _shadows(
+    ctx, progs, scene: Scene, strands: Strands, surface: OccluderSurface | None, clip_slices: bool, lap: _Laps
+) -> tuple[np.ndarray, OccluderLight | None]:
+    """(Ω per strand point, uploaded for the camera pass; the occluder's part of the light,
+    None without an occluder): the scene's shadow method's passes from the light, over the
+    strands' points and the occluder surface's points (§7, §13)."""
+    frame = light_frame(
+        scene.strands.points,
+        strands.segments,
+        scene.strands.width,
+        scene.light,
+        scene.shadows.resolution,
+        scene.strands.width_units,
+    )
+    points = Points(ctx, strands, None if surface is None else surface.points)
+    try:
+        frame = with_receivers(frame, points.receivers)
+        omega_all = gl_shadow_pass(scene.shadows.method)(
+            ctx, progs, scene, strands, frame, points, clip_slices=clip_slices
+        )
+        omega = omega_all[: strands.count].copy()
+        strands.omega.write(omega.tobytes())
+        lap("shadows")
+        if surface is None:
+            return omega, None
+        occluder = occluder_shadow(ctx, progs, scene, strands, points, surface, omega_all[strands.count :])
+        lap("occluder shadow")
+        return omega, occluder
+    finally:
+        points.release()
 
 
 def _render_patches(scene: Scene, params, omega, order, occluder) -> GLResult:

@@ -12,10 +12,12 @@ from ._bench_cases import STAGES as STAGES
 from ._bench_cases import TARGETS as TARGETS
 from ._bench_cases import bench_scene as bench_scene
 from ._bench_cases import configurations as configurations
+from ._compare import TimedCalls as TimedCalls
 from ._compare import compare as compare
 from ._compare import format_report as format_report
 from ._compare import image_stats as image_stats
 from ._compare import median_time as median_time
+from ._compare import timed_calls as timed_calls
 from ._knob_space import KnobSpace as KnobSpace
 from ._knob_space import OneKnobSpace as OneKnobSpace
 from ._knob_space import knob_space as knob_space

@@ -19,9 +19,9 @@ from __future__ import annotations
 import dataclasses
 import math
 import statistics
-import time
 
 from ._bench_timing import child_main, measure_gl
+from ._compare import timed_calls
 
 __all__ = [
     "MODEL_VARIANTS",
@@ -89,14 +89,7 @@ def _median(xs):
 
 def _timed(fn, repeats: int) -> dict:
     """`repeats` warm calls of `fn` (each waited for), after one call that compiles."""
-    import jax
-
-    jax.block_until_ready(fn())
-    runs = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        jax.block_until_ready(fn())
-        runs.append(time.perf_counter() - t0)
+    runs = timed_calls(fn, repeats).runs_s
     return {"median_s": _median(runs), "runs_s": runs}
 
 

@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from collections.abc import Callable
 from pathlib import Path
+from typing import NamedTuple
 
 from .._io._files import write_json
 from ._bench_cases import (
@@ -86,183 +89,205 @@ def _mark(met) -> str:
     return "" if met is None else (" ok" if met else " MISS")
 
 
+class _Row(NamedTuple):
+    """One line of the table: its label, one cell per configuration, and the target."""
+
+    label: str
+    cells: list[str]
+    target: str = ""
+
+
+@dataclasses.dataclass(frozen=True)
+class _Columns:
+    """The table's columns: one configuration and its run's result each."""
+
+    configs: list[dict]
+    results: list[dict]
+
+    def cells(self, fn: Callable[[dict, dict], str]) -> list[str]:
+        """`fn(config, result)` in each column whose run succeeded; empty in the others."""
+        return [fn(c, r) if r.get("status") == "ok" else "" for c, r in zip(self.configs, self.results)]
+
+    def jax_cells(self, fn: Callable[[dict, dict], str]) -> list[str]:
+        """`cells`, empty too where the run has no JAX figures."""
+        return self.cells(lambda c, r: fn(c, r) if "stages" in r else "")
+
+    def gl_cells(self, fn: Callable[[dict, dict], str]) -> list[str]:
+        """`cells`, empty too where the GL run did not succeed."""
+        return self.cells(lambda c, r: fn(c, r) if r.get("gl", {}).get("status") == "ok" else "")
+
+
+def _stage(key: str) -> Callable[[dict, dict], str]:
+    """A cell: the median time of the JAX stage `key` ("-" where the run has none)."""
+    return lambda c, r: _fmt_time(r["stages"].get(key, {}).get("median_s"))
+
+
+def _gl_pass(key: str) -> Callable[[dict, dict], str]:
+    """A cell: the median time of the GL pass `key` ("-" where the run has none)."""
+    return lambda c, r: _fmt_time(r["gl"]["passes"].get(key, {}).get("median_s"))
+
+
+def _marked(figure: Callable[[dict], str], target: str) -> Callable[[dict, dict], str]:
+    """A cell: `figure(result)`, marked against `target` (a key of targets_met)."""
+    return lambda c, r: figure(r) + _mark(r["targets_met"].get(target))
+
+
 def format_table(configs: list[dict], results: list[dict], header: str) -> str:
-    names = [config_name(c) for c in configs]
-    rows: list[tuple[str, list[str], str]] = []
-
-    def cells(fn):
-        out = []
-        for cfg, r in zip(configs, results):
-            out.append(fn(cfg, r) if r.get("status") == "ok" else "")
-        return out
-
-    def stage(key):
-        return lambda c, r: _fmt_time(r["stages"].get(key, {}).get("median_s"))
-
+    """`hairjax bench`'s table: one row per figure (the JAX stages and ordering, the GL
+    passes, their ratio, peak RSS, status), one column per configuration, each figure
+    marked against its target; then the runs' errors."""
+    columns = _Columns(configs, results)
     have_jax = any("stages" in r for r in results)
-    have_gl = any("gl" in r for r in results)
+    rows: list[_Row] = []
+    if have_jax:
+        rows += _stage_rows(columns) + _ordering_rows(columns)
+    if any("gl" in r for r in results):
+        rows += _gl_rows(columns, have_jax)
+    rows.append(_peak_rss_row(results))
+    rows.append(_Row("status", [r.get("verdict", r.get("status", "?")) for r in results]))
+    names = [config_name(c) for c in configs]
+    return "\n".join(_aligned(header, names, rows) + _error_lines(names, results))
 
-    def jax_cells(fn):
-        return cells(lambda c, r: fn(c, r) if "stages" in r else "")
 
-    def gl_cells(fn):
-        return cells(lambda c, r: fn(c, r) if r.get("gl", {}).get("status") == "ok" else "")
-
-    substeps = []
-    for r in results:
+def _stage_rows(columns: _Columns) -> list[_Row]:
+    """The JAX stages: the set-up and its sub-steps, the opacity stage, the shading stage,
+    its gradient and the full render."""
+    substeps: list[str] = []
+    for r in columns.results:
         for key in r.get("stages", {}):
             if key.startswith("geometry_setup/") and key not in substeps:
                 substeps.append(key)
+    return [
+        _Row(STAGE_LABELS["geometry_setup"], columns.jax_cells(_stage("geometry_setup"))),
+        *(_Row("  " + key.split("/", 1)[1], columns.jax_cells(_stage(key))) for key in substeps),
+        _Row(STAGE_LABELS["geometry_opacity"], columns.jax_cells(_stage("geometry_opacity"))),
+        _Row(
+            STAGE_LABELS["shading"],
+            columns.jax_cells(_marked(lambda r: _fmt_time(r["stages"]["shading"]["median_s"]), "shading_s")),
+            f"<= {TARGETS['shading_s'] * 1e3:.0f} ms",
+        ),
+        _Row(STAGE_LABELS["gradient"], columns.jax_cells(_stage("gradient"))),
+        _Row(
+            "  gradient / shading",
+            columns.jax_cells(
+                _marked(lambda r: f"{r['gradient_over_shading']:.2f}x", "gradient_over_shading")
+            ),
+            f"<= {TARGETS['gradient_over_shading']:g}x",
+        ),
+        _Row(
+            STAGE_LABELS["full_render"],
+            columns.jax_cells(
+                _marked(lambda r: _fmt_time(r["stages"]["full_render"]["median_s"]), "full_render_s")
+            ),
+            f"<= {TARGETS['full_render_s']:g} s at "
+            f"{FULL_RENDER_TARGET_CONFIG[0] // 1000}k @ {FULL_RENDER_TARGET_CONFIG[1]}",
+        ),
+    ]
 
-    if have_jax:
-        rows.append((STAGE_LABELS["geometry_setup"], jax_cells(stage("geometry_setup")), ""))
-        for key in substeps:
-            rows.append(("  " + key.split("/", 1)[1], jax_cells(stage(key)), ""))
-        rows.append((STAGE_LABELS["geometry_opacity"], jax_cells(stage("geometry_opacity")), ""))
-        rows.append(
-            (
-                STAGE_LABELS["shading"],
-                jax_cells(
-                    lambda c, r: (
-                        _fmt_time(r["stages"]["shading"]["median_s"])
-                        + _mark(r["targets_met"].get("shading_s"))
-                    )
-                ),
-                f"<= {TARGETS['shading_s'] * 1e3:.0f} ms",
-            )
-        )
-        rows.append((STAGE_LABELS["gradient"], jax_cells(stage("gradient")), ""))
-        rows.append(
-            (
-                "  gradient / shading",
-                jax_cells(
-                    lambda c, r: (
-                        f"{r['gradient_over_shading']:.2f}x"
-                        + _mark(r["targets_met"].get("gradient_over_shading"))
-                    )
-                ),
-                f"<= {TARGETS['gradient_over_shading']:g}x",
-            )
-        )
-        rows.append(
-            (
-                STAGE_LABELS["full_render"],
-                jax_cells(
-                    lambda c, r: (
-                        _fmt_time(r["stages"]["full_render"]["median_s"])
-                        + _mark(r["targets_met"].get("full_render_s"))
-                    )
-                ),
-                f"<= {TARGETS['full_render_s']:g} s at "
-                f"{FULL_RENDER_TARGET_CONFIG[0] // 1000}k @ {FULL_RENDER_TARGET_CONFIG[1]}",
-            )
-        )
-        rows.append(
-            (
-                "ordering (M segments/s)",
-                jax_cells(
-                    lambda c, r: (
-                        f"{r['ordering']['msegments_per_s']:.1f}"
-                        + _mark(r["targets_met"].get("ordering_msegments_per_s"))
-                    )
-                ),
-                f">= {TARGETS['ordering_msegments_per_s']:g}",
-            )
-        )
-        rows.append(
-            (
-                "  speed-up over kim-2003",
-                jax_cells(lambda c, r: f"{r['ordering']['speedup_over_kim_2003']:.0f}x"),
-                "(0.7 M/s, P-III 700 MHz)",
-            )
-        )
-        rows.append(("  segments ordered", jax_cells(lambda c, r: f"{r['ordering']['segments']:,}"), ""))
-        rows.append(("camera fragments", jax_cells(lambda c, r: f"{r['fragments']:,}"), ""))
-        rows.append(
-            (
-                "shadow-map fragments",
-                jax_cells(
-                    lambda c, r: "-" if r["shadow_fragments"] is None else f"{r['shadow_fragments']:,}"
-                ),
-                "",
-            )
-        )
-    if have_gl:
-        for key in GL_PASSES:
-            rows.append(
-                (
-                    f"GL {key}",
-                    gl_cells(lambda c, r, key=key: _fmt_time(r["gl"]["passes"].get(key, {}).get("median_s"))),
-                    "",
-                )
-            )
-        rows.append(
-            ("GL full render", gl_cells(lambda c, r: _fmt_time(r["gl"]["full_render"]["median_s"])), "")
-        )
-        if have_jax:
 
-            def ratio(target):
-                """JAX / GL full render, marked against `target` (a key of targets_met)."""
-                return cells(
-                    lambda c, r: (
-                        f"{r['jax_over_gl']:.2f}x" + _mark(r["targets_met"].get(target))
-                        if "jax_over_gl" in r
-                        else ""
-                    )
-                )
+def _ordering_rows(columns: _Columns) -> list[_Row]:
+    """The ordering's throughput (against kim-2003's) and the fragment counts."""
+    return [
+        _Row(
+            "ordering (M segments/s)",
+            columns.jax_cells(
+                _marked(lambda r: f"{r['ordering']['msegments_per_s']:.1f}", "ordering_msegments_per_s")
+            ),
+            f">= {TARGETS['ordering_msegments_per_s']:g}",
+        ),
+        _Row(
+            "  speed-up over kim-2003",
+            columns.jax_cells(lambda c, r: f"{r['ordering']['speedup_over_kim_2003']:.0f}x"),
+            "(0.7 M/s, P-III 700 MHz)",
+        ),
+        _Row("  segments ordered", columns.jax_cells(lambda c, r: f"{r['ordering']['segments']:,}")),
+        _Row("camera fragments", columns.jax_cells(lambda c, r: f"{r['fragments']:,}")),
+        _Row(
+            "shadow-map fragments",
+            columns.jax_cells(
+                lambda c, r: "-" if r["shadow_fragments"] is None else f"{r['shadow_fragments']:,}"
+            ),
+        ),
+    ]
 
-            rows.append(
-                (
-                    "JAX / GL full render",
-                    ratio("jax_over_gl"),
-                    f">= {GL_TARGET_RATIO:g}x at {FULL_RENDER_TARGET_CONFIG[0] // 1000}k @ "
-                    f"{FULL_RENDER_TARGET_CONFIG[1]}, 64 maps (GL no slower than JAX)",
-                )
-            )
-            rows.append(
-                (
-                    "  JAX no slower than GL",
-                    ratio("jax_no_slower_than_gl"),
-                    f"<= {JAX_TARGET_RATIO:g}x at "
-                    + " and ".join(f"{n // 1000}k @ {s}" for n, s in JAX_TARGET_CONFIGS)
-                    + " (the geometry stage on the device)",
-                )
-            )
-        rows.append(("GL status", [r.get("gl", {}).get("status", "-") for r in results], ""))
+
+def _gl_rows(columns: _Columns, have_jax: bool) -> list[_Row]:
+    """The GL passes and full render, with JAX's figures their ratio against the targets,
+    and the GL runs' status."""
+    rows = [_Row(f"GL {key}", columns.gl_cells(_gl_pass(key))) for key in GL_PASSES]
     rows.append(
-        (
-            "peak RSS",
-            [
-                f"{r['peak_rss_kib'] / 1024**2:.2f} GiB" + _mark(r.get("targets_met", {}).get("peak_rss"))
-                if r.get("peak_rss_kib")
-                else "-"
-                for r in results
-            ],
-            f"<= {PEAK_RSS_TARGET_GIB:g} GiB at {config_name(_target_config())}",
-        )
+        _Row("GL full render", columns.gl_cells(lambda c, r: _fmt_time(r["gl"]["full_render"]["median_s"])))
     )
-    rows.append(("status", [r.get("verdict", r.get("status", "?")) for r in results], ""))
+    if have_jax:
+        rows += _ratio_rows(columns)
+    rows.append(_Row("GL status", [r.get("gl", {}).get("status", "-") for r in columns.results]))
+    return rows
 
-    head = ("stage", names, "target")
-    widths = [max(len(head[0]), *(len(r[0]) for r in rows))]
+
+def _ratio_rows(columns: _Columns) -> list[_Row]:
+    """JAX / GL full render, against both of its targets."""
+
+    def ratio(target: str) -> list[str]:
+        return columns.cells(
+            lambda c, r: (
+                f"{r['jax_over_gl']:.2f}x" + _mark(r["targets_met"].get(target)) if "jax_over_gl" in r else ""
+            )
+        )
+
+    return [
+        _Row(
+            "JAX / GL full render",
+            ratio("jax_over_gl"),
+            f">= {GL_TARGET_RATIO:g}x at {FULL_RENDER_TARGET_CONFIG[0] // 1000}k @ "
+            f"{FULL_RENDER_TARGET_CONFIG[1]}, 64 maps (GL no slower than JAX)",
+        ),
+        _Row(
+            "  JAX no slower than GL",
+            ratio("jax_no_slower_than_gl"),
+            f"<= {JAX_TARGET_RATIO:g}x at "
+            + " and ".join(f"{n // 1000}k @ {s}" for n, s in JAX_TARGET_CONFIGS)
+            + " (the geometry stage on the device)",
+        ),
+    ]
+
+
+def _peak_rss_row(results: list[dict]) -> _Row:
+    """Each run's peak resident memory, against its target."""
+    return _Row(
+        "peak RSS",
+        [
+            f"{r['peak_rss_kib'] / 1024**2:.2f} GiB" + _mark(r.get("targets_met", {}).get("peak_rss"))
+            if r.get("peak_rss_kib")
+            else "-"
+            for r in results
+        ],
+        f"<= {PEAK_RSS_TARGET_GIB:g} GiB at {config_name(_target_config())}",
+    )
+
+
+def _aligned(header: str, names: list[str], rows: list[_Row]) -> list[str]:
+    """The header, then the rows under a head line, each column as wide as its widest cell:
+    labels and targets left-aligned, figures right-aligned."""
+    head = _Row("stage", names, "target")
+    widths = [max(len(head.label), *(len(r.label) for r in rows))]
     for j in range(len(names)):
-        widths.append(max(len(names[j]), *(len(r[1][j]) for r in rows)))
-    widths.append(max(len(head[2]), *(len(r[2]) for r in rows)))
+        widths.append(max(len(names[j]), *(len(r.cells[j]) for r in rows)))
+    widths.append(max(len(head.target), *(len(r.target) for r in rows)))
 
-    def line(label, values, target):
-        parts = [label.ljust(widths[0])]
-        parts += [v.rjust(w) for v, w in zip(values, widths[1:-1])]
-        parts.append(target.ljust(widths[-1]))
+    def line(row: _Row) -> str:
+        parts = [row.label.ljust(widths[0])]
+        parts += [v.rjust(w) for v, w in zip(row.cells, widths[1:-1])]
+        parts.append(row.target.ljust(widths[-1]))
         return "  ".join(parts).rstrip()
 
-    out = [header, "", line(*head), "  ".join("-" * w for w in widths)]
-    out += [line(*r) for r in rows]
+    return [header, "", line(head), "  ".join("-" * w for w in widths), *(line(r) for r in rows)]
+
+
+def _error_lines(names: list[str], results: list[dict]) -> list[str]:
+    """After a blank line, each failed run's error and each failed GL run's, by configuration."""
     errors = [(n, r["error"]) for n, r in zip(names, results) if r.get("error")]
     errors += [(n, r["gl"]["error"]) for n, r in zip(names, results) if r.get("gl", {}).get("error")]
-    if errors:
-        out.append("")
-        out += [f"{n}: {e}" for n, e in errors]
-    return "\n".join(out)
+    return ["", *(f"{n}: {e}" for n, e in errors)] if errors else []
 
 
 def _finite_or_none(x):

@@ -29,6 +29,7 @@ from typing import Any
 
 from ._bench_cases import KIM_2003_SEGMENTS_PER_S, ORDERING_BINS, bench_scene
 from ._bench_report import write_json_strict
+from ._compare import TimedCalls, timed_calls
 
 __all__ = ["child_main", "measure_gl"]
 
@@ -47,25 +48,25 @@ def measure_gl(scene, repeats: int, progress) -> dict:
         info = renderer_info()  # the driver's strings, as render's sidecar records them
     except GLUnavailable as err:
         return {"status": "unavailable", "error": f"GL unavailable: {err}"}
-    progress("GL warm-up run (compiles the shaders)")
-    result = render_gl(scene)
-    total: list[float] = []
     passes: dict[str, list[float]] = {}
-    for i in range(repeats):
-        del result
-        progress(f"GL run {i + 1}/{repeats}")
-        t0 = time.perf_counter()
-        result = render_gl(scene)
-        total.append(time.perf_counter() - t0)
-        for key, value in result.timings.items():
-            passes.setdefault(key, []).append(value)
+
+    def after(k, result, _seconds):
+        if k:
+            for key, value in result.timings.items():
+                passes.setdefault(key, []).append(value)
+        if k < repeats:
+            progress(f"GL run {k + 1}/{repeats}")
+
+    progress("GL warm-up run (compiles the shaders)")
+    timed = timed_calls(lambda: render_gl(scene), repeats, after)
+    total = timed.runs_s
     return {
         "status": "ok",
         "error": None,
         **info,
         "full_render": {"median_s": _median(total), "runs_s": total},
         "passes": {k: {"median_s": _median(v), "runs_s": v} for k, v in passes.items()},
-        "image_finite": bool(np.all(np.isfinite(result.image))),
+        "image_finite": bool(np.all(np.isfinite(timed.last.image))),
     }
 
 
@@ -114,48 +115,81 @@ def _measure_pairs(scene, repeats: int, progress) -> dict:
 
 
 def _measure_jax(scene, repeats: int, progress) -> dict:
+    from .._geometry_stage._setup import prepare
+    from .._geometry_stage._stage import geometry_stage
+
+    runs, substeps = _time_renders(scene, repeats, progress)
+    setup = prepare(scene)  # the last run's, cached
+    geom = geometry_stage(scene)
+    shading = _time_shading(geom, scene.params, repeats, progress)
+    runs["shading"] = shading.runs_s
+    gradient = _time_gradient(geom, scene.params, repeats, progress)
+    runs["gradient"] = gradient.runs_s
+    segments = scene.strands.segments()
+    ordering = _time_ordering(scene, setup, segments, repeats, progress)
+
+    stages = {k: {"median_s": _median(v), "runs_s": v} for k, v in runs.items()}
+    for key, values in substeps.items():
+        stages[f"geometry_setup/{key}"] = {"median_s": _median(values), "runs_s": values}
+    image = shading.last
+    return {
+        "stages": stages,
+        "gradient_over_shading": stages["gradient"]["median_s"] / stages["shading"]["median_s"],
+        "gradient_finite": _finite(gradient.last),
+        "ordering": _ordering_figures(ordering.runs_s, len(segments)),
+        "points": int(scene.strands.num_points),
+        "segments": int(len(segments)),
+        "fragments": int(len(setup.frag_pixel)),
+        "shadow_fragments": (None if setup.shadow is None else int(len(setup.shadow.frag_coverage))),
+        "image_finite": _finite(image),
+        "dtype": str(image.dtype),
+    }
+
+
+def _time_renders(scene, repeats: int, progress) -> tuple[dict[str, list[float]], dict[str, list[float]]]:
+    """One warm-up and `repeats` runs of `render_profiled`: it clears the scene's cached
+    set-up and geometry, then times prepare, geometry_stage and shading_stage, blocking
+    between them. Returns its figures by stage, and the set-up's sub-steps by name."""
+    from .._render import render_profiled
+
+    runs: dict[str, list[float]] = {k: [] for k in ("geometry_setup", "geometry_opacity", "full_render")}
+    substeps: dict[str, list[float]] = {}
+
+    def after(k, result, _seconds):
+        if k:
+            _, timings = result
+            runs["geometry_setup"].append(timings["geometry set-up"])
+            runs["geometry_opacity"].append(timings["geometry opacity (JAX)"])
+            runs["full_render"].append(timings["total"])
+            for key, value in timings.items():
+                if key.startswith("geometry/"):
+                    substeps.setdefault(key.split("/", 1)[1], []).append(value)
+        if k < repeats:
+            progress(f"run {k + 1}/{repeats}")
+
+    progress("warm-up run (compiles)")
+    timed_calls(lambda: render_profiled(scene), repeats, after)
+    return runs, substeps
+
+
+def _time_shading(geom, params, repeats: int, progress) -> TimedCalls:
+    """The shading stage alone, geometry reused: warm calls, as the gradient's. (Its time
+    within a full render, right after a fresh geometry, is noisier.)"""
+    from .._shading import shading_stage
+
+    progress("shading stage alone")
+    return timed_calls(lambda: shading_stage(geom, params), repeats)
+
+
+def _time_gradient(geom, params, repeats: int, progress) -> TimedCalls:
+    """The gradient of an image loss with respect to kd, ks, shininess and kappa, geometry
+    reused. The geometry is an argument rather than a closed-over constant, so that XLA does
+    not embed tens of millions of fragments in the compiled program."""
     import jax
     import jax.numpy as jnp
 
-    from .._geometry._ordering import Ordering, draw_order, segment_depth
-    from .._geometry_stage._setup import prepare
-    from .._geometry_stage._stage import geometry_stage
-    from .._render import render_profiled
     from .._shading import ShadingParams, shading_stage
 
-    params = scene.params
-
-    # One run is `render_profiled`: it clears the scene's cached set-up and geometry, then
-    # times prepare, geometry_stage and shading_stage, blocking between them.
-    runs: dict[str, list[float]] = {k: [] for k in ("geometry_setup", "geometry_opacity", "full_render")}
-    substeps: dict[str, list[float]] = {}
-    progress("warm-up run (compiles)")
-    image, _ = render_profiled(scene)
-    for i in range(repeats):
-        del image  # so that two runs' arrays never coexist
-        progress(f"run {i + 1}/{repeats}")
-        image, timings = render_profiled(scene)
-        runs["geometry_setup"].append(timings["geometry set-up"])
-        runs["geometry_opacity"].append(timings["geometry opacity (JAX)"])
-        runs["full_render"].append(timings["total"])
-        for key, value in timings.items():
-            if key.startswith("geometry/"):
-                substeps.setdefault(key.split("/", 1)[1], []).append(value)
-    setup = prepare(scene)  # the last run's, cached
-    geom = geometry_stage(scene)
-
-    # The shading stage alone, geometry reused: warm calls, as the gradient below. (Its
-    # time within a full render, right after a fresh geometry, is noisier.)
-    progress("shading stage alone")
-    runs["shading"] = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        image = jax.block_until_ready(shading_stage(geom, params))
-        runs["shading"].append(time.perf_counter() - t0)
-
-    # Gradient of an image loss with respect to the shading parameters, geometry reused.
-    # The geometry is an argument rather than a closed-over constant, so that XLA does not
-    # embed tens of millions of fragments in the compiled program.
     target = jax.block_until_ready(
         shading_stage(
             geom,
@@ -172,50 +206,41 @@ def _measure_jax(scene, repeats: int, progress) -> dict:
     grad_fn = jax.jit(jax.grad(loss))
     sub = {"kd": params.kd, "ks": params.ks, "shininess": params.shininess, "kappa": params.kappa}
     progress("gradient (compiles, then warm calls)")
-    grads = jax.block_until_ready(grad_fn(sub, geom, target))
-    runs["gradient"] = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        grads = jax.block_until_ready(grad_fn(sub, geom, target))
-        runs["gradient"].append(time.perf_counter() - t0)
-    grads_finite = all(bool(jnp.all(jnp.isfinite(g))) for g in jax.tree_util.tree_leaves(grads))
+    return timed_calls(lambda: grad_fn(sub, geom, target), repeats)
 
-    # Visibility ordering throughput on the scene's camera depths.
+
+def _time_ordering(scene, setup, segments, repeats: int, progress) -> TimedCalls:
+    """Visibility ordering on the scene's camera depths: `draw_order` with 256 bins."""
+    from .._geometry._ordering import Ordering, draw_order, segment_depth
+
     progress("ordering")
     _, depth = setup.view.project(scene.strands.points)
-    segments = scene.strands.segments()
-    draw_order(segment_depth(depth, segments), Ordering("bins", bins=ORDERING_BINS))  # warm-up
-    order_runs = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        draw_order(segment_depth(depth, segments), Ordering("bins", bins=ORDERING_BINS))
-        order_runs.append(time.perf_counter() - t0)
-    order_s = _median(order_runs)
+    return timed_calls(
+        lambda: draw_order(segment_depth(depth, segments), Ordering("bins", bins=ORDERING_BINS)), repeats
+    )
 
-    stages = {k: {"median_s": _median(v), "runs_s": v} for k, v in runs.items()}
-    for key, values in substeps.items():
-        stages[f"geometry_setup/{key}"] = {"median_s": _median(values), "runs_s": values}
-    mseg = len(segments) / order_s / 1e6 if order_s > 0 else float("inf")
+
+def _ordering_figures(runs_s: list[float], segments: int) -> dict:
+    """The ordering's record: its runs, and its throughput against kim-2003's."""
+    order_s = _median(runs_s)
+    mseg = segments / order_s / 1e6 if order_s > 0 else float("inf")
     return {
-        "stages": stages,
-        "gradient_over_shading": stages["gradient"]["median_s"] / stages["shading"]["median_s"],
-        "gradient_finite": grads_finite,
-        "ordering": {
-            "method": "bins",
-            "bins": ORDERING_BINS,
-            "segments": int(len(segments)),
-            "median_s": order_s,
-            "runs_s": order_runs,
-            "msegments_per_s": mseg,
-            "speedup_over_kim_2003": mseg * 1e6 / KIM_2003_SEGMENTS_PER_S,
-        },
-        "points": int(scene.strands.num_points),
-        "segments": int(len(segments)),
-        "fragments": int(len(setup.frag_pixel)),
-        "shadow_fragments": (None if setup.shadow is None else int(len(setup.shadow.frag_coverage))),
-        "image_finite": bool(jnp.all(jnp.isfinite(image))),
-        "dtype": str(image.dtype),
+        "method": "bins",
+        "bins": ORDERING_BINS,
+        "segments": int(segments),
+        "median_s": order_s,
+        "runs_s": runs_s,
+        "msegments_per_s": mseg,
+        "speedup_over_kim_2003": mseg * 1e6 / KIM_2003_SEGMENTS_PER_S,
     }
+
+
+def _finite(tree) -> bool:
+    """Whether every leaf of `tree` (JAX arrays) is finite."""
+    import jax
+    import jax.numpy as jnp
+
+    return all(bool(jnp.all(jnp.isfinite(leaf))) for leaf in jax.tree_util.tree_leaves(tree))
 
 
 def _peak_rss_kib() -> int:

@@ -3,11 +3,13 @@ against the band of pixels where the model explains a difference (docs/model.md 
 
 from __future__ import annotations
 
+import dataclasses
 import numbers
 import statistics
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import jax
 import numpy as np
@@ -30,6 +32,8 @@ __all__ = [
     "format_report",
     "check_repeats",
     "median_time",
+    "timed_calls",
+    "TimedCalls",
 ]
 
 # The difference image's colours (8-bit sRGB display values, not linear light): pixels
@@ -109,22 +113,58 @@ def check_repeats(repeats) -> int:
     return int(repeats)
 
 
+@dataclasses.dataclass(frozen=True)
+class TimedCalls:
+    """`timed_calls`' record: `warm_up_s`, the first call's seconds (compilation, shader
+    builds, caches: not in the median); `runs_s`, each timed call's seconds; `last`, the
+    last call's result."""
+
+    warm_up_s: float
+    runs_s: list[float]
+    last: Any
+
+    @property
+    def median_s(self) -> float:
+        return statistics.median(self.runs_s)
+
+
+def _timed_call(fn) -> tuple[float, Any]:
+    """(seconds, result) of one call of `fn`, its result waited for: JAX dispatches work
+    asynchronously, so a call returns before its arrays are computed."""
+    start = time.perf_counter()
+    result = jax.block_until_ready(fn())
+    return time.perf_counter() - start, result
+
+
+def timed_calls(fn, repeats: int, after: Callable[[int, Any, float], None] | None = None) -> TimedCalls:
+    """One warm-up call of `fn`, then `repeats` timed calls; each call's result is waited for
+    with `jax.block_until_ready` within its timed span (leaves without the method, e.g. NumPy
+    arrays or a GL result, are returned as they are).
+
+    `after(k, result, seconds)`, when given, runs after call k (0 the warm-up), outside the
+    timed span. A call's result is dropped before the next call starts, so that two calls'
+    arrays never coexist; `TimedCalls.last` keeps the last one."""
+    repeats = check_repeats(repeats)
+    warm_up_s, result = _timed_call(fn)
+    if after is not None:
+        after(0, result, warm_up_s)
+    runs_s = []
+    for k in range(1, repeats + 1):
+        del result
+        seconds, result = _timed_call(fn)
+        runs_s.append(seconds)
+        if after is not None:
+            after(k, result, seconds)
+    return TimedCalls(warm_up_s, runs_s, result)
+
+
 def median_time(fn, repeats: int, after: Callable[[int], None] | None = None) -> float:
-    """Median wall time of `repeats` calls of `fn`, after one untimed call.
+    """Median wall time of `repeats` calls of `fn`, after one warm-up call (`timed_calls`:
+    each result waited for with `jax.block_until_ready`).
 
     `after(k)`, when given, runs after call k (0 the warm-up), outside the timed span."""
-    repeats = check_repeats(repeats)
-    fn()  # warm-up: compilation, shader builds, caches
-    if after is not None:
-        after(0)
-    times = []
-    for k in range(1, repeats + 1):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-        if after is not None:
-            after(k)
-    return statistics.median(times)
+    report = None if after is None else (lambda k, _result, _seconds: after(k))
+    return timed_calls(fn, repeats, report).median_s
 
 
 def compare(scene: Scene, repeats: int = 3, *, progress: Progress | None = None, diff=None) -> dict:

@@ -8,13 +8,14 @@ from __future__ import annotations
 import math
 import re
 import types
+import weakref
 
 import numpy as np
 import pytest
 from helpers import PIXEL_TOL, small_furball_scene
 
 import hairjax as hj
-from hairjax.tools import _compare, compare, format_report, image_stats, median_time
+from hairjax.tools import _compare, compare, format_report, image_stats, median_time, timed_calls
 
 # The keys `hairjax compare` prints (format_report) and writes to --json.
 REPORT_KEYS = {
@@ -166,6 +167,77 @@ def test_median_time_reports_each_call_outside_the_timed_span(monkeypatch):
     calls: list[int] = []
     assert median_time(fn, 2, after) == 1.0
     assert calls == [0, 1, 2]  # 0: the warm-up
+
+
+class _Pending:
+    """A result whose work finishes only when waited for, as a JAX array's after
+    asynchronous dispatch: `block_until_ready` advances the clock by `wait`."""
+
+    def __init__(self, clock, wait: float):
+        self.clock, self.wait, self.waited = clock, wait, False
+
+    def block_until_ready(self):
+        self.clock.now += self.wait
+        self.waited = True
+        return self
+
+
+def test_median_time_waits_for_each_result(monkeypatch):
+    clock = types.SimpleNamespace(now=0.0)
+    monkeypatch.setattr(_compare, "time", types.SimpleNamespace(perf_counter=lambda: clock.now))
+    made: list[_Pending] = []
+
+    def fn():  # dispatch takes 1 s, the work 10 s more
+        clock.now += 1.0
+        made.append(_Pending(clock, 10.0))
+        return made[-1]
+
+    assert median_time(fn, 3) == 11.0  # without the wait: 1.0
+    assert len(made) == 4 and all(p.waited for p in made)  # the warm-up's result too
+
+
+def test_median_time_blocks_through_jax(monkeypatch):
+    blocked = []
+    monkeypatch.setattr(_compare.jax, "block_until_ready", lambda x: blocked.append(x) or x)
+    results = iter(range(3))
+    median_time(lambda: next(results), 2)
+    assert blocked == [0, 1, 2]
+
+
+def test_timed_calls_records_warm_up_runs_and_the_last_result(monkeypatch):
+    clock = types.SimpleNamespace(now=0.0)
+    monkeypatch.setattr(_compare, "time", types.SimpleNamespace(perf_counter=lambda: clock.now))
+    durations = iter([100.0, 5.0, 1.0, 3.0])
+    calls = iter(range(4))
+
+    def fn():
+        clock.now += next(durations)
+        return next(calls)
+
+    seen = []
+    timed = timed_calls(fn, 3, lambda k, result, seconds: seen.append((k, result, seconds)))
+    assert (timed.warm_up_s, timed.runs_s, timed.median_s, timed.last) == (100.0, [5.0, 1.0, 3.0], 3.0, 3)
+    assert seen == [(0, 0, 100.0), (1, 1, 5.0), (2, 2, 1.0), (3, 3, 3.0)]
+
+
+def test_timed_calls_drops_each_result_before_the_next_call():
+    """Two calls' results never coexist (a render's arrays can fill the memory)."""
+
+    class Result:
+        pass
+
+    made: list[weakref.ref] = []
+    alive_at_call: list[int] = []
+
+    def fn():
+        alive_at_call.append(sum(ref() is not None for ref in made))
+        result = Result()
+        made.append(weakref.ref(result))
+        return result
+
+    timed = timed_calls(fn, 3)
+    assert alive_at_call == [0, 0, 0, 0]
+    assert made[-1]() is timed.last
 
 
 @pytest.mark.parametrize("repeats", [0, -1, 1.5, True, "3"])
