@@ -87,7 +87,8 @@ def image_difference(a: np.ndarray, b: np.ndarray) -> dict:
 def _timings(name, scene, repeats: int, gl: bool) -> dict:
     import jax
 
-    from hairjax import draw_order, forget, render, segment_depth, visibility_order
+    from hairjax import render
+    from hairjax.experimental import draw_order, forget, segment_depth, visibility_order
     from hairjax.tools import median_time
 
     _, _, depth, segments, order = visibility_order(scene)
@@ -200,7 +201,7 @@ def main(argv=None) -> int:
     if args.repeats < 1:
         raise SystemExit("--repeats must be at least 1")
     hj = _hj()
-    from hairjax import visibility_order
+    from hairjax.experimental import visibility_order
 
     if args.quick:
         scenes = {"quick": quick_scene}

@@ -96,7 +96,7 @@ def _label(method: str, bins: int) -> str:
 
 def _orders(scene, bin_counts, stale):
     """The draw orders of this view: method label → (method, bins, order)."""
-    from hairjax import draw_order, segment_depth, visibility_order
+    from hairjax.experimental import draw_order, segment_depth, visibility_order
 
     _, _, depth, segments, drawable = visibility_order(scene.replace(ordering=_hj().Ordering("none")))
     seg_depth = segment_depth(depth, segments[drawable])
@@ -110,7 +110,7 @@ def _orders(scene, bin_counts, stale):
 
 
 def _timings(name, scene, bin_counts, repeats: int) -> list[dict]:
-    from hairjax import draw_order, hair_centre, segment_depth, static_order, visibility_order
+    from hairjax.experimental import draw_order, hair_centre, segment_depth, static_order, visibility_order
     from hairjax.tools import median_time
 
     _, _, depth, segments, drawable = visibility_order(scene.replace(ordering=_hj().Ordering("none")))
@@ -251,7 +251,7 @@ def main(argv=None) -> int:
     if args.repeats < 1 or args.size < 4:
         raise SystemExit("--repeats must be at least 1 and --size at least 4")
     hj = _hj()
-    from hairjax import visibility_order
+    from hairjax.experimental import visibility_order
 
     if args.quick:
         scenes = {"quick": lambda size: quick_scene()}
