@@ -63,8 +63,8 @@ CSV_COLUMNS = (
     "tau_max",
     "rel_rmse",
 )
-# The bear's figure: the issue a new user sees (stripes across its back with the default 64
-# opacity maps), beside deep maps of this many layers and exact shadows.
+# The bear's figure (docs/results.md §8): the artefact a new user sees (stripes across its back
+# with the default 64 opacity maps), beside deep maps of this many layers and exact shadows.
 FIGURE_MAPS, FIGURE_LAYERS = 64, 4
 
 

@@ -38,7 +38,7 @@ ROOT = Path(__file__).resolve().parents[1]
 SCENES = sorted((ROOT / "experiments" / "scenes").glob("*.toml")) + [
     ROOT / "hairjax" / "scenes" / "default.toml"
 ]
-TOLERANCE = 1e-5  # the bound between two renders of one model (docs/model.md)
+TOLERANCE = 1e-5  # between two renders of one model: experiments/README.md row 19, docs/model.md §5
 
 
 def jax_image(path: Path, device) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""Numerical stability (issue 5 §2), the part its tests share: the cases' scenes, the
+"""Numerical stability, the part its tests share: the cases' scenes, the
 compiled runner and the checks every case makes, on both renderers.
 
 The tests are split by the stage they exercise, each file with its part of the table of
@@ -30,8 +30,7 @@ maps, ≤ 4 maps). What every case checks (`check_jax`, `check_gl`):
 Each case's scene is compiled once per precision (`runner`), whichever file asks first;
 the cache is this module's, so the files share it.
 
-Not audited: hairjax/_fit/ (outside this issue's brief; its guards are tested in
-tests/fit/test_fit.py).
+Not covered here: hairjax/_fit/ (the fit's guards are tested in tests/fit/test_fit.py).
 """
 
 from __future__ import annotations

@@ -1,6 +1,7 @@
-"""Numerical stability of the whole render (issue 5 §2; the shared part and the stages:
+"""Numerical stability of the whole render (the shared part and the stages:
 tests/stability_helpers.py): compositing (hairjax/_composite.py) at the extremes of
-opacity, and random scenes drawn over all the issue's ranges at once.
+opacity, and random scenes drawn over all the ranges the stages' cases test one at a time,
+at once.
 
 | case                            | test_…                                  | scene: own assertions          |
 |---------------------------------|-----------------------------------------|--------------------------------|
@@ -51,7 +52,8 @@ def test_opacity_extremes(request, backend, alpha):
 
 @st.composite
 def random_scenes(draw):
-    """A small random scene within the issue's ranges, as keyword arguments (the scene is
+    """A small random scene within the ranges the stability cases test one at a time
+    (tests/stability_helpers.py and each stage's table), as keyword arguments (the scene is
     built inside the drawn precision): fur ball, camera anywhere (inside the fur ball
     below distance ~1.2), directional or point light (possibly inside), opacity 1e-6 … 1,
     width 0.25 … 8, shininess 0.5 … 1e4, κ 0 … 1e3, all scaled by 1e-4, 1 or 1e4."""

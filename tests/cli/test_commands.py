@@ -292,7 +292,8 @@ def test_render_a_bare_hair_file_frames_it(tmp_path, capsys):
     assert main([*argv, "--set", "shading.ks=0.125"]) == 0
     image = hj.read_image(out)
     assert image.shape == (64, 64, 4)
-    assert (image[..., 3] > 0).mean() >= 0.05  # the acceptance threshold: 5 % of the pixels
+    # A framed asset's acceptance threshold: its hair covers at least 5 % of the pixels.
+    assert (image[..., 3] > 0).mean() >= 0.05
     import json
 
     record = json.loads((tmp_path / "bangs.json").read_text())

@@ -33,7 +33,8 @@ def rel(a, b):
 def test_noise_free_recovery(scene, target, solver):
     r = hj.fit(scene, target, init=INIT, solver=hj.fit_solvers()[solver], max_steps=200)
     assert r.termination == "converged"
-    # The bound for noise-free targets: 1e-3 relative.
+    # The bound for noise-free targets: 1e-3 relative (BENCHMARKS.md, "Recovery";
+    # experiments/README.md row 01).
     for name in ("kd", "ks", "shininess", "kappa"):
         assert rel(getattr(r.params, name), getattr(TRUE, name)) < 1e-3, name
     assert r.loss[-1] < 1e-3 * r.loss[0] and r.steps == len(r.loss) - 1
@@ -301,7 +302,7 @@ def test_bfgs_on_a_faint_highlight_in_float32():
             init=hj.ShadingParams(kd=0.5, ks=0.3, shininess=40.0, kappa=2.0),
         )
     assert r.termination == "converged" and r.undetermined == ()
-    # 1e-3: the noise-free bound.
+    # 1e-3: the noise-free recovery bound (BENCHMARKS.md, "Recovery").
     for name in ("kd", "ks", "shininess", "kappa"):
         assert rel(getattr(r.params, name), getattr(truth, name)) < 1e-3, name
 

@@ -185,8 +185,9 @@ def test_the_set_up_on_the_device_gives_the_hosts_fragments_and_image(name):
     np.testing.assert_allclose(np.asarray(device.frag_coverage), host.frag_coverage, rtol=0, atol=eps)
     if host.shadow is not None and hasattr(host.shadow, "frag_cell"):  # the light's raster too
         np.testing.assert_array_equal(np.asarray(device.shadow.frag_cell), host.shadow.frag_cell)
-    # The bound for the images of a second set-up: 1e-5 (here they agree to
-    # rounding: the same fragments, composited by the same programs).
+    # The bound for the images of the two set-ups: 1e-5 (experiments/README.md row 19; the
+    # fragments are the same, docs/model.md §5, "On an accelerator"). Here they agree to
+    # rounding: the same fragments, composited by the same programs.
     np.testing.assert_allclose(device_image, host_image, rtol=0, atol=1e-5)
 
 

@@ -1,4 +1,4 @@
-"""Numerical stability of the geometry stage (issue 5 §2; the shared part and the other
+"""Numerical stability of the geometry stage (the shared part and the other
 stages: tests/stability_helpers.py): projection, rasteriser, ordering, shadows, occluder
 and set-up on extreme and degenerate inputs, and the guards that keep them finite.
 

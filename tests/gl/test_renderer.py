@@ -1,4 +1,4 @@
-"""GL renderer against the JAX renderer, pixel by pixel and point by point (issue 3).
+"""GL renderer against the JAX renderer, pixel by pixel and point by point (docs/model.md §11).
 
 The model has discontinuities (docs/model.md §5, §7, §9): a pixel centre belongs to a
 segment only for 0 ≤ s < L; a light-space fragment adds to the slice its depth falls in;
@@ -12,7 +12,8 @@ the pixels a fit to GL targets masks; tests/helpers.py passes them on to this fi
 the stability tests, tests/stability_helpers.py):
 - 1e-4 per pixel / per τ: float32 arithmetic on values ≤ 1 with ~10² operations per
   fragment and up to ~10³ fragments composited per pixel gives errors ~10⁻⁵ (measured
-  RMSE 4e-6 … 7e-5 on these scenes); 1e-4 is the issue's bound.
+  RMSE 4e-6 … 7e-5 on these scenes); 1e-4 is the bound of docs/model.md §11, "Where the two
+  renderers may differ, and why".
 - δ = 4 ulp of the raster's largest coordinate (2.4e-4 px at 512, 1.2e-4 at 256) for
   "near a segment end": GL projects points in float32, so screen coordinates carry about
   one ulp of error and s = (c − p₀)·u a few; 4 ulps is the measured envelope (at 2 ulps
@@ -20,7 +21,7 @@ the stability tests, tests/stability_helpers.py):
 - 1e-4 slice units for "near a slice boundary": depth relative error ~1e-7, times N/span.
 - a pixel is in the band when the fragments that may toggle there weigh enough to move it
   by > 1e-4 (weight α·T times the brightest colour); the band may hold at most 0.1 % of
-  pixels (the issue's bound).
+  pixels (docs/model.md §11, "Where the two renderers may differ, and why").
 """
 
 from __future__ import annotations

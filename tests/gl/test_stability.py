@@ -1,5 +1,5 @@
-"""Numerical stability of the GL renderer (issue 5 §2; the shared part and the other
-stages: tests/stability_helpers.py): GL's depth test in a scene 10⁻⁴ units across, and
+"""Numerical stability of the GL renderer (the shared part and the other stages:
+tests/stability_helpers.py): GL's depth test in a scene 10⁻⁴ units across, and
 every guard in the shaders and in hairjax/gl.
 
 Most GLSL guards are reached by the `gl` backend of another stage's cases (the generic

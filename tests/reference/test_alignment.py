@@ -33,7 +33,7 @@ STRANDS = (
     [(-0.95, -0.75, 0.0), (-0.45, -0.45, 0.1), (0.15, -0.6, 0.0), (0.65, -0.55, 0.2)],
 )
 PIXEL_WIDTHS = (1.0, 2.0, 4.0)
-IOU_MIN = 0.9  # the bound, at 1 pixel wide and up
+IOU_MIN = 0.9  # soft IoU over 2 × 2 blocks, 1 px wide and up: docs/reference.md, "Alignment"
 CENTROID_TOL = 0.25  # pixels
 
 

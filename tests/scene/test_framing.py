@@ -21,7 +21,9 @@ ASSETS = (
     sorted(DATA.glob("hair/*.hair")) + sorted(DATA.glob("hair/*.ply")) + sorted(DATA.glob("tressfx/*.tfx"))
 )
 
-# The acceptance threshold: a framed asset covers at least 5 % of the image.
+# The acceptance threshold for a framed asset: its hair covers at least 5 % of the image, a
+# low bar for a camera that fits the hair's bounding sphere to the narrower field of view
+# with a 10 % margin (docs/scenes.md, `[camera]`, `frame = "auto"`).
 MIN_COVERAGE = 0.05
 
 

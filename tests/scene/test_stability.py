@@ -1,5 +1,5 @@
-"""Numerical stability of the scene's own arrays (issue 5 §2; the shared part and the
-other stages: tests/stability_helpers.py): the guards in hairjax/_scene.
+"""Numerical stability of the scene's own arrays (the shared part and the other
+stages: tests/stability_helpers.py): the guards in hairjax/_scene.
 
 | guard (file: function)                          | test_guard_… (or test_… in full)            |
 |-------------------------------------------------|---------------------------------------------|

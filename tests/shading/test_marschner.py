@@ -1,7 +1,7 @@
 """The `marschner` model (docs/model.md §19): melanin as Mitsuba defines it, the lobes'
 physical properties, the scene file, gradients against float64 central differences and
-finite values and gradients at the extremes the issue names (roughness 0.02 and 1,
-melanin 0 and 8, grazing light and view, back-lit φ = π, L and V along the fibre)."""
+finite values and gradients at the extremes docs/model.md §19 ("Guards") names (roughness
+0.02 and 1, melanin 0 and 8, grazing light and view, back-lit φ = π, L and V along the fibre)."""
 
 import dataclasses
 

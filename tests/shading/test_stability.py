@@ -1,4 +1,4 @@
-"""Numerical stability of the shading (issue 5 §2; the shared part and the other stages:
+"""Numerical stability of the shading (the shared part and the other stages:
 tests/stability_helpers.py): shininess and κ at their extremes, the highlight's accuracy
 at p = 10⁴, tangents parallel to the light and the view, and the guards of the Kajiya-Kay
 terms and of the safe norms they use.
