@@ -1,4 +1,4 @@
-"""Deep opacity maps against opacity maps at equal time (docs/results.md §7).
+"""Deep opacity maps against opacity maps at equal time (docs/results.md §8).
 
 Yuksel & Keyser 2008 ("Deep Opacity Maps") claim that a few layers that start, per texel,
 at the first hair the light meets give fewer artefacts than many uniform slices (kim-2003
