@@ -29,6 +29,7 @@ the loops; by default the device unless it is the CPU.
 from __future__ import annotations
 
 import functools
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -50,6 +51,7 @@ __all__ = [
     "candidate_bytes",
     "device_candidates",
     "rasterize_on_device",
+    "GroupedOnDevice",
     "group_on_device",
 ]
 
@@ -197,12 +199,21 @@ def rasterize_on_device(*args, **kwargs) -> Fragments:
     return Fragments(pixel, segment, coverage, t, kept[4] if depth else None)
 
 
+class GroupedOnDevice(NamedTuple):
+    """Entries grouped by pixel on the device, as `_group.Grouped` on the host: `pixel`
+    ascending, `fields` permuted alike, and the number of entries `kept` (F, read back)."""
+
+    pixel: jax.Array
+    fields: tuple[jax.Array, ...]
+    kept: int
+
+
 def group_on_device(
     pixel: jax.Array, keep: jax.Array, n_pixels: int, *fields: jax.Array, capacity=None
-) -> tuple[jax.Array, tuple[jax.Array, ...], int]:
+) -> GroupedOnDevice:
     """The entries where `keep` is set, grouped by `pixel` in their given order, on the
-    device: `(sorted pixel, fields permuted alike, F)`, as `group_by_pixel` gives on the
-    host. One value read back: F. `capacity` (optional): a function of F giving the
+    device (`GroupedOnDevice`), as `group_by_pixel` gives on the host. One value read
+    back: F. `capacity` (optional): a function of F giving the
     arrays' length (`fragment_bucket`); entries from F on are then padding, pixel
     `n_pixels` and fields 0. Without it the arrays hold the F entries."""
     key, index, count = _sorted_by_pixel(pixel, keep, n_pixels)
@@ -213,7 +224,7 @@ def group_on_device(
     real = jnp.arange(kept) < count
     grouped = tuple(jnp.where(real, jnp.take(f, index, mode="clip"), 0) for f in fields)  # clip: in range
     pad = lambda x, value: jnp.pad(x, (0, size - kept), constant_values=value)  # noqa: E731
-    return pad(key, n_pixels), tuple(pad(f, 0) for f in grouped), count
+    return GroupedOnDevice(pad(key, n_pixels), tuple(pad(f, 0) for f in grouped), count)
 
 
 @functools.partial(jax.jit, static_argnums=2)
