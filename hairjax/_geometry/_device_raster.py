@@ -192,11 +192,13 @@ def rasterize_on_device(*args, **kwargs) -> Fragments:
     """`rasterize` (the same arguments) on the default device: the covered candidates of
     `device_candidates`, in raster order. One value read back: their count."""
     candidates = device_candidates(*args, **kwargs)
+    covered = candidates.coverage > 0
     fields = (candidates.pixel, candidates.segment, candidates.coverage, candidates.t)
-    depth = () if candidates.depth is None else (candidates.depth,)
-    kept = keep_on_device(candidates.coverage > 0, *fields, *depth)
-    pixel, segment, coverage, t = kept[:4]
-    return Fragments(pixel, segment, coverage, t, kept[4] if depth else None)
+    if candidates.depth is None:
+        pixel, segment, coverage, t = keep_on_device(covered, *fields)
+        return Fragments(pixel, segment, coverage, t, None)
+    pixel, segment, coverage, t, depth = keep_on_device(covered, *fields, candidates.depth)
+    return Fragments(pixel, segment, coverage, t, depth)
 
 
 class GroupedOnDevice(NamedTuple):

@@ -221,21 +221,37 @@ def rasterize_parts(
     # Where each piece's share begins (the last: the fields' length), `check_memory`'s.
     starts = check_memory(raster, bounds, seg_start, np.dtype(dtype), depth, image_width, image_height)
     size = starts[-1]
-    pixel, segment = np.empty(size, np.int32), np.empty(size, np.int32)
-    coverage, t = np.empty(size, dtype), np.empty(size, dtype)
-    depths = np.empty(size if depth else 0, dtype)
-    fields = (pixel, segment, coverage, t, depths)
-    shares = [[f[begin:end] if f.size else f for f in fields] for begin, end in zip(starts[:-1], starts[1:])]
+    # `Fragments`' fields, in the order the loop writes them (`raster_loop`).
+    fields = dict(
+        pixel=np.empty(size, np.int32),
+        segment=np.empty(size, np.int32),
+        coverage=np.empty(size, dtype),
+        t=np.empty(size, dtype),
+        depth=np.empty(size if depth else 0, dtype),
+    )
+    shares = [
+        {name: f[begin:end] if f.size else f for name, f in fields.items()}
+        for begin, end in zip(starts[:-1], starts[1:])
+    ]
     filled = in_parallel(
         [
-            functools.partial(raster, a, b, False, *share)
+            functools.partial(raster, a, b, False, *share.values())
             for a, b, share in zip(bounds[:-1], bounds[1:], shares)
         ]
     )
-    return [
-        Fragments(share[0][:k], share[1][:k], share[2][:k], share[3][:k], share[4][:k] if depth else None)
-        for share, k in zip(shares, filled)
-    ]
+    return [_written(share, k, depth) for share, k in zip(shares, filled)]
+
+
+def _written(share: dict[str, np.ndarray], k: int, depth: bool) -> Fragments:
+    """The `k` fragments the loop wrote at the start of a piece's `share` of the fields
+    (without `depth`, its empty field is none)."""
+    return Fragments(
+        pixel=share["pixel"][:k],
+        segment=share["segment"][:k],
+        coverage=share["coverage"][:k],
+        t=share["t"][:k],
+        depth=share["depth"][:k] if depth else None,
+    )
 
 
 def count_fragments(
