@@ -215,9 +215,9 @@ def group_on_device(
 ) -> GroupedOnDevice:
     """The entries where `keep` is set, grouped by `pixel` in their given order, on the
     device (`GroupedOnDevice`), as `group_by_pixel` gives on the host. One value read
-    back: F. `capacity` (optional): a function of F giving the
-    arrays' length (`fragment_bucket`); entries from F on are then padding, pixel
-    `n_pixels` and fields 0. Without it the arrays hold the F entries."""
+    back: F. `capacity` (optional): a function of F giving the arrays' length
+    (`fragment_bucket`); entries from F on are then padding, pixel `n_pixels` and fields
+    0. Without it the arrays hold the F entries."""
     key, index, count = _sorted_by_pixel(pixel, keep, n_pixels)
     count = int(count)
     size = count if capacity is None else capacity(count)
