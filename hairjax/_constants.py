@@ -8,6 +8,10 @@ them as `const` declarations) and the tests.
 # is the overlap of [d - 0.5, d + 0.5] with [-w/2, w/2] (kim-2003 §2, docs/model.md §5).
 PIXEL_HALF_EXTENT = 0.5
 
+# Pixel (x, y) is the unit box [x, x + 1) × [y, y + 1): its centre, where coverage, t and
+# depth are sampled (docs/model.md §5), lies half its extent from its corner.
+PIXEL_CENTRE = PIXEL_HALF_EXTENT
+
 # Opacity maps are sampled with a (2r + 1)² box filter around the texel of the point
 # (kim-2003 §4.1 uses 3 × 3).
 SHADOW_FILTER_RADIUS = 1

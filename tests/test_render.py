@@ -8,6 +8,7 @@ from helpers import central_difference, small_furball_scene
 
 import hairjax as hj
 import hairjax._geometry._shadows._frame as frame_mod
+import hairjax._geometry_stage._lighting as lighting_mod
 import hairjax._geometry_stage._setup as setup_mod
 import hairjax._geometry_stage._stage as stage_mod
 
@@ -157,7 +158,7 @@ def test_geometry_reused_and_unneeded_work_skipped(monkeypatch):
         raise AssertionError("this stage must not run for this scene")
 
     monkeypatch.setattr(frame_mod, "light_fragments", forbidden)  # every shadow method's set-up
-    monkeypatch.setattr(setup_mod, "occluder_hits", forbidden)
+    monkeypatch.setattr(lighting_mod, "occluder_hits", forbidden)
     a = hj.render(scene)
     b = hj.render(scene, hj.ShadingParams(kd=0.1))
     assert len(calls) == 1 and len(opacity_calls) == 1

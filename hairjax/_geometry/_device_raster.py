@@ -29,14 +29,17 @@ the loops; by default the device unless it is the CPU.
 from __future__ import annotations
 
 import functools
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 from jax import lax
 
+from .._constants import PIXEL_CENTRE
 from .._errors import SceneTooLarge
 from ._capacity import fragment_bucket
+from ._coverage import coverage_formula
 from ._hidden import keep_on_device
 from ._host import available_memory
 from ._raster import Fragments
@@ -48,6 +51,7 @@ __all__ = [
     "candidate_bytes",
     "device_candidates",
     "rasterize_on_device",
+    "GroupedOnDevice",
     "group_on_device",
 ]
 
@@ -123,21 +127,22 @@ def device_candidates(
     lo[:n] = plan.lo
     label = np.zeros(n_pad, np.int32)
     label[:n] = labels
-    out = _candidates(
+    fields = _candidates(
         seg_data, counts, lo, label, c_pad, plan.rows, image_width, image_height, bool(perspective), depth
     )
-    return Fragments(out[0], out[1], out[2], out[3], out[4] if depth else None)
+    return Fragments(**fields)
 
 
 @functools.partial(jax.jit, static_argnums=(4, 5, 6, 7, 8, 9))
 def _candidates(
     seg_data, counts, lo, label, n_columns, rows, image_width, image_height, perspective, with_depth
 ):
-    """(pixel, segment label, coverage, t[, depth]) of every candidate, `[n_columns·rows]`.
+    """`Fragments`' fields (pixel, segment label, coverage, t, depth or None) of every
+    candidate, `[n_columns·rows]` each.
 
-    The same arithmetic, in the same order and precision, as the host loop (`_raster`'s
-    `raster`), so the two write the same fragments (up to where each compiler contracts
-    a multiply-add: tested)."""
+    The same arithmetic, in the same order and precision, as the host loop
+    (`_raster_loop`), the coverage by the same formula (`coverage_formula`), so the two
+    write the same fragments (up to where each compiler contracts a multiply-add: tested)."""
     dtype = seg_data.dtype
     seg = jnp.repeat(jnp.arange(counts.shape[0], dtype=jnp.int32), counts, total_repeat_length=n_columns)
     first_column = jnp.cumsum(counts) - counts
@@ -153,23 +158,23 @@ def _candidates(
     inv_len = 1.0 / length_safe
     slope = jnp.where(x_major, dy, dx) / da
     offset = reach * length / jnp.abs(da)
-    b_line = jnp.where(x_major, y0, x0) + (k + 0.5 - jnp.where(x_major, x0, y0)) * slope
-    m = jnp.floor(b_line - offset - 0.5) + 1.0 + jnp.arange(rows, dtype=dtype)[None, :]
+    b_line = jnp.where(x_major, y0, x0) + (k + PIXEL_CENTRE - jnp.where(x_major, x0, y0)) * slope
+    m = jnp.floor(b_line - offset - PIXEL_CENTRE) + 1.0 + jnp.arange(rows, dtype=dtype)[None, :]
     px = jnp.where(x_major, k, m)
     py = jnp.where(x_major, m, k)
-    rx = px + 0.5 - x0
-    ry = py + 0.5 - y0
+    rx = px + PIXEL_CENTRE - x0
+    ry = py + PIXEL_CENTRE - y0
     s = (rx * dx + ry * dy) * inv_len
     t = s * inv_len
-    half = 0.5 * (w0 + t * (w1 - w0))  # w₀ + t(w₁ − w₀) is exactly w₀ for constant widths
-    d = jnp.abs(rx * dy - ry * dx) * inv_len
-    cov = jnp.clip(jnp.minimum(d + 0.5, half) - jnp.maximum(d - 0.5, -half), 0.0, 1.0)
+    coverage = coverage_formula(dtype.type, jnp.minimum, jnp.maximum)
+    # w₀ + t(w₁ − w₀) is exactly w₀ for ribbons of constant width (pixel widths).
+    cov = coverage(jnp.abs(rx * dy - ry * dx) * inv_len, w0 + t * (w1 - w0))
     inside = (px >= 0) & (px < image_width) & (py >= 0) & (py < image_height)
     # Padding rows have length 0 and fail s < L.
     cov = jnp.where(inside & (s >= 0) & (s < length), cov, 0.0)
     pixel = py.astype(jnp.int32) * image_width + px.astype(jnp.int32)
     segment = jnp.broadcast_to(label[seg][:, None], pixel.shape)
-    fields = [pixel, segment, cov, t]
+    fields = dict(pixel=pixel, segment=segment, coverage=cov, t=t, depth=None)
     if with_depth:
         if perspective:
             # Fire only on padding rows (depth 0): drawn segments lie beyond the near plane.
@@ -179,29 +184,40 @@ def _candidates(
             z = za + t * (zb - za)
         # Fires for segments at constant depth: keep z exactly (no self-shadowing by a
         # rounding error in 1/(1/z)).
-        fields.append(jnp.where(za == zb, za, z))
-    return tuple(f.ravel() for f in fields)
+        fields["depth"] = jnp.where(za == zb, za, z)
+    return {name: None if f is None else f.ravel() for name, f in fields.items()}
 
 
 def rasterize_on_device(*args, **kwargs) -> Fragments:
     """`rasterize` (the same arguments) on the default device: the covered candidates of
     `device_candidates`, in raster order. One value read back: their count."""
     candidates = device_candidates(*args, **kwargs)
+    covered = candidates.coverage > 0
     fields = (candidates.pixel, candidates.segment, candidates.coverage, candidates.t)
-    depth = () if candidates.depth is None else (candidates.depth,)
-    kept = keep_on_device(candidates.coverage > 0, *fields, *depth)
-    pixel, segment, coverage, t = kept[:4]
-    return Fragments(pixel, segment, coverage, t, kept[4] if depth else None)
+    if candidates.depth is None:
+        pixel, segment, coverage, t = keep_on_device(covered, *fields)
+        return Fragments(pixel, segment, coverage, t, None)
+    pixel, segment, coverage, t, depth = keep_on_device(covered, *fields, candidates.depth)
+    return Fragments(pixel, segment, coverage, t, depth)
+
+
+class GroupedOnDevice(NamedTuple):
+    """Entries grouped by pixel on the device, as `_group.Grouped` on the host: `pixel`
+    ascending, `fields` permuted alike, and the number of entries `kept` (F, read back)."""
+
+    pixel: jax.Array
+    fields: tuple[jax.Array, ...]
+    kept: int
 
 
 def group_on_device(
     pixel: jax.Array, keep: jax.Array, n_pixels: int, *fields: jax.Array, capacity=None
-) -> tuple[jax.Array, tuple[jax.Array, ...], int]:
+) -> GroupedOnDevice:
     """The entries where `keep` is set, grouped by `pixel` in their given order, on the
-    device: `(sorted pixel, fields permuted alike, F)`, as `group_by_pixel` gives on the
-    host. One value read back: F. `capacity` (optional): a function of F giving the
-    arrays' length (`fragment_bucket`); entries from F on are then padding, pixel
-    `n_pixels` and fields 0. Without it the arrays hold the F entries."""
+    device (`GroupedOnDevice`), as `group_by_pixel` gives on the host. One value read
+    back: F. `capacity` (optional): a function of F giving the arrays' length
+    (`fragment_bucket`); entries from F on are then padding, pixel `n_pixels` and fields
+    0. Without it the arrays hold the F entries."""
     key, index, count = _sorted_by_pixel(pixel, keep, n_pixels)
     count = int(count)
     size = count if capacity is None else capacity(count)
@@ -210,7 +226,7 @@ def group_on_device(
     real = jnp.arange(kept) < count
     grouped = tuple(jnp.where(real, jnp.take(f, index, mode="clip"), 0) for f in fields)  # clip: in range
     pad = lambda x, value: jnp.pad(x, (0, size - kept), constant_values=value)  # noqa: E731
-    return pad(key, n_pixels), tuple(pad(f, 0) for f in grouped), count
+    return GroupedOnDevice(pad(key, n_pixels), tuple(pad(f, 0) for f in grouped), count)
 
 
 @functools.partial(jax.jit, static_argnums=2)

@@ -28,13 +28,13 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Sequence
-from typing import no_type_check
+from typing import NamedTuple, no_type_check
 
 import numpy as np
 
 from ._host import aligned_empty, compile_loop, host_threads, in_parallel, split_evenly
 
-__all__ = ["group_by_pixel", "group_parts", "BAND_FRAGMENTS", "PARALLEL_MIN"]
+__all__ = ["Grouped", "group_by_pixel", "group_parts", "BAND_FRAGMENTS", "PARALLEL_MIN"]
 
 # Below this many fragments one core groups them: a second thread's start-up and per-pixel
 # counts cost more than they save.
@@ -46,14 +46,19 @@ PARALLEL_MIN = 1 << 20
 BAND_FRAGMENTS = 1 << 17
 
 
-def group_by_pixel(
-    pixel: np.ndarray, n_pixels: int, *fields: np.ndarray
-) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
+class Grouped(NamedTuple):
+    """Fragments grouped by pixel: `pixel`, the pixels ascending (int32, each pixel's
+    index repeated by its fragment count), and `fields` permuted alike (one array each)."""
+
+    pixel: np.ndarray
+    fields: tuple[np.ndarray, ...]
+
+
+def group_by_pixel(pixel: np.ndarray, n_pixels: int, *fields: np.ndarray) -> Grouped:
     """Fragments with `pixel[F]` in [0, n_pixels), grouped by pixel in their given order.
 
-    Returns `(sorted_pixel, grouped)`: the pixels ascending (`[F]` int32, each pixel's
-    index repeated by its fragment count) and each of `fields` (1-D, `[F]`, one to three
-    of them) permuted alike, in arrays aligned for the CPU device (`_host`). Equals
+    Returns `Grouped`: the pixels ascending (`[F]`) and each of `fields` (1-D, `[F]`, one
+    to three of them) permuted alike, in arrays aligned for the CPU device (`_host`). Equals
     `field[np.argsort(pixel, kind="stable")]`. From PARALLEL_MIN fragments on, contiguous
     parts of them are scattered on every core at once (`group_parts`)."""
     if any(f.shape != pixel.shape for f in fields):
@@ -65,9 +70,7 @@ def group_by_pixel(
     )
 
 
-def group_parts(
-    parts: Sequence[Sequence[np.ndarray]], n_pixels: int, capacity: int = 0
-) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
+def group_parts(parts: Sequence[Sequence[np.ndarray]], n_pixels: int, capacity: int = 0) -> Grouped:
     """`group_by_pixel` of fragments given in consecutive parts, each `(pixel, *fields)`
     with one to three fields (alike in number and dtype across the parts): grouped as
     their concatenation would be, each part moved to the bands on its own thread (the
@@ -95,7 +98,7 @@ def group_parts(
     for out in outs:
         out[total:] = 0
     if not total:  # no fragments (or no pixels): nothing to move
-        return sorted_pixel, outs
+        return Grouped(sorted_pixel, outs)
     band_pixel = _bands(counts)  # each band's first pixel, and n_pixels
     # Each part's and all parts' fragments per band.
     part_bands = [np.add.reduceat(c, band_pixel[:-1]) for c in part_counts]
@@ -141,7 +144,7 @@ def group_parts(
             )
         )
     in_parallel(tasks)
-    return sorted_pixel, outs
+    return Grouped(sorted_pixel, outs)
 
 
 def _bands(counts: np.ndarray) -> np.ndarray:

@@ -16,11 +16,10 @@ with the same coverage (no double-covered joints, no gaps).
 Geometry only, no gradients flow through here: the segments' columns are counted in NumPy
 float64; the per-pixel maths runs in JAX's default float precision (float32, or float64
 with x64 on) in one loop over the segments' columns and the candidate rows around the
-line in each, compiled by numba, which writes only the covered candidates. (An XLA kernel
-over every candidate followed by NumPy's compaction did the same work before, 2.5–4×
-slower: BENCHMARKS.md, "rasterize".) The loop contracts a·b + c into fused multiply-adds
-where LLVM finds them, as XLA's CPU kernel did, so its fragments equal that kernel's bit
-for bit.
+line in each, compiled by numba (`_raster_loop`), which writes only the covered
+candidates. (An XLA kernel over every candidate followed by NumPy's compaction did the
+same work before, 2.5–4× slower: BENCHMARKS.md, "rasterize".) The coverage is one formula
+for that loop and the device's XLA program (`_coverage`).
 """
 
 from __future__ import annotations
@@ -33,9 +32,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._constants import PIXEL_HALF_EXTENT
 from ._capacity import check_memory
 from ._host import compile_loop, host_threads, in_parallel, split_evenly
+from ._raster_loop import coverage_loop, raster_loop
 from ._raster_plan import raster_plan, ribbon_widths
 
 __all__ = [
@@ -62,7 +61,7 @@ def ribbon_coverage(d, width) -> np.ndarray:
     rasteriser's own compiled function, so the tests check what renders."""
     dtype = jnp.result_type(float)
     d, width = np.broadcast_arrays(np.asarray(d, dtype), np.asarray(width, dtype))
-    coverage = _kernels(np.dtype(dtype).name)[0]
+    coverage = coverage_loop(np.dtype(dtype).name)
     return np.array([coverage(a, b) for a, b in zip(d.ravel(), width.ravel())], dtype).reshape(d.shape)
 
 
@@ -126,7 +125,7 @@ def rasterize(
     pass over all fragments saved).
 
     Columns along each segment's major axis are laid out here in NumPy; the per-pixel
-    maths runs in one compiled loop over their candidate rows (`_kernels`), in JAX's
+    maths runs in one compiled loop over their candidate rows (`raster_loop`), in JAX's
     default float precision (float64 when x64 is enabled), in pieces on every core
     (`rasterize_parts`) that are then moved together in place (`_joined`).
     """
@@ -205,7 +204,7 @@ def rasterize_parts(
     if labels.shape != (n,):
         raise ValueError(f"labels must hold one entry per segment ({n}), got shape {labels.shape}")
     raster = functools.partial(
-        _kernels(np.dtype(dtype).name)[1],
+        raster_loop(np.dtype(dtype).name),
         seg_data,
         labels,
         lo,
@@ -222,21 +221,37 @@ def rasterize_parts(
     # Where each piece's share begins (the last: the fields' length), `check_memory`'s.
     starts = check_memory(raster, bounds, seg_start, np.dtype(dtype), depth, image_width, image_height)
     size = starts[-1]
-    pixel, segment = np.empty(size, np.int32), np.empty(size, np.int32)
-    coverage, t = np.empty(size, dtype), np.empty(size, dtype)
-    depths = np.empty(size if depth else 0, dtype)
-    fields = (pixel, segment, coverage, t, depths)
-    shares = [[f[begin:end] if f.size else f for f in fields] for begin, end in zip(starts[:-1], starts[1:])]
+    # `Fragments`' fields, in the order the loop writes them (`raster_loop`).
+    fields = dict(
+        pixel=np.empty(size, np.int32),
+        segment=np.empty(size, np.int32),
+        coverage=np.empty(size, dtype),
+        t=np.empty(size, dtype),
+        depth=np.empty(size if depth else 0, dtype),
+    )
+    shares = [
+        {name: f[begin:end] if f.size else f for name, f in fields.items()}
+        for begin, end in zip(starts[:-1], starts[1:])
+    ]
     filled = in_parallel(
         [
-            functools.partial(raster, a, b, False, *share)
+            functools.partial(raster, a, b, False, *share.values())
             for a, b, share in zip(bounds[:-1], bounds[1:], shares)
         ]
     )
-    return [
-        Fragments(share[0][:k], share[1][:k], share[2][:k], share[3][:k], share[4][:k] if depth else None)
-        for share, k in zip(shares, filled)
-    ]
+    return [_written(share, k, depth) for share, k in zip(shares, filled)]
+
+
+def _written(share: dict[str, np.ndarray], k: int, depth: bool) -> Fragments:
+    """The `k` fragments the loop wrote at the start of a piece's `share` of the fields
+    (without `depth`, its empty field is none)."""
+    return Fragments(
+        pixel=share["pixel"][:k],
+        segment=share["segment"][:k],
+        coverage=share["coverage"][:k],
+        t=share["t"][:k],
+        depth=share["depth"][:k] if depth else None,
+    )
 
 
 def count_fragments(
@@ -253,7 +268,7 @@ def count_fragments(
         return None
     n, dtype = plan.columns.shape[0], plan.seg_data.dtype
     raster = functools.partial(
-        _kernels(np.dtype(dtype).name)[1],
+        raster_loop(np.dtype(dtype).name),
         plan.seg_data,
         np.zeros(n, np.int32),
         plan.lo,
@@ -271,105 +286,3 @@ def count_fragments(
         for a, b in zip(bounds[:-1], bounds[1:])
     ]
     return sum(in_parallel(tasks))
-
-
-@functools.cache
-def _kernels(dtype_name: str):
-    """`(coverage, raster)` compiled by numba for floats of `dtype_name` (on first use;
-    cached on disk, `compile_loop`). Every constant has that type, so no operation widens
-    to float64."""
-    F = np.float32 if dtype_name == "float32" else np.float64
-    zero, one, half_extent = F(0.0), F(1.0), F(PIXEL_HALF_EXTENT)
-    exact_limit = F(1 << 23)  # integers below it and their sums with a row index are exact
-    # error_model numpy: a division by 0 gives inf, as in XLA, without a check per division.
-    # contract: fused multiply-adds where LLVM finds them, as XLA's CPU kernels have.
-    # no_type_check: the tests' jaxtyping hook would otherwise wrap them before numba.
-    loop = compile_loop(error_model="numpy", fastmath={"contract"})
-
-    @loop
-    @no_type_check
-    def coverage(d, width):
-        half = F(0.5) * width
-        return min(max(min(d + half_extent, half) - max(d - half_extent, -half), zero), one)
-
-    @loop
-    @no_type_check
-    def raster(
-        seg_data,
-        labels,
-        lo,
-        columns,
-        rows,
-        image_width,
-        image_height,
-        perspective,
-        with_depth,
-        first,
-        last,
-        count_only,
-        *out,
-    ):
-        # The number of covered candidates of segments first … last − 1; unless count_only,
-        # they are written to `out` from its start.
-        out_pixel, out_segment, out_coverage, out_t, out_depth = out
-        filled = 0
-        for i in range(first, last):
-            x0, y0, dx, dy, length, w0, za, zb, xm, reach, w1 = seg_data[i]
-            # A segment with columns has length > 0, so |da| ≥ L/√2 > 0: no guard divides.
-            x_major = xm > 0
-            da = dx if x_major else dy
-            inv_len = one / length
-            slope = (dy if x_major else dx) / da
-            offset = reach * length / abs(da)
-            a_origin = x0 if x_major else y0
-            b_origin = y0 if x_major else x0
-            for j in range(columns[i]):
-                # Column k = lo + j (exact in float32: < 2^24); its candidates are the rows
-                # pixel centres around the line there.
-                k = F(lo[i] + j)
-                b_line = b_origin + (k + half_extent - a_origin) * slope
-                row0 = np.floor(b_line - offset - half_extent) + one
-                # Only the rows whose centres may lie in the image (one to spare each side):
-                # the rest would `continue` below, and a ribbon far wider than the image
-                # has millions of them. Where row0 is not exact in float32, all rows.
-                r_first, r_last = 0, rows
-                if abs(row0) < exact_limit:
-                    across = image_height if x_major else image_width
-                    r_first = max(0, int(-row0) - 1)
-                    r_last = min(rows, int(across - row0) + 2)
-                for r in range(r_first, r_last):
-                    m = row0 + F(r)
-                    px = k if x_major else m
-                    py = m if x_major else k
-                    rx = px + half_extent - x0
-                    ry = py + half_extent - y0
-                    s = (rx * dx + ry * dy) * inv_len
-                    inside = (px >= 0) & (px < image_width) & (py >= 0) & (py < image_height)
-                    if not (inside and s >= 0 and s < length):
-                        continue
-                    t = s * inv_len
-                    # w₀ + t(w₁ − w₀) is exactly w₀ for ribbons of constant width (pixel widths).
-                    cov = coverage(abs(rx * dy - ry * dx) * inv_len, w0 + t * (w1 - w0))
-                    if not cov > 0:
-                        continue
-                    if count_only:
-                        filled += 1
-                        continue
-                    out_pixel[filled] = np.int32(py) * image_width + np.int32(px)
-                    out_segment[filled] = labels[i]
-                    out_coverage[filled] = cov
-                    out_t[filled] = t
-                    if with_depth:
-                        if za == zb:
-                            # Fires for segments at constant depth: keep z exactly (no
-                            # self-shadowing by a rounding error in 1/(1/z)).
-                            out_depth[filled] = za
-                        elif perspective:
-                            # Drawn segments lie beyond the near plane: za, zb > 0.
-                            out_depth[filled] = one / ((one - t) / za + t / zb)
-                        else:
-                            out_depth[filled] = za + t * (zb - za)
-                    filled += 1
-        return filled
-
-    return coverage, raster

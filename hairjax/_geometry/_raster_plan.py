@@ -7,13 +7,35 @@ both visit the same candidates."""
 from __future__ import annotations
 
 import dataclasses
+from typing import NamedTuple
 
 import jax.numpy as jnp
 import numpy as np
 
-from .._constants import PIXEL_HALF_EXTENT
+from .._constants import PIXEL_CENTRE, PIXEL_HALF_EXTENT
 
-__all__ = ["RasterPlan", "raster_plan", "ribbon_widths"]
+__all__ = ["RibbonRaster", "RasterPlan", "raster_plan", "ribbon_widths"]
+
+
+class RibbonRaster(NamedTuple):
+    """A raster's input, `rasterize`'s arguments by name (and in order): per segment its
+    ends `xy0`, `xy1` (`[E, 2]` pixel coordinates), their depths `z0`, `z1` (`[E]`) and
+    the ribbon's `width` (`[E]` pixels, or `[E, 2]` at each end: `ribbon_widths`); the
+    raster's size; whether depth is interpolated perspective-correctly."""
+
+    xy0: np.ndarray
+    xy1: np.ndarray
+    z0: np.ndarray
+    z1: np.ndarray
+    width: np.ndarray
+    image_width: int
+    image_height: int
+    perspective: bool
+
+    @property
+    def pixels(self) -> int:
+        """The raster's number of pixels, H·W."""
+        return self.image_width * self.image_height
 
 
 def ribbon_widths(
@@ -73,10 +95,10 @@ def raster_plan(xy0, xy1, z0, z1, width, image_width: int, image_height: int) ->
     a0 = np.where(x_major, xy0[:, 0], xy0[:, 1])
     a1 = np.where(x_major, xy1[:, 0], xy1[:, 1])
     size_a = np.where(x_major, image_width, image_height)
-    # Pixel centres k + ½ strictly inside (min a − reach, max a + reach) along the major
-    # axis, clipped to the image (the clip also bounds work for off-screen segments).
-    lo = np.clip(np.floor(np.minimum(a0, a1) - reach - 0.5) + 1, 0, size_a)
-    hi = np.clip(np.ceil(np.maximum(a0, a1) + reach - 0.5) - 1, -1, size_a - 1)
+    # Pixel centres k + PIXEL_CENTRE strictly inside (min a − reach, max a + reach) along
+    # the major axis, clipped to the image (the clip also bounds work for off-screen segments).
+    lo = np.clip(np.floor(np.minimum(a0, a1) - reach - PIXEL_CENTRE) + 1, 0, size_a)
+    hi = np.clip(np.ceil(np.maximum(a0, a1) + reach - PIXEL_CENTRE) - 1, -1, size_a - 1)
     # Zero-length segments (repeated points) cover nothing: a ribbon of length 0.
     columns = np.where(length > 0, np.maximum(hi - lo + 1, 0), 0).astype(np.int64)
     # Rows per column: pixel centres in an open interval of length 2·reach/|u_major| ≤

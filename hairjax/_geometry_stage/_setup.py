@@ -2,10 +2,14 @@
 only (docs/model.md §2–§7, §13). NumPy and compiled loops on the host; on an accelerator
 the rasters and the grouping by pixel run there as XLA programs (`_device_raster`).
 
-Projection and the visibility order, the ribbons' fragments sorted front to back per
-pixel, the occluder's test and its light, the shading model's per-point inputs, and the
-shadow method's plan for Ω. A scene without shadows plans no shadow work; a scene
-without occluder runs no occluder test. Cached per scene (`_cache`).
+`_prepare` runs its steps in turn, each handing the next a named record: projection and
+the visibility order (`visibility_order`, `VisibleSegments`), the shading model's
+per-point inputs (`_point_shading`), the camera's ribbons nearest first (`_camera_raster`,
+a `RibbonRaster`), the occluder seen from the camera and its light (`_lighting`), the
+camera's fragments grouped by pixel front to back (`_fragments`), the shadow method's
+plan for Ω with the occluder's own shadow (`_lighting`), and the `GeometrySetup` they
+make (`_geometry_setup`). A scene without shadows plans no shadow work; a scene without
+occluder runs no occluder test. Cached per scene (`_cache`).
 """
 
 from __future__ import annotations
@@ -13,7 +17,7 @@ from __future__ import annotations
 import dataclasses
 import time
 import warnings
-from typing import Any
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -21,22 +25,21 @@ import numpy as np
 
 from .._cache import cached
 from .._errors import EmptyViewWarning
-from .._geometry._capacity import fragment_bucket, refuses_out_of_memory
-from .._geometry._device_raster import device_candidates, group_on_device
-from .._geometry._group import group_parts
+from .._geometry._capacity import refuses_out_of_memory
 from .._geometry._host import release_heap, release_shared
-from .._geometry._occluder import occluder_hits, occluder_light_view, occluder_visibility
 from .._geometry._ordering import segment_depth
 from .._geometry._placement import Placement, placement_of
 from .._geometry._projection import View, camera_view
-from .._geometry._raster import Arrays, rasterize_parts, ribbon_widths
-from .._geometry._shadows import ShadowInputs
+from .._geometry._raster import Arrays
+from .._geometry._raster_plan import RibbonRaster, ribbon_widths
 from .._scene._scene import Scene
 from .._shading import PointInputs
 from .._values._strands import tangents, unit_rows
 from ._estimate import check_capacity
+from ._fragments import PaddedFragments, camera_fragments
+from ._lighting import OccluderView, ShadowPlan, occluder_view, shadow_plan, to_light
 
-__all__ = ["GeometrySetup", "prepare", "visibility_order", "to_light", "warn_empty_view"]
+__all__ = ["GeometrySetup", "VisibleSegments", "prepare", "visibility_order", "to_light", "warn_empty_view"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -59,7 +62,7 @@ class GeometrySetup:
     # The same four (pixel, i0, coverage, t), padded to `fragment_bucket(F)` entries of
     # pixel H·W and 0 (views of the same buffers on the host): what the geometry stage reads,
     # so that its programs compile once per bucket.
-    padded_fragments: tuple[Arrays, Arrays, Arrays, Arrays]
+    padded_fragments: PaddedFragments
     strand_of_point: np.ndarray  # [P] int32: a fragment's strand is strand_of_point[frag_i0]
     backdrop: np.ndarray  # [H*W, 3] the background behind the hair (0 on the occluder)
     opaque: np.ndarray  # [H*W] the occluder covers the pixel centre
@@ -111,12 +114,22 @@ def prepare(scene: Scene, *, order=None, placement: Placement | None = None) -> 
     return cached(scene, f"setup on the {where}", compute)
 
 
-def visibility_order(scene: Scene, order=None):
-    """Camera projection and the segments' draw order (docs/model.md §2, §4), shared by
-    the JAX and GL renderers.
+class VisibleSegments(NamedTuple):
+    """The camera's `view`, the strand points projected by it (`xy`, `[P, 2]` pixel
+    coordinates; `depth`, `[P]`), the `segments` (`[E, 2]` point indices) and their draw
+    `order`: the drawable segments (both ends beyond the near plane), the first drawn first."""
 
-    Returns `(view, xy [P, 2], depth [P], segments [E, 2], order)`; `order` lists the
-    drawable segments (both ends beyond the near plane), the first drawn first.
+    view: View
+    xy: np.ndarray
+    depth: np.ndarray
+    segments: np.ndarray
+    order: np.ndarray
+
+
+def visibility_order(scene: Scene, order=None) -> VisibleSegments:
+    """Camera projection and the segments' draw order (docs/model.md §2, §4), shared by
+    the JAX and GL renderers (`VisibleSegments`, which unpacks as `(view, xy, depth,
+    segments, order)`).
 
     `order` (optional): segment indices, the first drawn first, to use instead of sorting
     for this camera — e.g. an order computed for an earlier view and reused (kim-2003 §3,
@@ -131,11 +144,11 @@ def visibility_order(scene: Scene, order=None):
     drawable_mask = (depth[segments[:, 0]] > cam.near) & (depth[segments[:, 1]] > cam.near)
     if order is not None:
         order = _given_order(order, len(segments))
-        return view, xy, depth, segments, order[drawable_mask[order]]
+        return VisibleSegments(view, xy, depth, segments, order[drawable_mask[order]])
     order = scene.ordering.order(
         scene.strands, segments, segment_depth(depth, segments), np.flatnonzero(drawable_mask)
     )
-    return view, xy, depth, segments, order
+    return VisibleSegments(view, xy, depth, segments, order)
 
 
 def _given_order(order, n_segments: int) -> np.ndarray:
@@ -171,44 +184,90 @@ def warn_empty_view(scene: Scene) -> None:
     )
 
 
-def to_light(light, points: np.ndarray) -> np.ndarray:
-    """Unit vectors from `points` to the light (`[P, 3]`; 0 at a point light's position)."""
-    if light.kind == "directional":
-        d = -np.asarray(light.direction, dtype=np.float64)
-        return np.broadcast_to(d / np.linalg.norm(d), points.shape)
-    return unit_rows(np.asarray(light.position, dtype=np.float64) - points)
+class _Laps:
+    """The set-up's wall-clock time per step, in seconds by name (`timings`); a step may
+    run in parts, which add up. Calling it with a name ends that step's part."""
+
+    def __init__(self) -> None:
+        self.timings: dict[str, float] = {}
+        self._clock = time.perf_counter()
+
+    def __call__(self, name: str) -> None:
+        now = time.perf_counter()
+        self.timings[name] = self.timings.get(name, 0.0) + now - self._clock
+        self._clock = now
+
+
+@dataclasses.dataclass(frozen=True)
+class _PointShading:
+    """The shading model's per-point inputs (§17's, or none) and what follows from them:
+    the unit `tangent` and the per-point `base_color` (the strands' colour, ones when the
+    hair has none, times the model's colour factor), `[P, 3]` float64 each."""
+
+    tangent: np.ndarray
+    base_color: np.ndarray
+    inputs: PointInputs
+
+
+class _CameraRaster(NamedTuple):
+    """The camera's raster, nearest segment first (`raster`), and each segment's first
+    point (`labels`, `[E]` int32), which its fragments name (the segment is that point and
+    the next)."""
+
+    raster: RibbonRaster
+    labels: np.ndarray
 
 
 def _prepare(scene: Scene, order, placement: Placement) -> GeometrySetup:
+    """`prepare`'s set-up, computed: its steps in order, each timed (`GeometrySetup.timings`)."""
     release_shared()  # a forgotten scene's fragments, before this one's are allocated
-    timings: dict[str, float] = {}
-    clock = time.perf_counter()
-
-    def lap(name):
-        nonlocal clock
-        now = time.perf_counter()
-        timings[name] = timings.get(name, 0.0) + now - clock  # a stage may run in parts
-        clock = now
-
-    strands, cam = scene.strands, scene.camera
-    points = strands.points
+    lap = _Laps()
     check_capacity(scene, placement=placement)  # the closed-form items, before anything is projected
-    view, xy, depth, segments, order = visibility_order(scene, order)
-    seg_strand = strands.strand_of_point[segments[:, 0]]
+    visible = visibility_order(scene, order)
+    seg_strand = scene.strands.strand_of_point[visible.segments[:, 0]]
     lap("project+order")
+    shading = _point_shading(scene, lap)
+    camera = _camera_raster(scene, visible, seg_strand)
+    # With the fragments, before the image's arrays and theirs.
+    check_capacity(scene, camera.raster, placement=placement)
+    lap("capacity")
+    occluder = (
+        None if scene.occluder is None else occluder_view(scene.occluder, scene.light, visible.view, lap)
+    )
+    hit_depth = None if occluder is None else occluder.hit_depth
+    fragments = camera_fragments(camera.raster, camera.labels, hit_depth, placement, lap)
+    # Hair whose segments all have length 0 (or that has none: one-point strands) draws
+    # nothing from any camera; that is not the camera's fault, so no warning then.
+    points, segments = scene.strands.points, visible.segments
+    if not fragments.drawn and np.any(points[segments[:, 0]] != points[segments[:, 1]]):
+        warn_empty_view(scene)
+    padded = _with_segment_alpha(fragments.padded, shading.inputs.segment_alpha, points.shape[0], segments)
+    shadows = shadow_plan(scene, segments, seg_strand, shading.inputs.segment_alpha, occluder, placement, lap)
+    if shadows.plan is not None:  # the shadow set-up's transients, trimmed for a scene this large
+        release_heap(padded.pixel.size * 20)
+    return _geometry_setup(scene, visible.view, shading, padded, fragments.count, occluder, shadows, lap)
 
-    tangent = tangents(points, strands.offsets)
-    base_color = strands.color if strands.color is not None else np.ones_like(points)
+
+def _point_shading(scene: Scene, lap: _Laps) -> _PointShading:
+    """The strands' tangents, the shading model's per-point inputs and the base colour."""
+    strands = scene.strands
+    tangent = tangents(strands.points, strands.offsets)
+    base_color = strands.color if strands.color is not None else np.ones_like(strands.points)
     inputs = scene.shading.point_inputs(strands, tangent)  # the model's own (§17's), or none
     if inputs.color_factor is not None:
         base_color = base_color * inputs.color_factor
-    segment_alpha = inputs.segment_alpha
     if any(x is not None for x in (inputs.extra, inputs.color_factor, inputs.segment_alpha)):
         lap("shading inputs")
+    return _PointShading(tangent, base_color, inputs)
 
-    # Rasterise nearest-first, then a stable sort by pixel gives front-to-back per pixel.
-    near_first = order[::-1]
-    s0, s1 = segments[near_first, 0], segments[near_first, 1]
+
+def _camera_raster(scene: Scene, visible: VisibleSegments, seg_strand: np.ndarray) -> _CameraRaster:
+    """The drawn segments' ribbons in the camera's pixels (§5), nearest first: a stable
+    sort of their fragments by pixel then leaves each pixel's front to back (§6). Depth is
+    interpolated for the occluder's depth test only."""
+    near_first = visible.order[::-1]
+    s0, s1 = visible.segments[near_first, 0], visible.segments[near_first, 1]
+    view, xy, depth, strands = visible.view, visible.xy, visible.depth, scene.strands
     widths = ribbon_widths(
         strands.width[seg_strand[near_first]],
         strands.width_units,
@@ -217,156 +276,70 @@ def _prepare(scene: Scene, order, placement: Placement) -> GeometrySetup:
         view.focal,
         view.perspective,
     )
-    # Rasterised nearest segment first; each fragment names its segment's first point
-    # (the segment is that point and the next). Depth only for the occluder's depth test.
-    raster = (xy[s0], xy[s1], depth[s0], depth[s1], widths, cam.width, cam.height, True)
-    # With the fragments, before the image's arrays and theirs.
-    check_capacity(scene, raster, placement=placement)
-    lap("capacity")
-    hw = cam.width * cam.height
-    light = scene.light
-    light_rgb = np.asarray(light.color, dtype=np.float64)
+    raster = RibbonRaster(
+        xy[s0], xy[s1], depth[s0], depth[s1], widths, view.width, view.height, view.perspective
+    )
+    return _CameraRaster(raster, s0.astype(np.int32))
+
+
+def _with_segment_alpha(
+    padded: PaddedFragments, segment_alpha: np.ndarray | None, n_points: int, segments: np.ndarray
+) -> PaddedFragments:
+    """`padded` with each fragment's coverage scaled by its segment's alpha (§17's alpha
+    texture; None: unscaled)."""
+    if segment_alpha is None:
+        return padded
+    at_first_point = np.zeros(n_points, segment_alpha.dtype)
+    at_first_point[segments[:, 0]] = segment_alpha
+    if isinstance(padded.coverage, jax.Array):  # on the device, in the fragments' precision
+        scale = jnp.asarray(at_first_point, padded.coverage.dtype)[padded.i0]
+        return padded._replace(coverage=padded.coverage * scale)
+    # In place on the host: the exact views of `GeometrySetup` see it (padding: 0 stays 0).
+    coverage = padded.coverage
+    coverage *= at_first_point[padded.i0]
+    return padded
+
+
+def _geometry_setup(
+    scene: Scene,
+    view: View,
+    shading: _PointShading,
+    padded: PaddedFragments,
+    count: int,
+    occluder: OccluderView | None,
+    shadows: ShadowPlan,
+    lap: _Laps,
+) -> GeometrySetup:
+    """The steps' results as the geometry stage reads them: the per-point inputs in its
+    float precision (it reads nothing else of them), the image's backdrop and the
+    occluder's pixels."""
+    points, light = scene.strands.points, scene.light
+    hw = view.width * view.height
     backdrop = np.broadcast_to(np.asarray(scene.background, np.float64), (hw, 3)).copy()
-    opaque = np.zeros(hw, bool)
-    occluder = {}
-    hit_depth = None
-    if scene.occluder is not None:
-        hit_depth, normal, hit_point = occluder_hits(view, scene.occluder)
-        opaque = np.isfinite(hit_depth)
-        occ_pixel = np.flatnonzero(opaque)
-        surface = hit_point[occ_pixel]
-        to_l = to_light(light, surface)
-        # Lambert's max(N·L, 0) (§9): the clip fires on the occluder's unlit side.
-        lambert = np.clip(np.sum(normal[occ_pixel] * to_l, axis=1), 0.0, None)
-        color = np.asarray(scene.occluder.color, np.float64)
-        occluder = dict(
-            occluder_pixel=occ_pixel,
-            occluder_color=color,
-            occluder_direct=color * light_rgb * lambert[:, None],
-        )
-        backdrop[opaque] = 0.0  # the shading stage adds the occluder's colour (§13)
-        lap("occluder")
-
-    place = _fragments_on_device if placement == "device" else _fragments_on_host
-    drawn, padded, n_frags = place(raster, s0.astype(np.int32), hit_depth, lap)
-    frag_pixel, frag_i0, frag_coverage, frag_t = padded
-    # Hair whose segments all have length 0 (or that has none: one-point strands) draws
-    # nothing from any camera; that is not the camera's fault, so no warning then.
-    if not drawn and np.any(points[segments[:, 0]] != points[segments[:, 1]]):
-        warn_empty_view(scene)
-    if segment_alpha is not None:  # §17's alpha texture scales the segment's opacity
-        at_first_point = np.zeros(points.shape[0], segment_alpha.dtype)
-        at_first_point[segments[:, 0]] = segment_alpha
-        if isinstance(frag_coverage, jax.Array):  # on the device, in the fragments' precision
-            frag_coverage = frag_coverage * jnp.asarray(at_first_point, frag_coverage.dtype)[frag_i0]
-            padded = (frag_pixel, frag_i0, frag_coverage, frag_t)
-        else:  # in place: the exact views below see it (padding: coverage 0 stays 0)
-            frag_coverage *= at_first_point[frag_i0]
-
-    shadow = None
-    if scene.shadows.casts:
-        receivers = surface if occluder else None
-        shadow_inputs = ShadowInputs(
-            points,
-            segments,
-            seg_strand,
-            strands.width,
-            light,
-            receivers=receivers,
-            segment_alpha=segment_alpha,
-            width_units=strands.width_units,
-            placement=placement,
-        )
-        shadow = scene.shadows.setup(shadow_inputs)
-        lap("shadow set-up")
-        if occluder:
-            # §13: the occluder's shadow, a depth test in the light's view.
-            light_view = occluder_light_view(light, points, scene.occluder, scene.shadows.resolution)
-            depth_map, _, _ = occluder_hits(light_view, scene.occluder)
-            occluder["light_visibility"] = occluder_visibility(light_view, depth_map, points)
-            occluder["occluder_visibility"] = occluder_visibility(light_view, depth_map, surface)
-            lap("occluder shadow")
-    if shadow is not None:  # the shadow set-up's transients, trimmed for a scene this large
-        release_heap(frag_pixel.size * 20)
-
-    # The per-point inputs in the stage's float precision: it reads nothing else of them.
+    opaque = np.zeros(hw, bool) if occluder is None else occluder.opaque
+    backdrop[opaque] = 0.0  # the shading stage adds the occluder's colour (§13)
     dtype = jnp.result_type(float)
     return GeometrySetup(
         view=view,
-        tangent=tangent.astype(dtype),
+        tangent=shading.tangent.astype(dtype),
         to_light=to_light(light, points).astype(dtype),
         to_eye=unit_rows(view.origin - points).astype(dtype),
-        base_color=base_color.astype(dtype),
-        light_rgb=light_rgb,
-        frag_pixel=frag_pixel[:n_frags],
-        frag_i0=frag_i0[:n_frags],
-        frag_t=frag_t[:n_frags],
-        frag_coverage=frag_coverage[:n_frags],
+        base_color=shading.base_color.astype(dtype),
+        light_rgb=np.asarray(light.color, dtype=np.float64),
+        frag_pixel=padded.pixel[:count],
+        frag_i0=padded.i0[:count],
+        frag_t=padded.t[:count],
+        frag_coverage=padded.coverage[:count],
         padded_fragments=padded,
-        strand_of_point=strands.strand_of_point.astype(np.int32),
+        strand_of_point=scene.strands.strand_of_point.astype(np.int32),
         backdrop=backdrop,
         opaque=opaque,
-        shadow=shadow,
-        timings=timings,
-        shading_inputs=inputs,
-        **occluder,
+        shadow=shadows.plan,
+        timings=lap.timings,
+        shading_inputs=shading.inputs,
+        occluder_pixel=None if occluder is None else occluder.pixel,
+        occluder_direct=None if occluder is None else occluder.direct,
+        occluder_visibility=shadows.occluder_visibility,
+        occluder_color=None if occluder is None else occluder.color,
+        light_visibility=shadows.light_visibility,
     )
-
-
-def _fragments_on_host(raster, labels, hit_depth, lap):
-    """Whether the raster covered any pixel (before the occluder's depth test), the
-    camera's fragments grouped by pixel, front to back (`frag_pixel`, `frag_i0`,
-    `frag_coverage`, `frag_t`, padded to `fragment_bucket`), and their count, by the host's
-    compiled loops: the raster in pieces, one per core (`rasterize_parts`), read where they
-    are by the counting sort (`group_parts`), into aligned arrays that the geometry stage
-    shares with JAX (`_host`)."""
-    with_depth = hit_depth is not None
-    pieces = rasterize_parts(*raster, depth=with_depth, labels=labels)
-    n_frags = sum(piece.size for piece in pieces)
-    lap("rasterize")
-    if with_depth:  # kim-2003 §3: depth test on, hair does not write depth.
-        pieces = [piece.take(np.flatnonzero(piece.depths < hit_depth[piece.pixel])) for piece in pieces]
-        lap("occluder")
-    # Only what compositing needs is grouped: segment, coverage, t (not depth).
-    count = sum(piece.size for piece in pieces)
-    padded = group_parts(
-        [(piece.pixel, piece.segment, piece.coverage, piece.t) for piece in pieces],
-        raster[5] * raster[6],
-        fragment_bucket(count),
-    )
-    del pieces
-    release_heap(n_frags * 16)  # the raster's 4 fields, handed back to the system
-    lap("sort fragments")
-    return n_frags > 0, (padded[0], *padded[1]), count
-
-
-def _fragments_on_device(raster, labels, hit_depth, lap):
-    """`_fragments_on_host`'s fragments as XLA programs on JAX's default device
-    (`_device_raster`): every candidate of the same raster plan, then one stable sort by
-    pixel that also drops the uncovered and occluded candidates. JAX arrays."""
-    candidates = device_candidates(*raster, depth=hit_depth is not None, labels=labels)
-    keep = candidates.coverage > 0
-    jax.block_until_ready(keep)  # the lap times the raster, not its dispatch
-    lap("rasterize")
-    if hit_depth is not None:  # kim-2003 §3: depth test on, hair does not write depth.
-        dtype = candidates.depths.dtype
-        # d < h for a float64 h is d < h↑, h rounded up to the next float of d's type, so
-        # the test in that type is the host's (which compares in float64).
-        bound = hit_depth.astype(dtype)
-        bound = np.where(bound < hit_depth, np.nextafter(bound, np.inf, dtype=dtype), bound)
-        # clip: an uncovered candidate's pixel may lie outside the image; it is dropped anyway.
-        keep &= candidates.depths < jnp.asarray(bound)[jnp.clip(candidates.pixel, 0, bound.size - 1)]
-    hw = raster[5] * raster[6]
-    frag_pixel, grouped, count = group_on_device(
-        candidates.pixel,
-        keep,
-        hw,
-        candidates.segment,
-        candidates.coverage,
-        candidates.t,
-        capacity=fragment_bucket,
-    )
-    lap("sort fragments")
-    # Covered before the depth test: read back only when nothing is left after it.
-    drawn = count > 0 or bool(jnp.any(candidates.coverage > 0))
-    return drawn, (frag_pixel, *grouped), count

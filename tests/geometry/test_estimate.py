@@ -45,8 +45,7 @@ def _forbidden(what):
 def nothing_large(monkeypatch):
     """Fail where the set-up would allocate a large array: the camera's raster, every
     shadow method's plan."""
-    monkeypatch.setattr(_setup, "_fragments_on_host", _forbidden("the camera raster"))
-    monkeypatch.setattr(_setup, "_fragments_on_device", _forbidden("the camera raster"))
+    monkeypatch.setattr(_setup, "camera_fragments", _forbidden("the camera raster"))
     for method in (OpacityMaps, ExactShadows, DeepOpacityMaps):
         monkeypatch.setattr(method, "setup", _forbidden("the shadow set-up"))
 
@@ -147,8 +146,7 @@ def test_ordinary_scenes_are_not_refused(path, monkeypatch):
 
     monkeypatch.setattr(_capacity, "available_memory", lambda: 16 * GIB)
     monkeypatch.setattr(_device_raster, "_free_bytes", lambda: 16 * GIB)
-    monkeypatch.setattr(_setup, "_fragments_on_host", passed)
-    monkeypatch.setattr(_setup, "_fragments_on_device", passed)
+    monkeypatch.setattr(_setup, "camera_fragments", passed)
     with pytest.raises(_Passed):
         _setup.prepare(hj.load_scene(path))
 

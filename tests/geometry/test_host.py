@@ -130,7 +130,7 @@ def test_compiled_loops_work_where_no_cache_folder_is_writable(monkeypatch):
 
     from numba.core import caching
 
-    from hairjax._geometry import _raster
+    from hairjax._geometry import _raster, _raster_loop
     from hairjax._geometry._host import compile_loop
 
     p = np.array([[1.0, 2.0], [3.5, 12.0]])
@@ -143,11 +143,14 @@ def test_compiled_loops_work_where_no_cache_folder_is_writable(monkeypatch):
         return a + b
 
     assert add(2, 3) == 5
-    _raster._kernels.cache_clear()  # the raster's loops compiled afresh, under the same condition
+    loops = (_raster_loop.raster_loop, _raster_loop.coverage_loop, _raster_loop._depth_loop)
+    for loop in loops:  # the raster's loops compiled afresh, under the same condition
+        loop.cache_clear()
     try:
         after = _raster.rasterize(p[:1], p[1:], np.ones(1), np.ones(1), np.full(1, 2.0), 16, 16, False)
     finally:
-        _raster._kernels.cache_clear()
+        for loop in loops:
+            loop.cache_clear()
     assert after.size > 10
     for name in ("pixel", "segment", "coverage", "t", "depth"):
         np.testing.assert_array_equal(getattr(after, name), getattr(before, name))

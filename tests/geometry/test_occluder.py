@@ -287,13 +287,13 @@ def test_a_scene_without_occluder_does_no_occluder_work(monkeypatch):
     carries no occluder fields (the image is the one of tests/test_render.py)."""
     from helpers import small_furball_scene
 
-    from hairjax._geometry_stage import _setup as setup_mod
+    from hairjax._geometry_stage import _lighting
 
     def forbidden(*args, **kwargs):
         raise AssertionError("occluder work in a scene without occluder")
 
     for name in ("occluder_hits", "occluder_light_view", "occluder_visibility"):
-        monkeypatch.setattr(setup_mod, name, forbidden)
+        monkeypatch.setattr(_lighting, name, forbidden)
     geom = hj.geometry_stage(small_furball_scene())
     assert geom.occluder_pixel is None and geom.light_visibility is None
     assert geom.occluder_omega is None

@@ -233,13 +233,13 @@ def raster_calls(monkeypatch):
     from hairjax._geometry import _raster
 
     calls = []
-    coverage, loop = _raster._kernels("float32")
+    loop = _raster.raster_loop("float32")
 
     def spy(*args):
         calls.append(args[11])  # count_only
         return loop(*args)
 
-    monkeypatch.setattr(_raster, "_kernels", lambda name: (coverage, spy))
+    monkeypatch.setattr(_raster, "raster_loop", lambda name: spy)
     return calls
 
 

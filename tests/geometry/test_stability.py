@@ -533,7 +533,7 @@ def test_guard_rasteriser_zero_length_and_empty_input():
 
 @pytest.mark.parametrize("dtype", ["float64", "float32"])
 def test_guard_constant_depth_fragments_keep_z(dtype):
-    """The raster kernel's za == zb guard (_raster._kernels; and GLSL fragment_depth's): a segment at one
+    """The raster kernel's za == zb guard (_raster_loop's depth_at; GLSL fragment_depth's): a segment at one
     depth gives every fragment exactly that depth, although the perspective formula
     1/((1 − t)/z + t/z) rounds away from z (checked here, the guard's reason)."""
     from hairjax._geometry._raster import rasterize

@@ -1,0 +1,143 @@
+"""The host raster's compiled loops (docs/model.md §5): for each segment of a raster plan
+(`_raster_plan`), its columns and the candidate rows around its line in each, every
+candidate's coverage (`coverage_formula`, the device program's formula too), position t
+and depth, the covered ones written out. Compiled by numba for JAX's default float
+precision (float32, or float64 with x64 on); `_raster` runs them in pieces on every core.
+
+The loop contracts a·b + c into fused multiply-adds where LLVM finds them, as XLA's CPU
+kernel does, so its fragments equal the device program's (`_device_raster`) bit for bit
+there (tests/geometry/test_device_raster.py).
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import no_type_check
+
+import numpy as np
+
+from .._constants import PIXEL_CENTRE
+from ._coverage import coverage_formula
+from ._host import compile_loop
+
+__all__ = ["coverage_loop", "raster_loop"]
+
+# no_type_check on the loops: the tests' jaxtyping hook would otherwise wrap them before
+# numba compiles them.
+# error_model numpy: a division by 0 gives inf, as in XLA, without a check per division.
+# contract: fused multiply-adds where LLVM finds them, as XLA's CPU kernels have.
+_LOOP_OPTIONS = dict(error_model="numpy", fastmath={"contract"})
+
+
+def _float_type(dtype_name: str):
+    return np.float32 if dtype_name == "float32" else np.float64
+
+
+@functools.cache
+def coverage_loop(dtype_name: str):
+    """`coverage_formula` compiled by numba for scalars of `dtype_name` (on first use;
+    cached on disk, `compile_loop`), with Python's min and max."""
+    return compile_loop(**_LOOP_OPTIONS)(coverage_formula(_float_type(dtype_name), min, max))
+
+
+@functools.cache
+def _depth_loop(dtype_name: str):
+    """`depth_at(za, zb, t, perspective)`: the depth at t along a segment from depth za to
+    zb (docs/model.md §5), compiled by numba for scalars of `dtype_name`."""
+    one = _float_type(dtype_name)(1.0)
+
+    @compile_loop(**_LOOP_OPTIONS)
+    @no_type_check
+    def depth_at(za, zb, t, perspective):
+        if za == zb:
+            # Fires for segments at constant depth: keep z exactly (no self-shadowing by a
+            # rounding error in 1/(1/z)).
+            return za
+        if perspective:
+            # Drawn segments lie beyond the near plane: za, zb > 0.
+            return one / ((one - t) / za + t / zb)
+        return za + t * (zb - za)
+
+    return depth_at
+
+
+@functools.cache
+def raster_loop(dtype_name: str):
+    """The raster loop compiled by numba for floats of `dtype_name` (on first use; cached
+    on disk, `compile_loop`); every constant has that type, so no operation widens to
+    float64. It returns the number of covered candidates of segments first … last − 1 and,
+    unless count_only, writes them to `out` (pixel, segment, coverage, t, depth)."""
+    F = _float_type(dtype_name)
+    one, centre = F(1.0), F(PIXEL_CENTRE)
+    exact_limit = F(1 << 23)  # integers below it and their sums with a row index are exact
+    coverage, depth_at = coverage_loop(dtype_name), _depth_loop(dtype_name)
+
+    @compile_loop(**_LOOP_OPTIONS)
+    @no_type_check
+    def raster(
+        seg_data,
+        labels,
+        lo,
+        columns,
+        rows,
+        image_width,
+        image_height,
+        perspective,
+        with_depth,
+        first,
+        last,
+        count_only,
+        *out,
+    ):
+        out_pixel, out_segment, out_coverage, out_t, out_depth = out
+        filled = 0
+        for i in range(first, last):
+            x0, y0, dx, dy, length, w0, za, zb, xm, reach, w1 = seg_data[i]
+            # A segment with columns has length > 0, so |da| ≥ L/√2 > 0: no guard divides.
+            x_major = xm > 0
+            da = dx if x_major else dy
+            inv_len = one / length
+            slope = (dy if x_major else dx) / da
+            offset = reach * length / abs(da)
+            a_origin = x0 if x_major else y0
+            b_origin = y0 if x_major else x0
+            for j in range(columns[i]):
+                # Column k = lo + j (exact in float32: < 2^24); its candidates are the rows
+                # pixel centres around the line there.
+                k = F(lo[i] + j)
+                b_line = b_origin + (k + centre - a_origin) * slope
+                row0 = np.floor(b_line - offset - centre) + one
+                # Only the rows whose centres may lie in the image (one to spare each side):
+                # the rest would `continue` below, and a ribbon far wider than the image
+                # has millions of them. Where row0 is not exact in float32, all rows.
+                r_first, r_last = 0, rows
+                if abs(row0) < exact_limit:
+                    across = image_height if x_major else image_width
+                    r_first = max(0, int(-row0) - 1)
+                    r_last = min(rows, int(across - row0) + 2)
+                for r in range(r_first, r_last):
+                    m = row0 + F(r)
+                    px = k if x_major else m
+                    py = m if x_major else k
+                    rx = px + centre - x0
+                    ry = py + centre - y0
+                    s = (rx * dx + ry * dy) * inv_len
+                    inside = (px >= 0) & (px < image_width) & (py >= 0) & (py < image_height)
+                    if not (inside and s >= 0 and s < length):
+                        continue
+                    t = s * inv_len
+                    # w₀ + t(w₁ − w₀) is exactly w₀ for ribbons of constant width (pixel widths).
+                    cov = coverage(abs(rx * dy - ry * dx) * inv_len, w0 + t * (w1 - w0))
+                    if not cov > 0:
+                        continue
+                    if not count_only:
+                        out_pixel[filled] = np.int32(py) * image_width + np.int32(px)
+                        out_segment[filled] = labels[i]
+                        out_coverage[filled] = cov
+                        out_t[filled] = t
+                        if with_depth:
+                            out_depth[filled] = depth_at(za, zb, t, perspective)
+                    filled += 1
+        return filled
+
+    return raster
