@@ -36,7 +36,7 @@ from .._geometry._capacity import fragment_bytes, memory_size
 from .._geometry._device_raster import candidate_bytes
 from .._geometry._placement import Placement
 from .._geometry._raster import count_fragments
-from .._geometry._raster_plan import raster_plan
+from .._geometry._raster_plan import RibbonRaster, raster_plan
 from .._geometry._shadows import MAX_MAP_CELLS, light_raster
 from .._scene._scene import Scene
 
@@ -139,7 +139,14 @@ def _fragments(raster, limit: int | None) -> tuple[int, bool]:
         count = count_fragments(*raster, limit=limit)
         if count is not None:
             return count, True
-    return int(ribbon_pixel_bound(raster[0], raster[1], raster[4], raster[5], raster[6]).sum()), False
+    bound = ribbon_pixel_bound(raster.xy0, raster.xy1, raster.width, raster.image_width, raster.image_height)
+    return int(bound.sum()), False
+
+
+def _plan(raster: RibbonRaster):
+    """The raster's layout (`raster_plan`) from its input."""
+    r = raster
+    return raster_plan(r.xy0, r.xy1, r.z0, r.z1, r.width, r.image_width, r.image_height)
 
 
 def _width_keys(scene: Scene) -> str:
@@ -165,17 +172,17 @@ def fragment_needs(
     per = fragment_bytes(f, depth) + FRAGMENT_SORT
     needs = [Need(what, keys, 0 if on_device else count * per, count * FRAGMENT_FLOATS * f)]
     if on_device:
-        plan = raster_plan(*camera_raster[:7])
+        plan = _plan(camera_raster)
         needs.append(Need("the camera raster's candidates", keys, 0, candidate_bytes(plan, depth)))
     if light is not None:
         count, counted = _fragments(light, limit)
-        keys = f"shadows.resolution = {light[5]}, {_width_keys(scene)}"
+        keys = f"shadows.resolution = {light.image_width}, {_width_keys(scene)}"
         what = f"the light's {count:,} fragments" if counted else f"the light's fragments (at most {count:,})"
         light_on_device = on_device and scene.shadows.rasterizes_on_device
         host = 0 if light_on_device else count * LIGHT_FRAGMENT_HOST
         needs.append(Need(what, keys, host, count * LIGHT_FRAGMENT_FLOATS * f))
         if light_on_device:
-            plan = raster_plan(*light[:7])
+            plan = _plan(light)
             needs.append(Need("the light raster's candidates", keys, 0, candidate_bytes(plan, True)))
     return needs
 

@@ -16,7 +16,7 @@ from .._device_raster import rasterize_on_device
 from .._placement import Placement
 from .._projection import View, light_view
 from .._raster import Arrays, Fragments, rasterize
-from .._raster_plan import ribbon_widths
+from .._raster_plan import RibbonRaster, ribbon_widths
 
 __all__ = [
     "ShadowInputs",
@@ -163,7 +163,7 @@ class LightFragments:
 
 
 def light_raster(points, segments, seg_strand, width, light, resolution: int, width_units: str = "pixels"):
-    """The light's frame and its raster's arguments (`rasterize`'s, in order): the
+    """The light's frame and its raster's arguments (a `RibbonRaster`): the
     drawable segments' ends in the light's view and their ribbons' widths in texels
     (the strand's width in pixels, or its world width seen from the light,
     `ribbon_widths`). Shared by `light_fragments` and the capacity estimate."""
@@ -179,15 +179,15 @@ def light_raster(points, segments, seg_strand, width, light, resolution: int, wi
         frame.view.perspective,
     )
     xy, depth = frame.xy, frame.depth
-    return frame, (
-        xy[s0],
-        xy[s1],
-        depth[s0],
-        depth[s1],
-        widths,
-        resolution,
-        resolution,
-        frame.view.perspective,
+    return frame, RibbonRaster(
+        xy0=xy[s0],
+        xy1=xy[s1],
+        z0=depth[s0],
+        z1=depth[s1],
+        width=widths,
+        image_width=resolution,
+        image_height=resolution,
+        perspective=frame.view.perspective,
     )
 
 
