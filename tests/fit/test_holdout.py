@@ -4,7 +4,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from helpers import small_furball_scene
+from helpers import refused, small_furball_scene
 
 import hairjax as hj
 
@@ -75,7 +75,7 @@ def test_held_out_targets_are_checked_before_the_fit(views):
         hj.fit(front, hj.FitTargets(target, holdout=(side, np.zeros((16, 16, 3)))), progress=progress)
     with pytest.raises(hj.FitError, match="holdout: 2 scenes for 3 targets"):
         hj.fit(front, hj.FitTargets(target, holdout=([side, side], [target] * 3)), progress=progress)
-    with pytest.raises(hj.FitError, match=r"holdout must be a \(scene or scenes, target or targets\) pair"):
+    with refused("holdout", r"holdout must be a \(scene or scenes, target or targets\) pair", hj.FitError):
         hj.fit(front, hj.FitTargets(target, holdout=side), progress=progress)
     # A fit of the light renders held-out views at the fitted light: not under another light.
     with pytest.raises(hj.FitError, match="hold out a light with the light held"):
