@@ -107,11 +107,10 @@ def main(argv=None) -> int:
                     start = time.perf_counter()
                     r = hj.fit(
                         scene,
-                        noisy,
-                        init=START,
+                        hj.FitTargets(noisy, masks=[mask]),
                         solver=hj.fit_solvers()[solver],
-                        max_steps=args.max_steps,
-                        masks=[mask],
+                        init=START,
+                        stop=hj.FitStop(max_steps=args.max_steps),
                     )
                     errors = relative_errors(r.params, truth)
                     # Weakly identifiable: the fit's own standard error exceeds half the

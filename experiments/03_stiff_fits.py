@@ -200,11 +200,10 @@ def run_fit(
         r = hj.fit(
             scene,
             target,
-            fit=case.fit,
-            init=start,
             solver=hj.fit_solvers()[solver],
-            max_steps=max_steps,
-            separable=separable,
+            init=start,
+            variables=hj.FitVariables(case.fit, separable=separable),
+            stop=hj.FitStop(max_steps=max_steps),
             progress=lambda step, loss, t: elapsed.append(t),
         )
     except Exception as err:  # noqa: BLE001 — a stiff case must never stop the sweep
@@ -336,7 +335,7 @@ def _parser() -> argparse.ArgumentParser:
         "--no-separable",
         dest="separable",
         action="store_false",
-        help="let the solver search Kd and Ks too (hj.fit(separable=False)) instead of "
+        help="let the solver search Kd and Ks too (hj.FitVariables(separable=False)) instead of "
         "solving for them at every step (the default)",
     )
     p.add_argument("--out", type=Path, default=Path("out/stiff_fits"))

@@ -89,7 +89,13 @@ def run(size: int = 96, strands: int = 1000, target: str = "gl", max_steps: int 
         ).image
     else:
         image = np.asarray(hj.shading_stage(geometry, truth))
-    result = hj.fit(scene, image, fit=NAMES, init=params_of(START, scene.params), max_steps=max_steps)
+    result = hj.fit(
+        scene,
+        image,
+        init=params_of(START, scene.params),
+        variables=NAMES,
+        stop=hj.FitStop(max_steps=max_steps),
+    )
     fitted = {n: getattr(result.params, n) for n in NAMES}
     return relative_errors(fitted, TRUE), result.steps, result.time_s, result.rmse
 

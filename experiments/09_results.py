@@ -337,7 +337,7 @@ solver's own test passes short of it or when it stops where p has no effect:
 {stiff_table.strip()}
 
 For comparison, the solver searching all four parameters (`--no-separable`,
-`hj.fit(separable=False)`, Kd and Ks through a softplus). From the start 100× off every
+`hj.FitVariables(separable=False)`, Kd and Ks through a softplus). From the start 100× off every
 solver ends with Ks in the softplus's flat tail, where neither Ks nor p has an effect on
 the image: a stationary point that the convergence test accepts, and the reason variable
 projection is the default:

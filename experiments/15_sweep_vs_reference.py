@@ -131,7 +131,12 @@ def main(argv=None) -> int:
         f"its noise {floor / peak:.3g} of the peak"
     )
 
-    fit = hj.fit(scene, target, fit=QUICK_NAMES if args.quick else NAMES, max_steps=5 if args.quick else 100)
+    fit = hj.fit(
+        scene,
+        target,
+        variables=QUICK_NAMES if args.quick else NAMES,
+        stop=hj.FitStop(max_steps=5 if args.quick else 100),
+    )
     alpha = scene.strands.alpha if fit.alpha is None else np.full(scene.strands.num_strands, fit.alpha)
     fitted = scene.replace(params=fit.params, strands=scene.strands.replace(alpha=alpha))
     write_json(args.out / "fit.json", {**fit.to_json(), "target_noise_rmse": floor, "target_peak": peak})

@@ -22,7 +22,11 @@ from ._explore import Explorer as Explorer
 from ._explore import explore as explore
 from ._fit import BFGS as BFGS
 from ._fit import FitError as FitError
+from ._fit import FitNotConverged as FitNotConverged
 from ._fit import FitResult as FitResult
+from ._fit import FitStop as FitStop
+from ._fit import FitTargets as FitTargets
+from ._fit import FitVariables as FitVariables
 from ._fit import GaussNewton as GaussNewton
 from ._fit import fit as fit
 from ._fit import fit_solvers as fit_solvers

@@ -13,13 +13,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Literal, NamedTuple
 
 import numpy as np
 
 from ._errors import SceneError
-from ._fit import FitError, FitResult, fit
+from ._fit import FitError, FitResult, FitStop, FitTargets, FitVariables, fit
 from ._progress import Progress
 from ._reference._render import check_sampling, settings_of
 from ._reference._support import check_supported, import_mitsuba
@@ -271,9 +271,6 @@ def distill(
     `references` are given; `ValueError` for bad views or references; `FitError` for a bad
     fit input.
     """
-    from ._reference import reference_image
-    from ._render import render
-
     views = _check_views(views)
     start_model = _model_of(model)
     names = tuple(start_model.fittable) if fit_names is None else tuple(fit_names)
@@ -285,42 +282,26 @@ def distill(
         scene = scene.replace(reference=settings)
     scenes = {v.name: view_scene(scene.replace(shading=start_model), v) for v in views}
     renders = len(views) * (2 if noise_floor else 1) if references is None else 0
-    total, done = renders + 2, 0
-
-    def step(message: str) -> None:
-        nonlocal done
-        done += 1
-        if progress is not None:
-            progress(done, total, message)
-
+    step = _counter(renders + 2, progress)
     if references is None:
-        first: dict[str, np.ndarray] = {}
-        second: dict[str, np.ndarray] = {}
-        for v in views:
-            for s, out in ((seed, first), (seed + 1, second))[: 2 if noise_floor else 1]:
-                out[v.name] = reference_image(scenes[v.name], seed=s)
-                step(f"reference {v.name} (seed {s})")
+        first, second = _rendered_references(scenes, views, seed, noise_floor, step)
     else:
         first, second = _given_references(references, views)
-
-    train = [v.name for v in views if v.train]
-    held = [v.name for v in views if not v.train]
-    holdout = ([scenes[n] for n in held], [first[n] for n in held]) if held else None
-    try:
-        result = fit(
-            [scenes[n] for n in train],
-            [first[n] for n in train],
-            fit=names,
-            max_steps=max_steps,
-            holdout=holdout,
-        )
-    except FitError as err:
-        raise FitError(f"distill: {err}") from None
+    result = _fit_views(scenes, first, views, names, max_steps)
     step(f"fit {start_model.name}: {result.steps} steps, {result.termination}")
+    distillation = _distillation(start_model, result, views, scenes, first, second)
+    step("fitted renders")
+    return distillation
+
+
+def _distillation(start_model, result: FitResult, views, scenes: dict, first: dict, second: dict):
+    """The `Distillation`: the fitted model, each view rendered with it and measured
+    against its reference, and the noise floors where a second reference was made."""
+    from ._render import render
+
     fitted = start_model.replace_params(result.params)
     scenes = {n: s.replace(shading=fitted) for n, s in scenes.items()}
     images = {n: np.asarray(render(s)) for n, s in scenes.items()}
-    step("fitted renders")
     return Distillation(
         model=fitted,
         result=result,
@@ -332,3 +313,47 @@ def distill(
         floors={n: image_rmse([first[n]], [second[n]]) for n in second},
         second=second,
     )
+
+
+def _counter(total: int, progress: Progress | None) -> Callable[[str], None]:
+    """`step(message)`: counts a finished part of the `total` and reports it to `progress`."""
+    done = 0
+
+    def step(message: str) -> None:
+        nonlocal done
+        done += 1
+        if progress is not None:
+            progress(done, total, message)
+
+    return step
+
+
+def _rendered_references(scenes: dict, views, seed: int, noise_floor: bool, step) -> tuple[dict, dict]:
+    """(view → reference at `seed`, view → reference at `seed + 1` where `noise_floor`),
+    each render counted by `step`."""
+    from ._reference import reference_image
+
+    first: dict[str, np.ndarray] = {}
+    second: dict[str, np.ndarray] = {}
+    for v in views:
+        for s, out in ((seed, first), (seed + 1, second))[: 2 if noise_floor else 1]:
+            out[v.name] = reference_image(scenes[v.name], seed=s)
+            step(f"reference {v.name} (seed {s})")
+    return first, second
+
+
+def _fit_views(scenes: dict, references: dict, views, names, max_steps: int) -> FitResult:
+    """The fit to the training views' references, the views held out as its holdout;
+    FitError naming `distill`."""
+    train = [v.name for v in views if v.train]
+    held = [v.name for v in views if not v.train]
+    holdout = ([scenes[n] for n in held], [references[n] for n in held]) if held else None
+    try:
+        return fit(
+            [scenes[n] for n in train],
+            FitTargets([references[n] for n in train], holdout=holdout),
+            variables=FitVariables(names),
+            stop=FitStop(max_steps=max_steps),
+        )
+    except FitError as err:
+        raise FitError(f"distill: {err}") from None

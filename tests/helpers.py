@@ -100,12 +100,12 @@ def fit_image(terms, kd, ks, shininess, kappa, ambient, plain=False):
 
 
 @contextlib.contextmanager
-def refused(field: str, message: str):
-    """The block is refused a value of the wrong type for `field`: SceneError matching
-    `message`, or the annotation check's TypeCheckError naming the parameter (pytest runs
-    jaxtyping's import hook: a value of the wrong type meets the annotation check before
-    the constructor's own; users without the hook get the SceneError)."""
-    with pytest.raises((hj.SceneError, TypeCheckError)) as info:
+def refused(field: str, message: str, error: type[Exception] = hj.SceneError):
+    """The block is refused a value of the wrong type for `field`: `error` (SceneError)
+    matching `message`, or the annotation check's TypeCheckError naming the parameter
+    (pytest runs jaxtyping's import hook: a value of the wrong type meets the annotation
+    check before the constructor's own; users without the hook get `error`)."""
+    with pytest.raises((error, TypeCheckError)) as info:
         yield
     if isinstance(info.value, TypeCheckError):
         assert f"parameter '{field}'" in str(info.value), str(info.value)

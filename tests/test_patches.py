@@ -245,7 +245,19 @@ def _pixel_view(size=16):
     """An orthographic view whose pixel coordinates are the world's (x, y), depth z: GL's
     float32 window coordinates of the vertices below are then exact."""
     e = np.eye(3)
-    return View(np.zeros(3), e[2], e[0], -e[1], size, size, 1.0, 0.0, 0.0, False, -np.inf)
+    return View(
+        origin=np.zeros(3),
+        forward=e[2],
+        right=e[0],
+        up=-e[1],
+        width=size,
+        height=size,
+        focal=1.0,
+        cx=0.0,
+        cy=0.0,
+        perspective=False,
+        near=-np.inf,
+    )
 
 
 def _triangles(corners, colors=None):

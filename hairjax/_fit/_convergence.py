@@ -5,14 +5,19 @@ own test passes too early is restarted, one that stalls is tested, a plateau is 
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
+import optimistix as optx
 
 from ._solvers import NULL_RATIO
 from ._space import entries
+
+if TYPE_CHECKING:
+    from ._options import FitStop
 
 __all__ = [
     "MAX_RESTARTS",
@@ -22,15 +27,17 @@ __all__ = [
     "half_square",
     "plateau_exit",
     "solve",
+    "Solved",
     "init",
     "step",
     "state_loss",
     "terminate",
 ]
 
-# How often `fit` starts a solver afresh when its tolerance test passed but the convergence
-# test (`stationarity`) did not; and after how many steps without a lower loss it
-# applies the convergence test itself (a trust region at the float32 floor rejects every step).
+# `FitStop`'s defaults: how often `fit` starts a solver afresh when its tolerance test passed
+# but the convergence test (`stationarity`) did not; and after how many steps without a lower
+# loss it applies the convergence test itself (a trust region at the float32 floor rejects
+# every step).
 MAX_RESTARTS = 3
 STALL_STEPS = 10
 
@@ -141,6 +148,18 @@ def terminate(opt, fn, z, problem, state):
     return opt.terminate(fn, z, problem, {}, state, frozenset())
 
 
+class Solved(NamedTuple):
+    """What `solve` returns: the solver's last point `z` (a diverged solve's last finite
+    one), the steps taken, why it stopped (`FitResult.termination`), the restarts, and
+    whether the loss became non-finite."""
+
+    z: Any
+    steps: int
+    termination: str
+    restarts: int
+    diverged: bool
+
+
 def solve(
     opt,
     fn,
@@ -149,66 +168,43 @@ def solve(
     problem,
     losses: list,
     *,
-    max_steps: int,
-    rtol: float,
-    atol: float,
+    stop: FitStop,
     report: Callable[[int, float], None],
     plateau: Callable | None = None,
-):
+) -> Solved:
     """Step the optimistix solver `opt` (on `fn`, whose residuals are `residuals(z,
     problem)`) from z until the convergence test confirms a stationary point, or it stops
-    for a stated reason. Appends each step's loss to `losses` and calls `report(step,
-    loss)`. `plateau(z, effect, loss)`: a z to restart from where a parameter has no effect
-    at a stationary point (or None). Returns (z, steps, termination, restarts, diverged).
+    for a stated reason (`stop`, a `FitStop`). Appends each step's loss to `losses` and
+    calls `report(step, loss)`. `plateau(z, effect, loss)`: a z to restart from where a
+    parameter has no effect at a stationary point (or None).
 
     The convergence test (docs/fitting.md, "When a fit has converged"): Gauss-Newton's
-    predicted decrease (`stationarity`) within rtol·loss + atol. It is applied when the
-    solver's own test passes (if it fails, the solver restarts from its point, at most
-    MAX_RESTARTS times) and when no step has lowered the loss for STALL_STEPS steps."""
-    import optimistix as optx
-
-    steps, restarts = 0, 0
+    predicted decrease (`stationarity`) within rtol·loss + atol, the solver's tolerances.
+    It is applied when the solver's own test passes (if it fails, the solver restarts from
+    its point, at most `stop.max_restarts` times) and when no step has lowered the loss for
+    `stop.stall_steps` steps."""
+    rtol, atol = float(opt.rtol), float(opt.atol)
+    steps, restarts, stalled, outcome = 0, 0, False, ""
     state = init(opt, fn, z, problem)
     done, result = terminate(opt, fn, z, problem, state)
-    last_finite, confirmed, unconfirmed, stalled, diverged = z, False, False, False, False
+    last_finite = z
     while True:
         if bool(done) and result != optx.RESULTS.successful:
             break
-        restart = False
         if bool(done) or stalled:
-            # Once it has stepped, a least-squares solver's state holds r and J at z
-            # (before, `first_step`, its f_info is a placeholder).
-            from_state = hasattr(state.f_info, "residual") and not bool(state.first_step)
-            decrease, effect = (
-                state_stationarity(state) if from_state else stationarity(residuals, z, problem)
-            )
             # After a step, losses[-1] is the loss at z (every change of z is a step's, or a
             # plateau's restart followed by a step); before the first, losses[0] is the
             # start's with its own gains, not z's with the gains solved for.
             loss = losses[-1] if steps else float(half_square(residuals, z, problem))
-            if float(decrease) <= rtol * loss + atol:
-                # A stationary point, unless a parameter has no effect there (`plateau`).
-                lower = (
-                    None
-                    if restarts == MAX_RESTARTS or plateau is None
-                    else plateau(z, np.asarray(effect), loss)
-                )
-                if lower is None:
-                    confirmed = True
-                    break
-                z, restart = lower, True
-            elif bool(done):
-                # The solver's test passed away from a stationary point (seen: BFGS with p
-                # still 4.5× off, its curvature estimate stale): start it afresh here.
-                if restarts == MAX_RESTARTS:
-                    unconfirmed = True
-                    break
-                restart = True
-            # (Stalled short of a stationary point: keep stepping.)
-        if restart:
-            restarts += 1
-            state = init(opt, fn, z, problem)
-        if steps >= max_steps:
+            last = restarts == stop.max_restarts
+            verdict, z = _tested(state, residuals, z, problem, loss, bool(done), last, (rtol, atol), plateau)
+            if verdict in ("converged", "unconfirmed"):
+                outcome = verdict
+                break
+            if verdict == "restart":
+                restarts += 1
+                state = init(opt, fn, z, problem)
+        if steps >= stop.max_steps:
             break
         z, state, loss = step(opt, fn, z, problem, state)
         steps += 1
@@ -217,25 +213,57 @@ def solve(
         if not np.isfinite(losses[-1]):
             # Fires for a solver that accepts every step (none of ours: trust regions and
             # Armijo reject a non-finite loss): stop, return the last finite point.
-            z, diverged = last_finite, True
+            z, outcome = last_finite, "diverged"
             break
         last_finite = z
         done, result = terminate(opt, fn, z, problem, state)
-        # No lower loss in STALL_STEPS steps (a trust region at the float32 floor rejects
-        # every step): converged if the test above finds nothing left to gain.
-        recent = losses[-STALL_STEPS - 1 :]
-        stalled = steps % STALL_STEPS == 0 and len(recent) > STALL_STEPS and min(recent[1:]) >= recent[0]
-    if diverged:
-        termination = "stopped: diverged (the loss became non-finite); kept the last finite point"
-    elif confirmed:
-        termination = "converged"
-    elif unconfirmed:
-        termination = (
+        stalled = _stalled(losses, steps, stop.stall_steps)
+    return Solved(
+        z, steps, _termination(outcome, bool(done), result, restarts, stop), restarts, outcome == "diverged"
+    )
+
+
+def _tested(state, residuals: Callable, z, problem, loss: float, done: bool, last: bool, tolerances, plateau):
+    """The convergence test at z, whose loss is `loss`: ("converged", z) at a stationary
+    point; ("restart", z') from a lower plateau's z' (`plateau`) or, where the solver's own
+    test passed (`done`) away from a stationary point, from z itself (seen: BFGS with p
+    still 4.5× off, its curvature estimate stale); ("unconfirmed", z) where that happens
+    with no restart left (`last`); ("step", z) where a stalled solver is short of a
+    stationary point. `tolerances`: the solver's (rtol, atol)."""
+    rtol, atol = tolerances
+    # Once it has stepped, a least-squares solver's state holds r and J at z (before,
+    # `first_step`, its f_info is a placeholder).
+    from_state = hasattr(state.f_info, "residual") and not bool(state.first_step)
+    decrease, effect = state_stationarity(state) if from_state else stationarity(residuals, z, problem)
+    if float(decrease) <= rtol * loss + atol:
+        # A stationary point, unless a parameter has no effect there (`plateau`).
+        lower = None if last or plateau is None else plateau(z, np.asarray(effect), loss)
+        return ("converged", z) if lower is None else ("restart", lower)
+    if done:
+        return ("unconfirmed", z) if last else ("restart", z)
+    return "step", z
+
+
+def _stalled(losses: list, steps: int, stall_steps: int) -> bool:
+    """No lower loss in the last `stall_steps` steps, checked every `stall_steps` steps (a
+    trust region at the float32 floor rejects every step): the convergence test then says
+    whether anything is left to gain."""
+    recent = losses[-stall_steps - 1 :]
+    return steps % stall_steps == 0 and len(recent) > stall_steps and min(recent[1:]) >= recent[0]
+
+
+def _termination(outcome: str, done: bool, result, restarts: int, stop: FitStop) -> str:
+    """`FitResult.termination` of a solve that ended with `outcome` ("converged",
+    "unconfirmed", "diverged", or "" where the solver stopped or the steps ran out)."""
+    if outcome == "diverged":
+        return "stopped: diverged (the loss became non-finite); kept the last finite point"
+    if outcome == "converged":
+        return "converged"
+    if outcome == "unconfirmed":
+        return (
             f"stopped: the solver's tolerance test passed {restarts + 1} times where "
             "Gauss-Newton still predicts a decrease beyond the tolerances"
         )
-    elif bool(done):
-        termination = f"stopped: {optx.RESULTS[result]}"  # type: ignore[misc]  # equinox's enumeration: indexable at run time
-    else:
-        termination = f"stopped: reached max_steps = {max_steps}"
-    return z, steps, termination, restarts, diverged
+    if done:
+        return f"stopped: {optx.RESULTS[result]}"  # type: ignore[misc]  # equinox's enumeration: indexable at run time
+    return f"stopped: reached max_steps = {stop.max_steps}"

@@ -1,10 +1,11 @@
 """`hairjax.fit`: shading parameters fitted to target images with optimistix (docs/fitting.md).
 
-The entry checks the input, sets up each target through the scenes' shading model (its
-`FitModel`, `_shading_fit.fit_model`), steps the solver (`_convergence.py`) on
-the residuals of `_problem.py` (the gains solved for by `_varpro.py` where the model's
-image is linear in them) and builds the `FitResult`, standard errors included
-(`_uncertainty.py`). Nothing here depends on which model is fitted.
+The entry checks the input (`FitTargets`, `FitVariables`, `FitStop`: `_options.py`), sets
+up each target through the scenes' shading model (its `FitModel`,
+`_shading_fit.fit_model`), steps the solver (`_convergence.py`) on the residuals of
+`_problem.py` (the gains solved for by `_varpro.py` where the model's image is linear in
+them) and builds the `FitResult`, standard errors included (`_uncertainty.py`). Nothing
+here depends on which model is fitted.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 import time
 from collections.abc import Callable, Sequence
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -19,14 +21,15 @@ import numpy as np
 import optimistix as optx
 
 from .._scene._scene import Scene
-from .._shading import AbstractShadingModel, LightParams
+from .._shading import AbstractShadingModel
 from ._batch import batched, batched_model
-from ._convergence import half_square, plateau_exit, solve
-from ._holdout import check_light, held_out, held_out_rmse
+from ._convergence import Solved, half_square, plateau_exit, solve
+from ._holdout import HeldOut, check_light, held_out, held_out_rmse
 from ._light_fit import lit_fit_model, start_light
-from ._lit import LIGHT_NAMES, LitParams
+from ._lit import LitParams
 from ._model import FitModel
-from ._opacity_fit import ALPHA, OpacityParams, opacity_fit_model, start_alpha
+from ._opacity_fit import OpacityParams, opacity_fit_model, start_alpha
+from ._options import FitStop, FitTargets, FitVariables
 from ._problem import (
     Problem,
     check_names,
@@ -37,7 +40,7 @@ from ._problem import (
     residuals,
     target_arrays,
 )
-from ._result import FitError, FitResult
+from ._result import FitError, FitNotConverged, FitResult
 from ._shading_fit import fit_model, rgb_searched
 from ._solvers import default_tolerances, is_least_squares
 from ._space import to_flat
@@ -48,36 +51,21 @@ __all__ = ["fit"]
 
 def fit(
     scene: Scene | Sequence[Scene],
-    targets,
-    fit: Sequence[str] | None = None,
-    init=None,
+    targets: FitTargets | Any,
     solver=None,
     *,
-    masks=None,
-    weights=None,
-    scalar: Sequence[str] | None = None,
-    max_steps: int = 100,
-    light: LightParams | None = None,
-    separable: bool = True,
+    init=None,
+    variables: FitVariables | Sequence[str] | None = None,
+    stop: FitStop = FitStop(),
     progress: Callable[[int, float, float], None] | None = None,
-    holdout=None,
 ) -> FitResult:
     """Least-squares fit of shading parameters to one or more target images.
 
     **Arguments:**
     - `scene`: a Scene, or one per target (the same hair under several views or lights).
-    - `targets`: an `[H, W, 3|4]` linear image, or a list of them (alpha is ignored).
-    - `fit`: the parameters to fit, among the shading model's `fittable` (default: all of
-      them): kd, ks, shininess, kappa for Kajiya-Kay; kd, primary_color, primary_exponent,
-      primary_shift, secondary_color, secondary_exponent, secondary_shift, kappa for
-      Scheuermann (docs/model.md §17); and, for any model and only where named: ambient
-      (a gain, solved for like Kd), a `searched` parameter the model leaves out of
-      `fittable`, the light's light_direction (a directional light's)
-      and light_color (docs/fitting.md, "Fitting the light"), and alpha, one opacity for
-      every strand, starting from the first scene's mean (docs/fitting.md, "Fitting the
-      strands' opacity"); the rest stay at `init` and `light`.
-    - `init`: starting (and fixed) parameters, the model's parameter type; default the
-      first scene's.
+    - `targets`: a `FitTargets` (the images with their masks, weights and held-out views),
+      or only the images: an `[H, W, 3|4]` linear image or a list of them (alpha is
+      ignored), as `FitTargets(targets)`.
     - `solver`: an optimistix least-squares solver or minimiser (a minimiser is given
       ½‖r‖²), whose `rtol` and `atol` are the fit's tolerances: e.g.
       `optimistix.LevenbergMarquardt(rtol=1e-5, atol=1e-7)`, `hairjax.GaussNewton(...)`
@@ -86,141 +74,190 @@ def fit(
       (None): Levenberg-Marquardt with those tolerances (1e-8 and 1e-10 in float64, 1e-5
       and 1e-7 in float32: tighter than float32 resolves only adds steps that change
       nothing).
-    - `light`: the light's starting (and held) `LightParams`; default the scenes' light.
-      Given, or with a light name in `fit`, the image is the shading stage's with this
-      light (Ω and V stay the scenes' light's).
-    - `masks`, `weights`: optional per-target `[H, W]` pixel masks and weights.
-    - `scalar`: among the fitted RGB parameters (the gains: kd, ks; Scheuermann's colours;
-      an RGB searched parameter; light_color), those fitted as one grey value instead of
-      RGB. None (the default): the fitted gains among the model's `grey` (none for
-      Kajiya-Kay and Scheuermann); a sequence, `()` included, says it in full
-      (docs/fitting.md, "What a model declares").
-    - `separable`: solve the fitted gains by non-negative linear least squares at every
-      step (variable projection; the image is linear in them) so that the solver iterates
-      on the model's searched parameters (shininess, κ, …) only; a fit of gains alone is
-      then one solve. False: the solver iterates on every fitted parameter (docs/fitting.md).
+    - `init`: starting (and fixed) parameters, the model's parameter type; default the
+      first scene's.
+    - `variables`: a `FitVariables`, what is fitted (the names, those fitted grey, the
+      light held or started from, variable projection), or only the names, as
+      `FitVariables(variables)`; None: `FitVariables()`, the model's `fittable`.
+    - `stop`: a `FitStop`, when the fit stops (`max_steps`, 100 by default; restarts;
+      `throw`).
     - `progress(step, loss, elapsed_s)`: called after every step.
-    - `holdout`: `(scene or scenes, target or targets)` the fit does not see, paired like
-      `scene` and `targets`; the result's `holdout_rmse` is the fitted parameters' RMSE on
-      them (docs/fitting.md, "Held-out views and lights"). Checked before the fit starts.
 
     **Returns:** a `FitResult`.
+
+    **Raises:** `FitError` for bad input, before any work (the held-out targets included);
+    `FitNotConverged` where the fit stopped without converging and `stop.throw` is set.
     """
-    scenes = [scene] if isinstance(scene, Scene) else list(scene)
-    target_list = [targets] if np.ndim(targets) == 3 else list(targets)
-    if len(scenes) == 1 and len(target_list) > 1:
-        scenes = scenes * len(target_list)
-    if len(scenes) != len(target_list):
-        raise FitError(f"{len(scenes)} scenes for {len(target_list)} targets")
-    mask_list = [None] * len(scenes) if masks is None else list(masks)
-    weight_list = [None] * len(scenes) if weights is None else list(weights)
-    if any(s.patches is not None for s in scenes):  # docs/model.md §18: not wired into the fit
-        raise FitError("fit does not support hair-patch scenes (hair.geometry = 'patches')")
-    lit = light is not None or (fit is not None and any(n in LIGHT_NAMES for n in fit))
-    opacity = fit is not None and ALPHA in fit
-    if opacity and lit:
-        raise FitError(f"{ALPHA} is not fitted together with the light (light_direction, light_color)")
-    init = scenes[0].params if init is None else init
-    model = _model_of(scenes, lit, opacity, init)
-    names = check_names(model.defaults if fit is None else fit, () if scalar is None else scalar, model)
-    scalar = tuple(n for n in model.grey if n in names) if scalar is None else tuple(scalar)
+    targets = targets if isinstance(targets, FitTargets) else FitTargets(targets)
+    variables = variables if isinstance(variables, FitVariables) else FitVariables(variables)
+    if not isinstance(stop, FitStop):
+        raise FitError(f"stop must be a FitStop (e.g. hairjax.FitStop(max_steps=200)), got {stop!r}")
     if solver is None:
         rtol, atol = default_tolerances()
         solver = optx.LevenbergMarquardt(rtol=rtol, atol=atol)
     least_squares = is_least_squares(solver)
-    rtol, atol = float(solver.rtol), float(solver.atol)
-    arrays = [target_arrays(s, t, m, w) for s, t, m, w in zip(scenes, target_list, mask_list, weight_list)]
+    start = _start(scene, targets, variables, init)
+
+    clock = time.perf_counter()
+    data, model = _prepared(start)
+    jax.block_until_ready(data)
+    geometry_s = time.perf_counter() - clock
+
+    def report(step, loss):
+        if progress is not None:
+            progress(step, loss, time.perf_counter() - clock - geometry_s)
+
+    problem = _problem(start, data, model, variables.separable)
+    losses: list = []
+    solved = _solve(solver, least_squares, problem, losses, stop, report)
+    fitted = jit_point(solved.z, problem)[0]
+    elapsed = time.perf_counter() - clock - geometry_s
+    result = _result(start, problem, fitted, losses, solved, elapsed, geometry_s)
+    if start.heldout is not None:
+        result = dataclasses.replace(result, holdout_rmse=held_out_rmse(result, start.heldout))
+    if stop.throw and result.termination != "converged":
+        raise FitNotConverged(result)
+    return result
+
+
+class _Start(NamedTuple):
+    """A fit's checked input (`_start`): the scenes and their targets' (target, √weight)
+    arrays, the model's fit, the names fitted and those fitted grey, the point the solve
+    starts from (the light or the strands' opacity joined to the parameters where fitted)
+    and its parts, and the held-out targets."""
+
+    scenes: list[Scene]
+    arrays: list[tuple[np.ndarray, np.ndarray]]
+    model: FitModel
+    names: tuple[str, ...]
+    scalar: tuple[str, ...]
+    point: Any
+    initial: Any
+    initial_light: Any
+    initial_alpha: float | None
+    heldout: HeldOut | None
+
+
+def _start(scene, targets: FitTargets, variables: FitVariables, init) -> _Start:
+    """The input checked and the start set up (`_Start`); FitError before any work."""
+    scenes = [scene] if isinstance(scene, Scene) else list(scene)
+    per_image = targets.per_image()
+    if len(scenes) == 1 and len(per_image) > 1:
+        scenes = scenes * len(per_image)
+    if len(scenes) != len(per_image):
+        raise FitError(f"{len(scenes)} scenes for {len(per_image)} targets")
+    if any(s.patches is not None for s in scenes):  # docs/model.md §18: not wired into the fit
+        raise FitError("fit does not support hair-patch scenes (hair.geometry = 'patches')")
+    lit, opacity = variables.lit, variables.opacity
+    init = scenes[0].params if init is None else init
+    model = _model_of(scenes, lit, opacity, init)
+    given_scalar = () if variables.scalar is None else variables.scalar
+    names = check_names(model.defaults if variables.names is None else variables.names, given_scalar, model)
+    scalar = (
+        tuple(n for n in model.grey if n in names) if variables.scalar is None else tuple(variables.scalar)
+    )
+    arrays = [target_arrays(s, t, m, w) for s, (t, m, w) in zip(scenes, per_image)]
     if not isinstance(init, model.params_type):
         raise FitError(
             f"a {model.label} scene is fitted from {model.params_type.__name__}, got {type(init).__name__}"
         )
-    heldout = None
-    if holdout is not None:
-        if not isinstance(holdout, tuple) or len(holdout) != 2:
-            raise FitError("holdout must be a (scene or scenes, target or targets) pair")
-        heldout = held_out(*holdout)
-        check_light(heldout, scenes, lit)
-        if any(type(s.shading) is not type(scenes[0].shading) for s, _, _ in heldout):
-            raise FitError("holdout: the held-out scenes need the training scenes' shading model")
-    initial, initial_light = init, None
+    heldout = None if targets.holdout is None else _held_out(targets.holdout, scenes, lit)
+    point, initial_light, initial_alpha = init, None, None
     if lit:  # the light joins the model's parameters (docs/fitting.md, "Fitting the light")
-        initial_light = start_light(scenes, names, light)
-        init = LitParams(init, initial_light)
-    initial_alpha = start_alpha(scenes) if opacity else None
+        initial_light = start_light(scenes, names, variables.light)
+        point = LitParams(init, initial_light)
     if opacity:  # the strands' opacity joins them (docs/fitting.md, "Fitting the strands' opacity")
-        init = OpacityParams(init, jnp.asarray(initial_alpha, dtype=jnp.result_type(float)))
+        initial_alpha = start_alpha(scenes)
+        point = OpacityParams(init, jnp.asarray(initial_alpha, dtype=jnp.result_type(float)))
+    return _Start(scenes, arrays, model, names, scalar, point, init, initial_light, initial_alpha, heldout)
 
-    start = time.perf_counter()
-    data = [model.prepare(s, init, names, t, sw) for s, (t, sw) in zip(scenes, arrays)]
-    stacked = batched(data)  # several targets: one batch under vmap where they stack
+
+def _held_out(holdout: tuple, scenes: list[Scene], lit: bool) -> HeldOut:
+    """`FitTargets.holdout`'s targets checked against the training scenes (`held_out`)."""
+    heldout = held_out(*holdout)
+    check_light(heldout, scenes, lit)
+    if any(type(s.shading) is not type(scenes[0].shading) for s, _, _ in heldout):
+        raise FitError("holdout: the held-out scenes need the training scenes' shading model")
+    return heldout
+
+
+def _prepared(start: _Start) -> tuple[Any, FitModel]:
+    """(every target's data, the model's fit) from `FitModel.prepare`: one batch under
+    vmap where the targets stack (`batched`)."""
+    model = start.model
+    data = [
+        model.prepare(s, start.point, start.names, t, sw) for s, (t, sw) in zip(start.scenes, start.arrays)
+    ]
+    stacked = batched(data)
     if stacked is not data:
-        data, model = stacked, batched_model(model)
-    jax.block_until_ready(data)
-    geometry_s = time.perf_counter() - start
+        return stacked, batched_model(model)
+    return data, model
 
-    # The solver iterates on z over `solved`; the fitted gains in `linear` are solved for.
-    linear = tuple(n for n in model.linear if separable and n in names)
-    solved = tuple(n for n in names if n not in linear)
-    problem = Problem(data, init, model, solved, linear, scalar)
-    z = to_flat(init, solved, scalar, model.transforms)
-    fn = residual_fn if least_squares else loss_fn
-    # loss[0] is the loss at `init` itself, its gains included (not at the solved gains).
-    losses = [float(params_loss(init, model, data))]
 
-    def report(step, loss):
-        if progress is not None:
-            progress(step, loss, time.perf_counter() - start - geometry_s)
+def _problem(start: _Start, data, model: FitModel, separable: bool) -> Problem:
+    """The solve's `Problem`: the solver iterates on z over `solved`; the fitted gains in
+    `linear` are solved for (variable projection, where `separable`)."""
+    linear = tuple(n for n in model.linear if separable and n in start.names)
+    solved = tuple(n for n in start.names if n not in linear)
+    return Problem(data, start.point, model, solved, linear, start.scalar)
 
-    if not solved:
+
+def _solve(solver, least_squares: bool, problem: Problem, losses: list, stop: FitStop, report) -> Solved:
+    """The solve from the problem's start (`_convergence.solve`), its losses appended to
+    `losses`, the first the loss at the start itself, its gains included (not at the
+    solved gains)."""
+    model = problem.model
+    z = to_flat(problem.init, problem.solved, problem.scalar, model.transforms)
+    losses.append(float(params_loss(problem.init, model, problem.data)))
+    if not problem.solved:
         # Only gains are fitted: one linear least-squares solve is the whole fit.
-        steps, termination, restarts, diverged = 1, "converged", 0, False
         losses.append(float(half_square(residuals, z, problem)))
-        report(steps, losses[-1])
-    else:
-        z, steps, termination, restarts, diverged = solve(
-            solver,
-            fn,
-            residuals,
-            z,
-            problem,
-            losses,
-            max_steps=max_steps,
-            rtol=rtol,
-            atol=atol,
-            report=report,
-            plateau=lambda z, effect, loss: plateau_exit(residuals, z, problem, effect, loss, rtol, atol),
-        )
-    fitted = jit_point(z, problem)[0]
+        report(1, losses[-1])
+        return Solved(z, 1, "converged", 0, False)
+    rtol, atol = float(solver.rtol), float(solver.atol)
+    return solve(
+        solver,
+        residual_fn if least_squares else loss_fn,
+        residuals,
+        z,
+        problem,
+        losses,
+        stop=stop,
+        report=report,
+        plateau=lambda z, effect, loss: plateau_exit(residuals, z, problem, effect, loss, rtol, atol),
+    )
+
+
+def _result(
+    start: _Start, problem: Problem, fitted, losses: list, solved: Solved, time_s, geometry_s
+) -> FitResult:
+    """The `FitResult` at the fitted point, its standard errors and RMSE included."""
+    lit, opacity = start.initial_light is not None, start.initial_alpha is not None
     params, fitted_light = (fitted.shading, fitted.light) if lit else (fitted, None)
     params, fitted_alpha = (fitted.shading, float(fitted.alpha)) if opacity else (params, None)
-    elapsed = time.perf_counter() - start - geometry_s
-
-    std_error, undetermined = standard_errors(model, data, fitted, names, scalar)
+    data = problem.data
+    std_error, undetermined = standard_errors(problem.model, data, fitted, start.names, start.scalar)
     n_pixels = float(sum(np.count_nonzero(np.asarray(d.sqrt_weight)) for d in data)) * 3
     # At the returned point (a diverged fit's last loss is not).
-    final_loss = float(half_square(residuals, z, problem)) if diverged else losses[-1]
-    rmse = float(np.sqrt(2 * final_loss / max(n_pixels, 1.0)))
-    result = FitResult(
+    final_loss = float(half_square(residuals, solved.z, problem)) if solved.diverged else losses[-1]
+    return FitResult(
         params=params,
-        initial=initial,
-        fitted=names,
+        initial=start.initial,
+        fitted=start.names,
         loss=losses,
-        steps=steps,
-        time_s=elapsed,
+        steps=solved.steps,
+        time_s=time_s,
         geometry_s=geometry_s,
-        termination=termination,
+        termination=solved.termination,
         std_error=std_error,
         undetermined=undetermined,
-        rmse=rmse,
-        restarts=restarts,
+        rmse=float(np.sqrt(2 * final_loss / max(n_pixels, 1.0))),
+        restarts=solved.restarts,
         light=fitted_light,
-        initial_light=initial_light,
+        initial_light=start.initial_light,
         alpha=fitted_alpha,
-        initial_alpha=initial_alpha,
+        initial_alpha=start.initial_alpha,
     )
-    if heldout is None:
-        return result
-    return dataclasses.replace(result, holdout_rmse=held_out_rmse(result, heldout))
 
 
 def _model_of(scenes, lit: bool, opacity: bool, init) -> FitModel:

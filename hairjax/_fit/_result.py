@@ -9,11 +9,20 @@ import numpy as np
 
 from ._lit import light_field
 
-__all__ = ["FitResult", "FitError"]
+__all__ = ["FitResult", "FitError", "FitNotConverged"]
 
 
 class FitError(ValueError):
     """Bad fit input (unknown parameter, target size, NaN pixels, …), raised before work."""
+
+
+class FitNotConverged(RuntimeError):
+    """A fit that stopped without converging, raised where `FitStop(throw=True)`; `result`
+    is the `FitResult` it would have returned (its `termination` says why it stopped)."""
+
+    def __init__(self, result: FitResult):
+        super().__init__(f"the fit did not converge: {result.termination}")
+        self.result = result
 
 
 @dataclasses.dataclass(frozen=True)

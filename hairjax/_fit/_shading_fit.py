@@ -246,17 +246,17 @@ def prepare_terms(
     varying = tuple(n for n in gains if reached[n])
     pairs = tuple((n, p) for n in varying for p in searched if p in reached[n])
     fixed_terms = TargetTerms(
-        full,
-        streak,
-        light_scale,
-        {},
-        {},
-        jnp.zeros(()),
-        jnp.asarray(target),
-        jnp.asarray(sqrt_weight),
-        tuple(n for n in gains if n not in varying),
-        (),
-        lit,
+        geometry=full,
+        ambient_scale=streak,
+        light=light_scale,
+        fixed={},
+        bases={},
+        constant=jnp.zeros(()),
+        target=jnp.asarray(target),
+        sqrt_weight=jnp.asarray(sqrt_weight),
+        varying=tuple(n for n in gains if n not in varying),
+        searched=(),
+        lit=lit,
     )
     reflectance = model.reflectance(points, params)  # at the start: the fixed terms' values
     fixed = gain_images_plain(fixed_terms, params, reflectance) if fixed_terms.varying else {}
@@ -266,19 +266,19 @@ def prepare_terms(
         bases = {n: {**reflectance.ambient, **reflectance.lit}[n] for n in varying}
     constant = full.transmittance[:, None] * full.backdrop
     return TargetTerms(
-        geom,
-        streak,
-        light_scale,
-        fixed,
-        bases,
-        constant,
-        jnp.asarray(target),
-        jnp.asarray(sqrt_weight),
-        varying,
-        searched,
-        lit,
-        pairs,
-        direction,
+        geometry=geom,
+        ambient_scale=streak,
+        light=light_scale,
+        fixed=fixed,
+        bases=bases,
+        constant=constant,
+        target=jnp.asarray(target),
+        sqrt_weight=jnp.asarray(sqrt_weight),
+        varying=varying,
+        searched=searched,
+        lit=lit,
+        pairs=pairs,
+        direction=direction,
     )
 
 

@@ -87,17 +87,17 @@ def camera_view(camera) -> View:
     right, up = _basis(forward, np.asarray(camera.up, dtype=np.float64))
     focal = 0.5 * camera.height / np.tan(np.radians(camera.fov) / 2)
     return View(
-        eye,
-        forward,
-        right,
-        up,
-        camera.width,
-        camera.height,
-        float(focal),
-        camera.width / 2 + camera.offset[0],
-        camera.height / 2 + camera.offset[1],
-        True,
-        camera.near,
+        origin=eye,
+        forward=forward,
+        right=right,
+        up=up,
+        width=camera.width,
+        height=camera.height,
+        focal=float(focal),
+        cx=camera.width / 2 + camera.offset[0],
+        cy=camera.height / 2 + camera.offset[1],
+        perspective=True,
+        near=camera.near,
     )
 
 
@@ -122,17 +122,17 @@ def light_view(light, points: np.ndarray, resolution: int, margin: int) -> View:
         # Fires when all points coincide seen from the light: any scale frames one point.
         focal = usable / extent if extent > 0 else 1.0
         return View(
-            centre,
-            forward,
-            right,
-            up,
-            resolution,
-            resolution,
-            float(focal),
-            resolution / 2,
-            resolution / 2,
-            False,
-            -np.inf,
+            origin=centre,
+            forward=forward,
+            right=right,
+            up=up,
+            width=resolution,
+            height=resolution,
+            focal=float(focal),
+            cx=resolution / 2,
+            cy=resolution / 2,
+            perspective=False,
+            near=-np.inf,
         )
     origin = np.asarray(light.position, dtype=np.float64)
     axis = centre - origin
@@ -156,15 +156,15 @@ def light_view(light, points: np.ndarray, resolution: int, margin: int) -> View:
         tan_half = tan_max  # fires when no point is in front of the light
     focal = (usable / 2) / tan_half
     return View(
-        origin,
-        forward,
-        right,
-        up,
-        resolution,
-        resolution,
-        float(focal),
-        resolution / 2,
-        resolution / 2,
-        True,
-        float(near),
+        origin=origin,
+        forward=forward,
+        right=right,
+        up=up,
+        width=resolution,
+        height=resolution,
+        focal=float(focal),
+        cx=resolution / 2,
+        cy=resolution / 2,
+        perspective=True,
+        near=float(near),
     )

@@ -107,13 +107,9 @@ def _mask_weights(masks, target_paths, targets) -> list | None:
     return weights
 
 
-def run(args: argparse.Namespace) -> int:
-    import numpy as np
-
-    from .._fit import ALPHA, LIGHT_NAMES, FitError, fit, solver_named
-    from .._io._image import read_image
-    from .._progress import reporter
-    from ._scenes import load_cli_scene
+def _check_counts(args: argparse.Namespace) -> None:
+    """Each extra --scene, --holdout-scene and --mask has its target: FitError otherwise."""
+    from .._fit import FitError
 
     if len(args.scenes) >= len(args.target):
         raise FitError(
@@ -130,17 +126,15 @@ def run(args: argparse.Namespace) -> int:
             f"{len(args.masks)} --mask for {len(args.target)} --target: "
             "each --mask goes with the --target at the same position"
         )
-    outputs = _outputs(args)
-    check_outputs(outputs)
-    # Everything is read and checked before any rendering starts.
-    targets = [read_image(t) for t in args.target]
-    weights = _mask_weights(args.masks, args.target, targets)
-    first = load_cli_scene(args, args.scene)
-    check_free_space(_sizes(outputs, first))
-    if args.save_scene is not None:  # a scene a file cannot describe is refused before the fit
-        from .._scene._save import scene_data
 
-        scene_data(first)
+
+def _fit_targets(args: argparse.Namespace, first, targets, weights):
+    """The scenes and the `FitTargets`: the --target images with their --mask weights, the
+    --holdout images with their scenes (the first scene for those without)."""
+    from .._fit import FitTargets
+    from .._io._image import read_image
+    from ._scenes import load_cli_scene
+
     extra = [load_cli_scene(args, s) for s in args.scenes]
     scenes = [first, *extra, *[first] * (len(targets) - 1 - len(extra))]
     holdout = None
@@ -148,33 +142,27 @@ def run(args: argparse.Namespace) -> int:
         held = [read_image(t) for t in args.holdout]
         held_scenes = [load_cli_scene(args, s) for s in args.holdout_scenes]
         holdout = ([*held_scenes, *[first] * (len(held) - len(held_scenes))], held)
-    # Each shading model has its parameters (docs/model.md §17 for Scheuermann's); any model
-    # also fits the light's (docs/fitting.md, "Fitting the light"), when named.
-    fittable = first.shading.fittable
+    return scenes, FitTargets(targets, weights=weights, holdout=holdout)
+
+
+def _names(args: argparse.Namespace, fittable: tuple[str, ...]) -> tuple[str, ...]:
+    """--fit's names (default the model's `fittable`); FitError for an unknown one. Each
+    shading model has its parameters (docs/model.md §17 for Scheuermann's); any model also
+    fits the light's (docs/fitting.md, "Fitting the light") and the strands' opacity, when
+    named."""
+    from .._fit import ALPHA, LIGHT_NAMES, FitError
+
     also = (*(("ambient",) if "ambient" not in fittable else ()), *LIGHT_NAMES, ALPHA)  # where named
     names = fittable if args.fit is None else tuple(n.strip() for n in args.fit.split(",") if n.strip())
     unknown = [n for n in names if n not in fittable + also]
     if unknown or not names:
         what = f"unknown parameter {unknown[0]!r}" if unknown else "no parameter"
         raise FitError(f"{what} in --fit; fittable: {', '.join(fittable + also)}")
+    return names
 
-    if not args.quiet:
-        print(f"fitting {', '.join(names)} with {args.solver} to {len(targets)} target(s)", file=sys.stderr)
-    with reporter("fit", quiet=args.quiet) as progress:
 
-        def on_step(step, loss, elapsed):
-            progress(step, args.max_steps, f"loss {loss:.6e}")
-
-        result = fit(
-            scenes,
-            targets,
-            fit=names,
-            solver=solver_named(args.solver),
-            max_steps=args.max_steps,
-            weights=weights,
-            progress=on_step,
-            holdout=holdout,
-        )
+def _summary(args: argparse.Namespace, result, names, fittable) -> None:
+    """The parameters' table, how the fit stopped and its RMSE (held out too), on stdout."""
     print(_table(result, names, fittable))
     restarted = f" ({result.restarts} restarts)" if result.restarts else ""
     print(
@@ -184,8 +172,13 @@ def run(args: argparse.Namespace) -> int:
     if result.holdout_rmse is not None:
         print(f"held-out RMSE {result.holdout_rmse:.4g} ({len(args.holdout)} target(s) the fit did not see)")
 
+
+def _write(outputs: list[Output], first, result, target) -> None:
+    """Every requested output, written together (none where one fails)."""
+    import numpy as np
+
     image = None
-    if args.out is not None or args.plot is not None:
+    if any(o.option in ("--out", "--plot") for o in outputs):
         from .._fit import fitted_image
 
         image = np.asarray(fitted_image(first, result))
@@ -206,7 +199,48 @@ def run(args: argparse.Namespace) -> int:
             else:
                 from .._io._view import side_by_side
 
-                side_by_side(targets[0], image, tmp, title=f"{first.name}: {result.termination}")
+                side_by_side(target, image, tmp, title=f"{first.name}: {result.termination}")
+
+
+def run(args: argparse.Namespace) -> int:
+    from .._fit import FitStop, FitVariables, fit, solver_named
+    from .._io._image import read_image
+    from .._progress import reporter
+    from ._scenes import load_cli_scene
+
+    _check_counts(args)
+    outputs = _outputs(args)
+    check_outputs(outputs)
+    # Everything is read and checked before any rendering starts.
+    images = [read_image(t) for t in args.target]
+    weights = _mask_weights(args.masks, args.target, images)
+    first = load_cli_scene(args, args.scene)
+    check_free_space(_sizes(outputs, first))
+    if args.save_scene is not None:  # a scene a file cannot describe is refused before the fit
+        from .._scene._save import scene_data
+
+        scene_data(first)
+    scenes, targets = _fit_targets(args, first, images, weights)
+    fittable = first.shading.fittable
+    names = _names(args, fittable)
+
+    if not args.quiet:
+        print(f"fitting {', '.join(names)} with {args.solver} to {len(scenes)} target(s)", file=sys.stderr)
+    with reporter("fit", quiet=args.quiet) as progress:
+
+        def on_step(step, loss, elapsed):
+            progress(step, args.max_steps, f"loss {loss:.6e}")
+
+        result = fit(
+            scenes,
+            targets,
+            solver_named(args.solver),
+            variables=FitVariables(names),
+            stop=FitStop(max_steps=args.max_steps),
+            progress=on_step,
+        )
+    _summary(args, result, names, fittable)
+    _write(outputs, first, result, images[0])
     if not args.quiet:
         for out in outputs:
             print(f"wrote {out.path}")

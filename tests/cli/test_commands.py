@@ -188,7 +188,7 @@ def test_fit_takes_the_light_names(scene_file, tmp_path, monkeypatch, capsys):
     hj.write_image(target, np.zeros((30, 40, 4)))
     argv = ["fit", str(scene_file), "--target", str(target), "--json", str(report), "-q"]
     assert main([*argv, "--fit", ",".join(names)]) == 0
-    assert calls[0]["fit"] == names
+    assert calls[0]["variables"].names == names
     rows = {line.split()[0]: line for line in capsys.readouterr().out.splitlines() if line}
     assert "0.8" in rows["light_color"] and "-0.9" in rows["light_direction"] and "fixed" in rows["kd"]
     assert json.loads(report.read_text())["light"]["color"] == [1.0, 0.8, 0.6]
@@ -211,7 +211,7 @@ def test_fit_takes_alpha(scene_file, tmp_path, monkeypatch, capsys):
     hj.write_image(target, np.zeros((30, 40, 4)))
     argv = ["fit", str(scene_file), "--target", str(target), "--fit", "kd,alpha", "--out", str(out), "-q"]
     assert main(argv) == 0
-    assert calls[0]["fit"] == ("kd", "alpha")
+    assert calls[0]["variables"].names == ("kd", "alpha")
     row = next(line for line in capsys.readouterr().out.splitlines() if line.startswith("alpha"))
     assert row.split()[1:4] == ["0.8", "0.25", "0.01"]
     scene = hj.load_scene(scene_file)
@@ -232,8 +232,8 @@ def test_fit_reports_the_held_out_rmse(scene_file, tmp_path, monkeypatch, capsys
     fields = dict(params=params, initial=params, fitted=("kd",), loss=[1.0], steps=1, time_s=0.1)
     fields |= dict(geometry_s=0.1, std_error={"kd": None}, undetermined=(), rmse=0.5)
     result = FitResult(**fields, termination="converged", holdout_rmse=0.0123)
-    calls = []
-    monkeypatch.setattr("hairjax._fit.fit", lambda *args, **kwargs: calls.append(kwargs) or result)
+    calls = []  # the FitTargets each fit is given
+    monkeypatch.setattr("hairjax._fit.fit", lambda scenes, targets, *a, **kw: calls.append(targets) or result)
     other = tmp_path / "side.toml"
     other.write_text(SMALL_SCENE + "[light]\ndirection = [0.6, -0.7, -0.3]\n")
     target, held, report = tmp_path / "t.exr", tmp_path / "h.exr", tmp_path / "fit.json"
@@ -241,7 +241,7 @@ def test_fit_reports_the_held_out_rmse(scene_file, tmp_path, monkeypatch, capsys
     hj.write_image(held, np.full((30, 40, 4), 0.5))
     argv = ["fit", str(scene_file), "--target", str(target), "--json", str(report), "-q"]
     assert main([*argv, "--holdout", str(held), "--holdout-scene", str(other), "--holdout", str(held)]) == 0
-    scenes, targets = calls[0]["holdout"]
+    scenes, targets = calls[0].holdout
     first_light = hj.load_scene(scene_file).light.direction
     assert [s.light.direction for s in scenes] == [(0.6, -0.7, -0.3), first_light]
     assert len(targets) == 2 and np.all(np.asarray(targets[0])[..., :3] == 0.5)

@@ -89,7 +89,7 @@ def test_an_rgb_searched_parameter_fitted_as_one_grey_value(absorbing):
     grey = dataclasses.replace(ABSORBING, sigma=jnp.full(3, 1.5))
     target = np.asarray(hj.render(scene, grey))
     start = dataclasses.replace(grey, sigma=jnp.asarray(SIGMA))  # coloured: its mean, 1.37, is grey's start
-    r = hj.fit(scene, target, init=start, scalar=("sigma",))
+    r = hj.fit(scene, target, init=start, variables=hj.FitVariables(scalar=("sigma",)))
     assert r.termination == "converged"
     sigma = np.asarray(r.params.sigma)
     assert sigma[0] == sigma[1] == sigma[2]
@@ -226,10 +226,10 @@ def test_a_fit_leaves_the_second_plateau(two_lobes):
     leave. The fit scans q there (the model's second plateau)."""
     scene, target = two_lobes
     init = dataclasses.replace(TWO_LOBES, kd=jnp.full(3, 0.3), q=jnp.asarray(1e8))
-    _recovered(hj.fit(scene, target, init=init, solver=hj.fit_solvers()["gauss-newton"]))
+    _recovered(hj.fit(scene, target, solver=hj.fit_solvers()["gauss-newton"], init=init))
     # Without the second plateau's scan the same fit stops on it, q where it started.
     one = scene.replace(shading=TwoLobesOnePlateau(TWO_LOBES))
-    alone = hj.fit(one, target, init=init, solver=hj.fit_solvers()["gauss-newton"])
+    alone = hj.fit(one, target, solver=hj.fit_solvers()["gauss-newton"], init=init)
     assert alone.restarts == 0 and float(alone.params.q) > 1e7 and alone.rmse > 1e-3
 
 
@@ -237,7 +237,7 @@ def test_a_fit_leaves_both_plateaus_in_turn(two_lobes):
     """Both highlights needles: the fit scans p, then q from the best p."""
     scene, target = two_lobes
     init = dataclasses.replace(TWO_LOBES, kd=jnp.full(3, 0.3), p=jnp.asarray(1e8), q=jnp.asarray(1e8))
-    _recovered(hj.fit(scene, target, init=init, solver=hj.fit_solvers()["gauss-newton"]))
+    _recovered(hj.fit(scene, target, solver=hj.fit_solvers()["gauss-newton"], init=init))
 
 
 # ---------------------------------------------------------------- grey gains
@@ -252,13 +252,13 @@ def test_a_grey_gain_is_grey_unless_scalar_says_otherwise(two_lobes):
     scene, target = two_lobes
     scene = scene.replace(shading=GreyTwoLobes(TWO_LOBES))
     names = ("kd", "ks", "kt")
-    r = hj.fit(scene, target, fit=names, init=TWO_LOBES)
+    r = hj.fit(scene, target, init=TWO_LOBES, variables=names)
     kt = np.asarray(r.params.kt)
     assert kt[0] == kt[1] == kt[2] and isinstance(r.std_error["kt"], float)
     assert np.ptp(np.asarray(r.params.kd)) > 0.1  # kd stays RGB (truth: 0.5, 0.35, 0.2)
     # Named in full, `scalar` replaces the declaration: () fits kt in RGB, back to the truth.
-    rgb = hj.fit(scene, target, fit=names, init=TWO_LOBES, scalar=())
+    rgb = hj.fit(scene, target, init=TWO_LOBES, variables=hj.FitVariables(names, scalar=()))
     np.testing.assert_allclose(rgb.params.kt, TWO_LOBES.kt, rtol=1e-6)  # one linear solve, noise-free
     assert np.shape(rgb.std_error["kt"]) == (3,)
-    both = hj.fit(scene, target, fit=names, init=TWO_LOBES, scalar=("kd",))
+    both = hj.fit(scene, target, init=TWO_LOBES, variables=hj.FitVariables(names, scalar=("kd",)))
     assert np.ptp(np.asarray(both.params.kt)) > 0.1 and np.ptp(np.asarray(both.params.kd)) == 0.0

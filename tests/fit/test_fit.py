@@ -6,7 +6,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from helpers import first_then_slow, fit_image, fit_terms, real_fragments, small_furball_scene
+from helpers import first_then_slow, fit_image, fit_terms, real_fragments, refused, small_furball_scene
 
 import hairjax as hj
 from hairjax._fit import _convergence, _entry, _nnls, _problem, _shading_fit, _solvers, _space, _varpro
@@ -31,7 +31,7 @@ def rel(a, b):
 
 @pytest.mark.parametrize("solver", first_then_slow(["levenberg-marquardt", "gauss-newton", "dogleg", "bfgs"]))
 def test_noise_free_recovery(scene, target, solver):
-    r = hj.fit(scene, target, init=INIT, solver=hj.fit_solvers()[solver], max_steps=200)
+    r = hj.fit(scene, target, solver=hj.fit_solvers()[solver], init=INIT, stop=hj.FitStop(max_steps=200))
     assert r.termination == "converged"
     # The bound for noise-free targets: 1e-3 relative (BENCHMARKS.md, "Recovery";
     # experiments/README.md row 01).
@@ -44,7 +44,9 @@ def test_noise_free_recovery(scene, target, solver):
 def test_recovery_without_variable_projection(scene, target):
     """separable=False: the solver iterates on all four parameters (the softplus gains
     too) and reaches the same truth."""
-    r = hj.fit(scene, target, init=INIT, separable=False, max_steps=200)
+    r = hj.fit(
+        scene, target, init=INIT, variables=hj.FitVariables(separable=False), stop=hj.FitStop(max_steps=200)
+    )
     assert r.termination == "converged" and r.undetermined == ()
     for name in ("kd", "ks", "shininess", "kappa"):
         assert rel(getattr(r.params, name), getattr(TRUE, name)) < 1e-3, name
@@ -56,7 +58,7 @@ def test_gains_alone_are_one_linear_solve(scene, target):
     start = hj.ShadingParams(
         kd=5.0, ks=1e-4, shininess=TRUE.shininess, kappa=TRUE.kappa, ambient=TRUE.ambient
     )
-    r = hj.fit(scene, target, fit=("kd", "ks"), init=start)
+    r = hj.fit(scene, target, init=start, variables=("kd", "ks"))
     assert r.steps == 1 and r.termination == "converged" and r.loss[1] < 1e-12 * r.loss[0]
     assert rel(r.params.kd, TRUE.kd) < 1e-6 and rel(r.params.ks, TRUE.ks) < 1e-6
 
@@ -67,7 +69,7 @@ def test_zero_specular_fitted_comes_back_zero(scene, solver):
     softplus could only approach it), p is reported undetermined, the others recovered."""
     truth = hj.ShadingParams(kd=(0.3, 0.5, 0.2), ks=0.0, shininess=25.0, kappa=2.5, ambient=0.05)
     target = np.asarray(hj.render(scene, truth))
-    r = hj.fit(scene, target, init=INIT, solver=hj.fit_solvers()[solver], max_steps=200)
+    r = hj.fit(scene, target, solver=hj.fit_solvers()[solver], init=INIT, stop=hj.FitStop(max_steps=200))
     assert r.termination == "converged" and "shininess" in r.undetermined
     np.testing.assert_array_equal(np.asarray(r.params.ks), 0.0)
     assert rel(r.params.kd, truth.kd) < 1e-3 and rel(r.params.kappa, truth.kappa) < 1e-3
@@ -175,7 +177,7 @@ def test_subset_and_scalar(scene, target):
     start = TRUE.__class__(
         kd=TRUE.kd, ks=0.1, shininess=TRUE.shininess, kappa=TRUE.kappa, ambient=TRUE.ambient
     )
-    r = hj.fit(scene, target, fit=("ks",), init=start, scalar=("ks",))
+    r = hj.fit(scene, target, init=start, variables=hj.FitVariables(("ks",), scalar=("ks",)))
     assert rel(r.params.ks, TRUE.ks) < 1e-6
     np.testing.assert_array_equal(r.params.kd, TRUE.kd)  # held fixed
     assert r.params.shininess == TRUE.shininess
@@ -190,7 +192,7 @@ def test_fitting_kappa_alone_reuses_the_shading_terms(scene, target, monkeypatch
     start = hj.ShadingParams(
         kd=TRUE.kd, ks=TRUE.ks, shininess=TRUE.shininess, kappa=0.5, ambient=TRUE.ambient
     )
-    r = hj.fit(scene, target, fit=("kappa",), init=start)
+    r = hj.fit(scene, target, init=start, variables=("kappa",))
     assert rel(r.params.kappa, TRUE.kappa) < 1e-6
     # Traced when the terms were prepared (once to find what κ reaches, once for the
     # per-point terms), never per step: only τ changes with κ.
@@ -214,7 +216,7 @@ def test_shininess_undetermined_without_specular(scene):
     no_spec = hj.ShadingParams(kd=TRUE.kd, ks=0.0, shininess=25.0, kappa=TRUE.kappa, ambient=TRUE.ambient)
     target = np.asarray(hj.render(scene, no_spec))
     start = hj.ShadingParams(kd=TRUE.kd, ks=0.0, shininess=80.0, kappa=TRUE.kappa, ambient=TRUE.ambient)
-    r = hj.fit(scene, target, fit=("shininess",), init=start)
+    r = hj.fit(scene, target, init=start, variables=("shininess",))
     assert "shininess" in r.undetermined and r.std_error["shininess"] is None
     assert np.isfinite(float(r.params.shininess)) and all(np.isfinite(r.loss))
 
@@ -227,7 +229,9 @@ def test_a_parameter_without_effect_does_not_stop_the_solvers(scene, solver):
     truth = hj.ShadingParams(kd=(0.3, 0.5, 0.2), ks=0.0, shininess=25.0, kappa=2.5, ambient=0.05)
     target = np.asarray(hj.render(scene, truth))
     start = hj.ShadingParams(kd=0.5, ks=0.0, shininess=10.0, kappa=1.0, ambient=0.05)
-    r = hj.fit(scene, target, fit=("kd", "shininess", "kappa"), init=start, solver=hj.fit_solvers()[solver])
+    r = hj.fit(
+        scene, target, solver=hj.fit_solvers()[solver], init=start, variables=("kd", "shininess", "kappa")
+    )
     assert r.termination == "converged" and "shininess" in r.undetermined
     assert rel(r.params.kd, truth.kd) < 1e-3 and rel(r.params.kappa, truth.kappa) < 1e-3
 
@@ -235,7 +239,7 @@ def test_a_parameter_without_effect_does_not_stop_the_solvers(scene, solver):
 def test_kappa_undetermined_when_everything_is_in_shadow(scene):
     dark = hj.ShadingParams(kd=TRUE.kd, ks=TRUE.ks, shininess=TRUE.shininess, kappa=1e4, ambient=TRUE.ambient)
     target = np.asarray(hj.render(scene, dark))
-    r = hj.fit(scene, target, fit=("kappa",), init=dark)
+    r = hj.fit(scene, target, init=dark, variables=("kappa",))
     assert "kappa" in r.undetermined
     assert np.isfinite(float(r.params.kappa))
 
@@ -263,7 +267,7 @@ def test_standard_errors_equal_the_parameter_space_formula(scene, target):
     rng = np.random.default_rng(1)
     noisy = target[..., :3] + rng.normal(0, 0.01, target[..., :3].shape)
     names = ("shininess", "kd", "kappa")
-    r = hj.fit(scene, noisy, fit=names, init=INIT)
+    r = hj.fit(scene, noisy, init=INIT, variables=names)
 
     def image(x):
         p = hj.ShadingParams(kd=x[1:4], ks=r.params.ks, shininess=x[0], kappa=x[4], ambient=r.params.ambient)
@@ -298,8 +302,8 @@ def test_bfgs_on_a_faint_highlight_in_float32():
             scene,
             target,
             solver=hj.fit_solvers()["bfgs"],
-            max_steps=300,
             init=hj.ShadingParams(kd=0.5, ks=0.3, shininess=40.0, kappa=2.0),
+            stop=hj.FitStop(max_steps=300),
         )
     assert r.termination == "converged" and r.undetermined == ()
     # 1e-3: the noise-free recovery bound (BENCHMARKS.md, "Recovery").
@@ -342,14 +346,69 @@ def test_bfgs_update_satisfies_the_secant_equation_at_small_scale():
 @pytest.mark.parametrize(
     "kwargs, message",
     [
-        (dict(fit=("kd", "gloss")), "unknown parameter 'gloss'"),
+        (dict(variables=("kd", "gloss")), "unknown parameter 'gloss'"),
         (dict(solver="adam"), "optimistix least-squares solver or minimiser"),
-        (dict(scalar=("kappa",)), "grey value"),
+        (dict(variables=hj.FitVariables(scalar=("kappa",))), "grey value"),
     ],
 )
 def test_bad_arguments(scene, target, kwargs, message):
     with pytest.raises(hj.FitError, match=message):
         hj.fit(scene, target, **kwargs)
+
+
+@pytest.mark.parametrize(
+    "make, message",
+    [
+        (lambda t: hj.FitTargets(t, masks=[None, None]), "2 masks for 1 target images"),
+        (lambda t: hj.FitTargets([t, t], weights=[None]), "1 weights for 2 target images"),
+        (lambda t: hj.FitTargets(t, holdout=(t,)), "holdout must be a"),
+        (lambda t: hj.FitVariables("kd"), "sequence of names"),
+        (lambda t: hj.FitVariables(("kd",), scalar="kd"), "sequence of names"),
+        (lambda t: hj.FitVariables(("kd", "alpha"), light=hj.LightParams(color=(1.0, 1.0, 1.0))), "alpha"),
+        (lambda t: hj.FitStop(max_steps=-1), "max_steps must be an integer >= 0"),
+        (lambda t: hj.FitStop(stall_steps=0), "stall_steps must be an integer >= 1"),
+        (lambda t: hj.FitStop(max_restarts=True), "max_restarts must be an integer"),
+    ],
+)
+def test_records_check_their_values_when_built(target, make, message):
+    with pytest.raises(hj.FitError, match=message):
+        make(target)
+
+
+def test_values_of_another_type_are_refused(scene, target):
+    with refused("max_steps", "max_steps must be an integer", hj.FitError):
+        hj.FitStop(max_steps=2.5)
+    with refused("stop", "stop must be a FitStop", hj.FitError):
+        hj.fit(scene, target, stop=200)
+
+
+def test_shorthands_are_the_records(scene, target):
+    """Images alone stand for FitTargets(images), names alone for FitVariables(names): the
+    same fit, to the last bit."""
+    short = hj.fit(scene, target, init=INIT, variables=("kd", "kappa"), stop=hj.FitStop(max_steps=3))
+    full = hj.fit(
+        scene,
+        hj.FitTargets([target], masks=[None], weights=[None]),
+        init=INIT,
+        variables=hj.FitVariables(("kd", "kappa")),
+        stop=hj.FitStop(max_steps=3),
+    )
+    assert short.steps == full.steps and short.loss == full.loss
+    for name in ("kd", "kappa"):
+        np.testing.assert_array_equal(getattr(short.params, name), getattr(full.params, name))
+
+
+def test_throw_raises_where_the_fit_stops_unconverged(scene, target):
+    """FitStop(throw=True): a fit that stops without converging raises FitNotConverged,
+    carrying the result it would have returned; a converged fit returns as without it."""
+    with pytest.raises(hj.FitNotConverged, match="reached max_steps = 2") as caught:
+        hj.fit(scene, target, init=INIT, stop=hj.FitStop(max_steps=2, throw=True))
+    assert caught.value.result.steps == 2 and caught.value.result.termination.startswith("stopped")
+    start = hj.ShadingParams(
+        kd=5.0, ks=1e-4, shininess=TRUE.shininess, kappa=TRUE.kappa, ambient=TRUE.ambient
+    )
+    r = hj.fit(scene, target, init=start, variables=("kd", "ks"), stop=hj.FitStop(throw=True))
+    assert r.termination == "converged"
 
 
 def test_bad_targets(scene, target):
@@ -425,12 +484,12 @@ def fresh_jit():
 def test_a_second_fit_reuses_the_compiled_steps(scene, target, monkeypatch, fresh_jit, solver):
     """A second fit of the same shapes and names (other values, another start) traces
     nothing: counted by a wrapper around nnls, which every step's trace calls."""
-    hj.fit(scene, target, init=INIT, solver=hj.fit_solvers()[solver], max_steps=3)
+    hj.fit(scene, target, solver=hj.fit_solvers()[solver], init=INIT, stop=hj.FitStop(max_steps=3))
     calls = []
     original = _varpro.nnls
     monkeypatch.setattr(_varpro, "nnls", lambda *a: calls.append(1) or original(*a))
     other = hj.ShadingParams(kd=0.2, ks=0.5, shininess=30.0, kappa=1.5, ambient=0.05)
-    r = hj.fit(scene, 0.9 * target, init=other, solver=hj.fit_solvers()[solver], max_steps=3)
+    r = hj.fit(scene, 0.9 * target, solver=hj.fit_solvers()[solver], init=other, stop=hj.FitStop(max_steps=3))
     assert r.steps >= 1 and calls == []
 
 
@@ -459,7 +518,7 @@ def test_divergence_ends_cleanly(scene, monkeypatch, fresh_jit):
 
     far, start = _overflow_beyond_kappa_5(monkeypatch, scene)
     plain = optx.GaussNewton(rtol=1e-8, atol=1e-10)
-    r = hj.fit(scene, far, fit=("kappa",), init=start, solver=plain)
+    r = hj.fit(scene, far, solver=plain, init=start, variables=("kappa",))
     assert r.termination.startswith("stopped: diverged")
     assert not np.isfinite(r.loss[-1])  # the step that overflowed is recorded
     # ... but the result is the last finite point, and nothing is claimed about it.
@@ -473,7 +532,14 @@ def test_no_solver_accepts_a_step_into_overflow(scene, monkeypatch, fresh_jit, s
     """Trust regions (LM, dogleg) and Armijo backtracking (Gauss-Newton, BFGS) reject a
     step whose loss is not finite: every recorded loss stays finite, κ stays ≤ 5."""
     far, start = _overflow_beyond_kappa_5(monkeypatch, scene)
-    r = hj.fit(scene, far, fit=("kappa",), init=start, solver=hj.fit_solvers()[solver], max_steps=30)
+    r = hj.fit(
+        scene,
+        far,
+        solver=hj.fit_solvers()[solver],
+        init=start,
+        variables=("kappa",),
+        stop=hj.FitStop(max_steps=30),
+    )
     assert all(np.isfinite(r.loss)) and float(r.params.kappa) <= 5.0
     assert "diverged" not in r.termination
 
@@ -543,6 +609,12 @@ def test_a_tolerance_test_passed_too_early_restarts_the_solver(scene, target, mo
     assert r.restarts == _convergence.MAX_RESTARTS and r.steps == _convergence.MAX_RESTARTS
     assert r.termination.startswith("stopped: the solver's tolerance test passed")
     assert r.loss[-1] < r.loss[0]  # the restarts did step
+    once = hj.fit(scene, target, init=INIT, stop=hj.FitStop(max_restarts=1))
+    assert (
+        once.restarts == 1
+        and once.steps == 1
+        and once.termination == r.termination.replace("4 times", "2 times")
+    )
     r = hj.fit(scene, target, init=TRUE)
     assert r.termination == "converged" and r.restarts == 0 and r.steps == 0
 
@@ -560,12 +632,13 @@ def test_a_stalled_solver_converges_only_where_nothing_is_left(
 
     monkeypatch.setattr(_convergence, "step", still)
     monkeypatch.setattr(_convergence, "terminate", lambda *args: (False, None))
-    r = hj.fit(scene, target, init=start, max_steps=3 * _convergence.STALL_STEPS)
-    assert r.termination.startswith(termination)
-    if start is TRUE:  # tested every STALL_STEPS steps, over losses after the start's
-        assert _convergence.STALL_STEPS <= r.steps <= 2 * _convergence.STALL_STEPS
-    else:
-        assert r.steps == 3 * _convergence.STALL_STEPS
+    for stall in (_convergence.STALL_STEPS, 4):  # FitStop's default, and another
+        r = hj.fit(scene, target, init=start, stop=hj.FitStop(max_steps=3 * stall, stall_steps=stall))
+        assert r.termination.startswith(termination)
+        if start is TRUE:  # tested every `stall` steps, over losses after the start's
+            assert stall <= r.steps <= 2 * stall
+        else:
+            assert r.steps == 3 * stall
 
 
 @pytest.mark.parametrize("solver", ["gauss-newton", "dogleg"])
@@ -574,7 +647,7 @@ def test_a_fit_leaves_the_plateau_where_ks_is_zero(scene, target, solver):
     solvers stop at a stationary point with Kd and κ fitted to the wrong image. `fit`
     scans the shininess there and restarts from the best p."""
     start = hj.ShadingParams(kd=0.5, ks=0.2, shininess=1e8, kappa=1.0, ambient=0.05)
-    r = hj.fit(scene, target, init=start, solver=hj.fit_solvers()[solver])
+    r = hj.fit(scene, target, solver=hj.fit_solvers()[solver], init=start)
     assert r.termination == "converged" and r.restarts >= 1
     assert all(rel(getattr(r.params, n), getattr(TRUE, n)) < 1e-3 for n in hj.KajiyaKay.fittable)
 
@@ -584,10 +657,16 @@ def test_the_ambient_gain_is_fitted_where_named(scene):
     true = dataclasses.replace(TRUE, ambient=jnp.asarray([0.05, 0.1, 0.02]))
     target = np.asarray(hj.render(scene, true))
     start = dataclasses.replace(INIT, ambient=jnp.zeros(3))
-    r = hj.fit(scene, target, fit=("kd", "ks", "shininess", "kappa", "ambient"), init=start, max_steps=200)
+    r = hj.fit(
+        scene,
+        target,
+        init=start,
+        variables=("kd", "ks", "shininess", "kappa", "ambient"),
+        stop=hj.FitStop(max_steps=200),
+    )
     assert r.termination == "converged" and r.undetermined == ()
     # The noise-free recovery bound (docs/fitting.md): 1e-3 relative.
     assert rel(r.params.ambient, true.ambient) < 1e-3 and rel(r.params.kd, true.kd) < 1e-3
     assert np.all(np.isfinite(r.std_error["ambient"]))
-    held = hj.fit(scene, target, init=start, max_steps=3)
+    held = hj.fit(scene, target, init=start, stop=hj.FitStop(max_steps=3))
     assert "ambient" not in held.fitted and np.all(np.asarray(held.params.ambient) == 0.0)

@@ -4,7 +4,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from helpers import small_furball_scene
+from helpers import refused, small_furball_scene
 
 import hairjax as hj
 
@@ -36,7 +36,7 @@ def test_held_out_rmse_is_the_rmse_of_the_fitted_params_on_the_held_out_view(vie
     # The held-out view was rendered with another Kd: the fitted parameters cannot follow it.
     other = dataclasses.replace(TRUE, kd=np.asarray([0.5, 0.3, 0.2]))
     held = [np.asarray(hj.render(side, TRUE)), np.asarray(hj.render(side, other))]
-    r = hj.fit(front, target, init=INIT, max_steps=200, holdout=(side, held))
+    r = hj.fit(front, hj.FitTargets(target, holdout=(side, held)), init=INIT, stop=hj.FitStop(max_steps=200))
     assert r.termination == "converged"
     # Pooled over the two held-out targets, each over all its pixels.
     expected = np.sqrt((by_hand(side, r.params, held[0]) ** 2 + by_hand(side, r.params, held[1]) ** 2) / 2)
@@ -54,11 +54,13 @@ def test_noise_free_fit_holds_on_a_view_and_light_it_did_not_see(views):
     front, side = views
     target_side = np.asarray(hj.render(side, TRUE))
     target = np.asarray(hj.render(front, TRUE))
-    r = hj.fit(front, target, init=INIT, max_steps=200, holdout=(side, target_side))
+    r = hj.fit(
+        front, hj.FitTargets(target, holdout=(side, target_side)), init=INIT, stop=hj.FitStop(max_steps=200)
+    )
     assert r.termination == "converged"
     # 1e-3 relative parameters move the image by about 1e-3 of its RMS brightness.
     assert r.holdout_rmse < 1e-3 * np.sqrt(np.mean(target_side[..., :3] ** 2))
-    assert hj.fit(front, target, init=INIT, max_steps=1).holdout_rmse is None
+    assert hj.fit(front, target, init=INIT, stop=hj.FitStop(max_steps=1)).holdout_rmse is None
 
 
 def test_held_out_targets_are_checked_before_the_fit(views):
@@ -70,12 +72,17 @@ def test_held_out_targets_are_checked_before_the_fit(views):
         calls.append(args)
 
     with pytest.raises(hj.FitError, match="target is 16x16 but scene"):
-        hj.fit(front, target, holdout=(side, np.zeros((16, 16, 3))), progress=progress)
+        hj.fit(front, hj.FitTargets(target, holdout=(side, np.zeros((16, 16, 3)))), progress=progress)
     with pytest.raises(hj.FitError, match="holdout: 2 scenes for 3 targets"):
-        hj.fit(front, target, holdout=([side, side], [target] * 3), progress=progress)
-    with pytest.raises(hj.FitError, match=r"holdout must be a \(scene or scenes, target or targets\) pair"):
-        hj.fit(front, target, holdout=side, progress=progress)
+        hj.fit(front, hj.FitTargets(target, holdout=([side, side], [target] * 3)), progress=progress)
+    with refused("holdout", r"holdout must be a \(scene or scenes, target or targets\) pair", hj.FitError):
+        hj.fit(front, hj.FitTargets(target, holdout=side), progress=progress)
     # A fit of the light renders held-out views at the fitted light: not under another light.
     with pytest.raises(hj.FitError, match="hold out a light with the light held"):
-        hj.fit(front, target, fit=("kd", "light_color"), holdout=(side, target), progress=progress)
+        hj.fit(
+            front,
+            hj.FitTargets(target, holdout=(side, target)),
+            variables=("kd", "light_color"),
+            progress=progress,
+        )
     assert calls == []

@@ -92,7 +92,7 @@ def test_fit_recovers_the_light_direction_and_colour(flat):
     the target is the renderer's at the true light."""
     target = np.asarray(hj.render(flat.replace(light=TRUE_LIGHT), TRUE))
     start = hj.ShadingParams(kd=TRUE.kd, ks=TRUE.ks, shininess=10.0, kappa=TRUE.kappa, ambient=TRUE.ambient)
-    r = hj.fit(flat, target, fit=("light_direction", "light_color", "shininess"), init=start)
+    r = hj.fit(flat, target, init=start, variables=("light_direction", "light_color", "shininess"))
     assert r.termination == "converged" and r.undetermined == ()
     angle = float(np.arccos(np.clip(unit(r.light.direction) @ unit(TRUE_LIGHT.direction), -1, 1)))
     start_angle = float(np.arccos(unit(r.initial_light.direction) @ unit(TRUE_LIGHT.direction)))
@@ -120,7 +120,7 @@ def test_gains_at_a_held_light_are_one_linear_solve(flat):
         kd=5.0, ks=1e-4, shininess=TRUE.shininess, kappa=TRUE.kappa, ambient=TRUE.ambient
     )
     held = hj.LightParams.from_light(TRUE_LIGHT)
-    r = hj.fit(flat, target, fit=("kd", "ks"), init=start, light=held)
+    r = hj.fit(flat, target, init=start, variables=hj.FitVariables(("kd", "ks"), light=held))
     assert r.steps == 1 and r.termination == "converged" and r.loss[1] < 1e-12 * r.loss[0]
     # 1e-6: as tests/fit/test_fit.py's solve at the scene's light (rounding of the solve).
     np.testing.assert_allclose(r.params.kd, TRUE.kd, rtol=1e-6)
@@ -132,15 +132,15 @@ def test_light_fits_that_are_refused(scene):
     target = np.zeros((24, 24, 3))
     point = scene.replace(light=hj.Light(kind="point", position=(2.0, 3.0, 2.0)))
     with pytest.raises(hj.FitError, match="point light"):
-        hj.fit(point, target, fit=("light_direction",))
+        hj.fit(point, target, variables=("light_direction",))
     assert isinstance(hj.FitError("x"), ValueError)
     sphere = hj.Occluder(center=(0.0, 0.0, 0.0), radius=0.4, color=(0.8, 0.6, 0.5))
     with pytest.raises(hj.FitError, match="occluder"):
-        hj.fit(scene.replace(occluder=sphere), target, fit=("light_direction", "ks"))
+        hj.fit(scene.replace(occluder=sphere), target, variables=("light_direction", "ks"))
     with pytest.raises(hj.FitError, match="share one light"):
-        hj.fit([scene, scene.replace(light=TRUE_LIGHT)], [target, target], fit=("light_color", "ks"))
+        hj.fit([scene, scene.replace(light=TRUE_LIGHT)], [target, target], variables=("light_color", "ks"))
     # The colour scales every lit term, as kd and ks do: with both fitted it is degenerate.
     with pytest.raises(hj.FitError, match="degenerate"):
-        hj.fit(scene, target, fit=("light_color", "kd", "ks"))
+        hj.fit(scene, target, variables=("light_color", "kd", "ks"))
     with pytest.raises(hj.FitError, match="light_direction, light_color"):
-        hj.fit(scene, target, fit=("kd", "gloss"))
+        hj.fit(scene, target, variables=("kd", "gloss"))

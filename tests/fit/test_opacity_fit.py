@@ -61,7 +61,7 @@ def test_the_image_derivative_in_alpha_matches_finite_differences():
 def test_alpha_is_recovered_with_the_shading_parameters():
     scene = small_furball_scene(strands=120, size=32)  # strands' opacity 0.6: the start
     target = np.asarray(hj.render(scene, TRUE, _opacity_fit.strand_alpha(scene, 0.4)))
-    r = hj.fit(scene, target, fit=NAMES, init=INIT, max_steps=200)
+    r = hj.fit(scene, target, init=INIT, variables=NAMES, stop=hj.FitStop(max_steps=200))
     assert r.termination == "converged" and r.undetermined == ()
     # The noise-free recovery bound of docs/fitting.md: 1e-3 relative.
     assert abs(r.alpha - 0.4) < 1e-3 * 0.4 and r.initial_alpha == pytest.approx(0.6)
@@ -76,4 +76,4 @@ def test_alpha_is_recovered_with_the_shading_parameters():
 def test_alpha_is_not_fitted_with_the_light():
     scene = small_furball_scene(strands=40, size=16)
     with pytest.raises(hj.FitError, match="alpha is not fitted together with the light"):
-        hj.fit(scene, np.zeros((16, 16, 3)), fit=("kd", "alpha", "light_color"))
+        hj.fit(scene, np.zeros((16, 16, 3)), variables=("kd", "alpha", "light_color"))

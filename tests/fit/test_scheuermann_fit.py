@@ -60,9 +60,9 @@ def test_fit_refuses_what_it_cannot_do():
     scene = scheuermann_scene(size=8, strands=3, shadows="none")
     target = np.zeros((8, 8, 3))
     with pytest.raises(hj.FitError, match="unknown parameter 'ks' for a scheuermann scene"):
-        hj.fit(scene, target, fit=("kd", "ks"))
+        hj.fit(scene, target, variables=("kd", "ks"))
     with pytest.raises(hj.FitError, match="grey value"):
-        hj.fit(scene, target, fit=("kd",), scalar=("primary_shift",))
+        hj.fit(scene, target, variables=hj.FitVariables(("kd",), scalar=("primary_shift",)))
     kk = scene.replace(shading=hj.KajiyaKay(hj.ShadingParams()))
     with pytest.raises(hj.FitError, match="share a shading model"):
         hj.fit([scene, kk], [target, target])

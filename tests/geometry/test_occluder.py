@@ -382,7 +382,7 @@ def test_fit_sees_the_occluder_receive_the_shadow():
     target = np.asarray(hj.render(scene))
     p = scene.params
     start = hj.ShadingParams(kd=p.kd, ks=p.ks, shininess=p.shininess, ambient=p.ambient, kappa=0.3)
-    r = hj.fit(scene, target, fit=("kappa",), init=start, max_steps=50)
+    r = hj.fit(scene, target, init=start, variables=("kappa",), stop=hj.FitStop(max_steps=50))
     np.testing.assert_allclose(float(r.params.kappa), 0.7, rtol=1e-6)
     assert r.rmse < 1e-9
 

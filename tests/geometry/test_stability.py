@@ -359,17 +359,17 @@ def test_guard_plane_clamps():
     from hairjax._geometry._shadows import LightFrame, point_planes
 
     view = View(
-        np.zeros(3),
-        np.array([0.0, 0.0, -1.0]),
-        np.array([1.0, 0, 0]),
-        np.array([0, 1.0, 0]),
-        8,
-        8,
-        1.0,
-        4.0,
-        4.0,
-        False,
-        -np.inf,
+        origin=np.zeros(3),
+        forward=np.array([0.0, 0.0, -1.0]),
+        right=np.array([1.0, 0, 0]),
+        up=np.array([0, 1.0, 0]),
+        width=8,
+        height=8,
+        focal=1.0,
+        cx=4.0,
+        cy=4.0,
+        perspective=False,
+        near=-np.inf,
     )
     depth = np.array([1.0, 2.0, 3.0, 0.5])  # D₀ = 1, D_N = 3; the last one unseen
     frame = LightFrame(

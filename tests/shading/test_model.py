@@ -102,7 +102,7 @@ def test_is_fitted_through_its_own_terms(toy):
         # float64, noise-free, every pixel: the optimum is the truth to the solver's rtol.
         np.testing.assert_allclose(getattr(result.params, name), getattr(TRUE, name), rtol=1e-5)
     with pytest.raises(hj.FitError, match="unknown parameter 'ks' for a toy-test scene"):
-        hj.fit(scene, target, fit=("ks",))
+        hj.fit(scene, target, variables=("ks",))
 
 
 def test_is_read_from_a_scene_file(toy, tmp_path):
