@@ -234,10 +234,17 @@ def test_a_fit_leaves_the_second_plateau(two_lobes):
 
 
 def test_a_fit_leaves_both_plateaus_in_turn(two_lobes):
-    """Both highlights needles: the fit scans p, then q from the best p."""
+    """Both highlights needles: the fit scans p, then q from the best p.
+
+    After p's scan, q still grazes a few points, and the loss falls by a sliver each step
+    while q climbs (to 7e38 here): no stall for the second scan to start until that climb
+    ends. It ends after 128 steps in all on this machine (float64, measured) and within 100
+    on CI's at 464a0b5, so the step budget is 300: the test is about the two scans, not
+    about how many steps the climb takes."""
     scene, target = two_lobes
     init = dataclasses.replace(TWO_LOBES, kd=jnp.full(3, 0.3), p=jnp.asarray(1e8), q=jnp.asarray(1e8))
-    _recovered(hj.fit(scene, target, solver=hj.fit_solvers()["gauss-newton"], init=init))
+    solver = hj.fit_solvers()["gauss-newton"]
+    _recovered(hj.fit(scene, target, solver=solver, init=init, stop=hj.FitStop(max_steps=300)))
 
 
 # ---------------------------------------------------------------- grey gains
