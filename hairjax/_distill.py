@@ -13,14 +13,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from typing import Literal, NamedTuple
 
 import numpy as np
 
 from ._errors import SceneError
 from ._fit import FitError, FitResult, FitStop, FitTargets, FitVariables, fit
-from ._progress import Progress
+from ._progress import Progress, counter
 from ._reference._render import check_sampling, settings_of
 from ._reference._support import check_supported, import_mitsuba
 from ._scene._scene import Scene
@@ -282,7 +282,7 @@ def distill(
         scene = scene.replace(reference=settings)
     scenes = {v.name: view_scene(scene.replace(shading=start_model), v) for v in views}
     renders = len(views) * (2 if noise_floor else 1) if references is None else 0
-    step = _counter(renders + 2, progress)
+    step = counter(renders + 2, progress)
     if references is None:
         first, second = _rendered_references(scenes, views, seed, noise_floor, step)
     else:
@@ -313,19 +313,6 @@ def _distillation(start_model, result: FitResult, views, scenes: dict, first: di
         floors={n: image_rmse([first[n]], [second[n]]) for n in second},
         second=second,
     )
-
-
-def _counter(total: int, progress: Progress | None) -> Callable[[str], None]:
-    """`step(message)`: counts a finished part of the `total` and reports it to `progress`."""
-    done = 0
-
-    def step(message: str) -> None:
-        nonlocal done
-        done += 1
-        if progress is not None:
-            progress(done, total, message)
-
-    return step
 
 
 def _rendered_references(scenes: dict, views, seed: int, noise_floor: bool, step) -> tuple[dict, dict]:

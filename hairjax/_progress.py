@@ -23,10 +23,10 @@ from __future__ import annotations
 import contextlib
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import IO, Protocol, cast, runtime_checkable
 
-__all__ = ["Progress", "Stream", "reporter", "progress_of"]
+__all__ = ["Progress", "Stream", "reporter", "progress_of", "counter"]
 
 
 @runtime_checkable
@@ -123,3 +123,17 @@ def progress_of(progress: Progress | bool | None, title: str) -> Iterator[Progre
         yield _silent
     else:
         yield progress
+
+
+def counter(total: int, progress: Progress | None) -> Callable[[str], None]:
+    """`step(message)`: counts one more finished step of `total` and reports it to
+    `progress` (silent for None)."""
+    done = 0
+
+    def step(message: str) -> None:
+        nonlocal done
+        done += 1
+        if progress is not None:
+            progress(done, total, message)
+
+    return step

@@ -121,19 +121,7 @@ def light_view(light, points: np.ndarray, resolution: int, margin: int) -> View:
         extent = 2 * max(float(np.abs(rel @ right).max()), float(np.abs(rel @ up).max()))
         # Fires when all points coincide seen from the light: any scale frames one point.
         focal = usable / extent if extent > 0 else 1.0
-        return View(
-            origin=centre,
-            forward=forward,
-            right=right,
-            up=up,
-            width=resolution,
-            height=resolution,
-            focal=float(focal),
-            cx=resolution / 2,
-            cy=resolution / 2,
-            perspective=False,
-            near=-np.inf,
-        )
+        return _square_view(centre, (forward, right, up), resolution, focal, perspective=False, near=-np.inf)
     origin = np.asarray(light.position, dtype=np.float64)
     axis = centre - origin
     scale = float(np.linalg.norm(hi - lo) + np.linalg.norm(axis))
@@ -155,6 +143,13 @@ def light_view(light, points: np.ndarray, resolution: int, margin: int) -> View:
     else:
         tan_half = tan_max  # fires when no point is in front of the light
     focal = (usable / 2) / tan_half
+    return _square_view(origin, (forward, right, up), resolution, focal, perspective=True, near=float(near))
+
+
+def _square_view(origin, axes, resolution: int, focal, *, perspective: bool, near: float) -> View:
+    """The light's `resolution`² view from `origin` along `axes` (forward, right, up),
+    centred on the map."""
+    forward, right, up = axes
     return View(
         origin=origin,
         forward=forward,
@@ -165,6 +160,6 @@ def light_view(light, points: np.ndarray, resolution: int, margin: int) -> View:
         focal=float(focal),
         cx=resolution / 2,
         cy=resolution / 2,
-        perspective=True,
-        near=float(near),
+        perspective=perspective,
+        near=near,
     )

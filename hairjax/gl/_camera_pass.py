@@ -15,7 +15,21 @@ from ._occluder import OccluderLight, OccluderSurface, draw_occluder_color
 from ._shading import lookup_texture, shading_uniforms, streak_texture, use_shading_textures
 from ._uniforms import light_uniforms, set_uniforms, vec, view_uniforms
 
-__all__ = ["camera_depth_far", "camera_pass"]
+__all__ = ["blend_over", "camera_depth_far", "camera_pass"]
+
+
+def blend_over(ctx) -> None:
+    """Blend "over" (docs/model.md §6): C ← a c + (1 − a) C for colour, and
+    A ← a + (1 − a) A, i.e. 1 − Π(1 − α), for alpha."""
+    import moderngl
+
+    ctx.enable(moderngl.BLEND)
+    ctx.blend_func = (
+        moderngl.SRC_ALPHA,
+        moderngl.ONE_MINUS_SRC_ALPHA,
+        moderngl.ONE,
+        moderngl.ONE_MINUS_SRC_ALPHA,
+    )
 
 
 def camera_depth_far(scene: Scene, view: View, depth: np.ndarray) -> float:
@@ -90,13 +104,7 @@ def camera_pass(
         # kim-2003 §3: hair far to near, depth test on (if anything wrote depth), no depth
         # writes; "over" for colour, and 1 − Π(1 − α) for alpha.
         fbo.depth_mask = False
-        ctx.enable(moderngl.BLEND)
-        ctx.blend_func = (
-            moderngl.SRC_ALPHA,
-            moderngl.ONE_MINUS_SRC_ALPHA,
-            moderngl.ONE,
-            moderngl.ONE_MINUS_SRC_ALPHA,
-        )
+        blend_over(ctx)
         ctx.blend_equation = moderngl.FUNC_ADD
         prog = progs["camera"]
         set_uniforms(prog, shade=True, eye=vec(view.origin), **shading_uniforms(scene, params), **common)

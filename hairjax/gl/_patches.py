@@ -25,7 +25,7 @@ from .._geometry._projection import View
 from .._geometry_stage._stage import geometry_stage
 from .._patches import Patches
 from .._scene._scene import Scene
-from ._camera_pass import camera_depth_far
+from ._camera_pass import blend_over, camera_depth_far
 from ._context import check, release
 from ._occluder import OccluderLight, OccluderSurface, draw_occluder_color, occluder_light
 from ._programs import programs
@@ -179,14 +179,7 @@ def _four_passes(ctx, fbo, prog, vao, vertices: int) -> None:
         ctx.depth_func = p.z_test
         fbo.color_mask = (p.colour,) * 4
         if p.blend:
-            ctx.enable(moderngl.BLEND)
-            # "over": C ← a c + (1 − a) C, A ← a + (1 − a) A.
-            ctx.blend_func = (
-                moderngl.SRC_ALPHA,
-                moderngl.ONE_MINUS_SRC_ALPHA,
-                moderngl.ONE,
-                moderngl.ONE_MINUS_SRC_ALPHA,
-            )
+            blend_over(ctx)
         else:
             ctx.disable(moderngl.BLEND)
         vao.render(moderngl.TRIANGLES, vertices=vertices)

@@ -18,7 +18,7 @@ from .._cache import forget
 from .._disagreement import PIXEL_TOL, renderer_band
 from .._geometry_stage._stage import geometry_stage
 from .._io._image import linear_to_srgb, write_image, write_png_codes
-from .._progress import Progress
+from .._progress import Progress, counter
 from .._render import render
 from .._scene._scene import Scene
 
@@ -180,14 +180,7 @@ def compare(scene: Scene, repeats: int = 3, *, progress: Progress | None = None,
     from ..gl import render_gl
 
     repeats = check_repeats(repeats)
-    total = 2 + 2 * (1 + repeats)
-    done = 0
-
-    def step(message: str) -> None:
-        nonlocal done
-        done += 1
-        if progress is not None:
-            progress(done, total, message)
+    step = counter(2 + 2 * (1 + repeats), progress)
 
     def timing(name: str) -> Callable[[int], None]:
         return lambda k: step(f"{name} warm-up" if k == 0 else f"{name} timed run {k}/{repeats}")
