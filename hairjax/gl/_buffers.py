@@ -1,15 +1,34 @@
 """The hair on the GPU: the strand points' vertex buffers every ribbon pass draws from,
-and the points whose Ω the shadow passes compute (docs/model.md §7, §13)."""
+and the points whose Ω the shadow passes compute (docs/model.md §7, §13).
+
+The strands are uploaded once per scene and context (`resident_strands`): every later GL
+render of the same scene object draws from the same buffers. They live in the per-scene
+cache (`_cache`), so they go when the scene goes or is forgotten, and their buffers are
+released with them."""
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 
+from .._cache import cached
 from .._scene._scene import Scene
 from .._values._strands import tangents
 from ._shading import point_inputs
 
-__all__ = ["Points", "Strands"]
+__all__ = ["Points", "Strands", "resident_strands"]
+
+
+def resident_strands(ctx, scene: Scene) -> Strands:
+    """`scene`'s strands on the GPU of `ctx`, uploaded on the scene's first GL render and
+    kept for the later ones (module docstring)."""
+    return cached(scene, f"GL strands in context {id(ctx)}", lambda: Strands(ctx, scene))
+
+
+def _release(buffers: list) -> None:
+    for b in buffers:
+        b.release()
 
 
 class Strands:
@@ -35,6 +54,34 @@ class Strands:
         self.width = f4(s.width[per_point])
         self.omega = f4(np.zeros(s.num_points))
         self.visibility = f4(np.ones(s.num_points))
+        # Whether a render wrote Ω or V over their defaults (0 and 1), for the next render.
+        self.omega_written = self.visibility_written = False
+        buffers = [
+            self.position,
+            self.tangent,
+            self.color,
+            self.alpha,
+            self.width,
+            self.omega,
+            self.visibility,
+        ]
+        # The buffers go with this object: dropped from the cache, or released at once.
+        self._release = weakref.finalize(self, _release, [*buffers, *(b for b, _, _ in self.extra)])
+        self._release.atexit = False  # at exit the context goes first, and its buffers with it
+
+    def write_omega(self, omega: np.ndarray | None) -> None:
+        """Ω per point for the camera pass (`float32[P]`); None: 0, no shadow."""
+        if omega is not None or self.omega_written:
+            values = np.zeros(self.count, "f4") if omega is None else omega
+            self.omega.write(np.ascontiguousarray(values, "f4").tobytes())
+        self.omega_written = omega is not None
+
+    def write_visibility(self, visibility: np.ndarray | None) -> None:
+        """The occluder's visibility V per point (`float32[P]`); None: 1, unoccluded."""
+        if visibility is not None or self.visibility_written:
+            values = np.ones(self.count, "f4") if visibility is None else visibility
+            self.visibility.write(np.ascontiguousarray(values, "f4").tobytes())
+        self.visibility_written = visibility is not None
 
     def vertex_array(self, prog, index_buffer):
         return self.ctx.vertex_array(
@@ -60,17 +107,7 @@ class Strands:
         return self.ctx.buffer(pairs.tobytes() if pairs.size else b"\0" * 8)  # no segments: GL needs ≥ 1 byte
 
     def release(self):
-        for b in (
-            self.position,
-            self.tangent,
-            self.color,
-            self.alpha,
-            self.width,
-            self.omega,
-            self.visibility,
-            *(buffer for buffer, _, _ in self.extra),
-        ):
-            b.release()
+        self._release()
 
 
 class Points:

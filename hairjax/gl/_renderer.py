@@ -24,7 +24,7 @@ from .._geometry_stage._setup import visibility_order
 from .._patches import scene_patches, scene_point_colors
 from .._scene._scene import Scene
 from . import _deep_maps, _exact_opacity, _opacity_maps  # noqa: F401 (they register their passes)
-from ._buffers import Points, Strands
+from ._buffers import Points, Strands, resident_strands
 from ._camera_pass import camera_depth_far, camera_pass
 from ._context import get_context
 from ._occluder import OccluderLight, OccluderSurface, occluder_shadow
@@ -76,7 +76,7 @@ def render_gl(
     view, _, depth, _, order = visibility_order(scene, order)
     depth_far = camera_depth_far(scene, view, depth)
     lighting = scene.occluder is not None and scene.shadows.casts
-    strands = Strands(ctx, scene)
+    strands = resident_strands(ctx, scene)
     surface = None
     try:
         lap("upload")
@@ -94,14 +94,16 @@ def render_gl(
             omega, made = _shadows(ctx, progs, scene, strands, surface, clip_slices, lap)
             if made is not None:  # the scene has an occluder: it takes part in the light
                 occluder = made
-        if lighting and occluder is not None:  # lighting: given with omega, or made above
-            strands.visibility.write(np.asarray(occluder.visibility, "f4").tobytes())
+        else:
+            strands.write_omega(None)
+        # Lighting: the occluder's part of the light, given with omega or made above.
+        lit = lighting and occluder is not None
+        strands.write_visibility(np.asarray(occluder.visibility, "f4") if lit and occluder else None)
         lit_by = occluder if lighting else None
         image = camera_pass(ctx, progs, scene, params, strands, view, order, depth_far, surface, lit_by)
         lap("camera pass")
         return GLResult(image, omega, lap.timings, lit_by)
     finally:
-        strands.release()
         if surface is not None:
             surface.release()
 
@@ -123,7 +125,7 @@ class _Laps:
 def _given_omega(strands: Strands, omega) -> np.ndarray:
     """`omega` as `float32[P]`, uploaded for the camera pass."""
     omega = np.asarray(omega, dtype="f4").reshape(strands.count)
-    strands.omega.write(omega.tobytes())
+    strands.write_omega(omega)
     return omega
 
 
@@ -148,7 +150,7 @@ def _shadows(
             ctx, progs, scene, strands, frame, points, clip_slices=clip_slices
         )
         omega = omega_all[: strands.count].copy()
-        strands.omega.write(omega.tobytes())
+        strands.write_omega(omega)
         lap("shadows")
         if surface is None:
             return omega, None
