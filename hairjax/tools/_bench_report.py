@@ -127,6 +127,21 @@ def _gl_pass(key: str) -> Callable[[dict, dict], str]:
     return lambda c, r: _fmt_time(r["gl"]["passes"].get(key, {}).get("median_s"))
 
 
+def _gl_work(fields: tuple[str, str], unit: float = 1.0) -> Callable[[dict, dict], str]:
+    """A cell: two counts of a warm GL render's work (`hairjax/gl/_work.py`), in `unit`s
+    ("-" for a run from before they were counted)."""
+
+    def cell(c: dict, r: dict) -> str:
+        work = r["gl"].get("work")
+        if work is None:
+            return "-"
+        return " / ".join(
+            f"{work[f] / unit:,.0f}" if unit == 1.0 else f"{work[f] / unit:,.1f}" for f in fields
+        )
+
+    return cell
+
+
 def _marked(figure: Callable[[dict], str], target: str) -> Callable[[dict, dict], str]:
     """A cell: `figure(result)`, marked against `target` (a key of targets_met)."""
     return lambda c, r: figure(r) + _mark(r["targets_met"].get(target))
@@ -215,6 +230,10 @@ def _gl_rows(columns: _Columns, have_jax: bool) -> list[_Row]:
     """The GL passes and full render, with JAX's figures their ratio against the targets,
     and the GL runs' status."""
     rows = [_Row(f"GL {key}", columns.gl_cells(_gl_pass(key))) for key in GL_PASSES]
+    rows += [
+        _Row("  draws / binds", columns.gl_cells(_gl_work(("draws", "binds")))),
+        _Row("  MB uploaded / read", columns.gl_cells(_gl_work(("uploaded", "read_back"), 1e6))),
+    ]
     rows.append(
         _Row("GL full render", columns.gl_cells(lambda c, r: _fmt_time(r["gl"]["full_render"]["median_s"])))
     )

@@ -20,6 +20,7 @@ figures are measured as usual.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import statistics
 import sys
@@ -43,6 +44,7 @@ def measure_gl(scene, repeats: int, progress) -> dict:
     import numpy as np
 
     from ..gl import GLUnavailable, render_gl, renderer_info
+    from ..gl._work import counted_gl_work
 
     try:
         info = renderer_info()  # the driver's strings, as render's sidecar records them
@@ -57,8 +59,16 @@ def measure_gl(scene, repeats: int, progress) -> dict:
         if k < repeats:
             progress(f"GL run {k + 1}/{repeats}")
 
+    works = []
+
+    def counted():
+        with counted_gl_work() as work:
+            result = render_gl(scene)
+        works.append(work)
+        return result
+
     progress("GL warm-up run (compiles the shaders)")
-    timed = timed_calls(lambda: render_gl(scene), repeats, after)
+    timed = timed_calls(counted, repeats, after)
     total = timed.runs_s
     return {
         "status": "ok",
@@ -66,6 +76,7 @@ def measure_gl(scene, repeats: int, progress) -> dict:
         **info,
         "full_render": {"median_s": _median(total), "runs_s": total},
         "passes": {k: {"median_s": _median(v), "runs_s": v} for k, v in passes.items()},
+        "work": dataclasses.asdict(works[-1]),  # a warm run's (`hairjax/gl/_work.py`)
         "image_finite": bool(np.all(np.isfinite(timed.last.image))),
     }
 

@@ -51,3 +51,27 @@ def test_the_buffers_go_with_the_cache_entry(gl):
     forget(scene)  # the entry goes: the Strands object is collected, its buffers released
     gc.collect()
     assert not release.alive
+
+
+def test_gl_work_is_counted_and_shows_the_resident_strands(gl):
+    """`counted_gl_work`: a render draws, binds its targets, reads its image back; the
+    scene's second render uploads less, its strands being resident; and moderngl's methods
+    are themselves again after the block."""
+    import moderngl
+
+    from hairjax.gl._work import counted_gl_work
+
+    original = moderngl.VertexArray.render
+    scene = small_furball_scene(strands=60, size=32, shadows="opacity-maps", maps=4)
+    with counted_gl_work() as first:
+        image = render_gl(scene).image
+    with counted_gl_work() as second:
+        render_gl(scene)
+    assert moderngl.VertexArray.render is original
+    # One ribbon draw per opacity map at least, and the camera's; its RGBA image read back.
+    assert first.draws >= scene.shadows.maps + 1 and first.binds >= 2
+    assert first.read_back >= image.nbytes
+    # The second render skips the strands' seven per-point float buffers (position,
+    # tangent and colour of 3 floats; alpha, width, Ω and V of 1): 13 floats a point.
+    assert first.uploaded - second.uploaded == 13 * 4 * scene.strands.num_points
+    assert (second.draws, second.binds, second.read_back) == (first.draws, first.binds, first.read_back)

@@ -182,6 +182,18 @@ def test_bench_quick_both_backends(tmp_path, capsys):
     for key in GL_PASSES:
         assert _positive_finite(gl["passes"][key]["median_s"]), key
     assert gl["image_finite"]
+    # A warm run's GL work (hairjax/gl/_work.py) is recorded and printed: its draws, its
+    # targets bound, what it uploads (Ω, the passes' index buffers) and reads back.
+    work = gl["work"]
+    assert work["draws"] > 0 and work["binds"] > 0 and work["read_back"] > 0
+    assert 0 < work["uploaded"] and "draws / binds" in printed and "MB uploaded / read" in printed
+    # The format of stored runs from before the counts: "-" in those cells.
+    old = {**config, "gl": {k: v for k, v in gl.items() if k != "work"}}
+    table = format_table([{"strands": config["strands"], "size": config["width"]}], [old], "")
+    assert any(
+        line.strip().startswith("draws / binds") and line.rstrip().endswith("-")
+        for line in table.splitlines()
+    )
     # The ratio is the median of back-to-back pairs' ratios, as recorded.
     paired = config["paired"]
     assert len(paired["gl_s"]) == len(paired["jax_s"]) == len(paired["ratios"]) == 2
