@@ -37,7 +37,7 @@ from .._constants import FIT_TRANSMITTANCE_CUTOFF
 from .._geometry_stage._stage import geometry_stage
 from .._shading import AbstractShadingModel, occluder_colors, transmittance
 from .._shading._light import LightParams, lit_to_light
-from .._shading._stage import point_streaks, shading_points
+from .._shading._stage import shading_points
 from ._dependence import dependence
 from ._model import FitModel
 from ._space import SOFTPLUS, with_values
@@ -233,8 +233,11 @@ def prepare_terms(
     model: AbstractShadingModel = geom.shading
     searched = tuple(n for n in model.searched if n in names)
     # §16: the streak factor scales a point's whole colour: it rides on both scales.
-    factor = point_streaks(geom)
-    streak = jnp.ones((geom.tangent.shape[0], 1), geom.tangent.dtype) if factor is None else factor[:, None]
+    streak = (
+        jnp.ones((geom.tangent.shape[0], 1), geom.tangent.dtype)
+        if geom.streak is None
+        else geom.streak[:, None]
+    )
     white = light is not None  # the colour multiplies the images instead
     light_scale = jnp.broadcast_to(streak, geom.tangent.shape) if white else geom.light_rgb[None, :] * streak
     points = shading_points(geom)

@@ -11,7 +11,7 @@ from typing import Any
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-from jaxtyping import Array, Float, Int
+from jaxtyping import Array, Float
 
 from .._cache import cached
 from .._composite import pixel_weights
@@ -21,7 +21,7 @@ from .._geometry._host import release_heap, to_device
 from .._geometry._placement import Placement, placement_of
 from .._scene._scene import Scene
 from .._shading import AbstractShadingModel
-from .._shading._streaks import Streaks
+from .._shading._streaks import streak_factors
 from ._setup import prepare
 
 __all__ = ["Geometry", "composite_weights", "fragment_alpha", "geometry_stage"]
@@ -56,11 +56,10 @@ class Geometry(eqx.Module):
     shading: AbstractShadingModel
     height: int = eqx.field(static=True)
     width: int = eqx.field(static=True)
-    # §16's streaks, applied by the shading stage (`point_streaks`); None without streaks,
-    # and then no `strand_of_point` either.
-    streaks: Streaks | None = eqx.field(static=True, default=None)
-    strand_of_point: Int[Array, " P"] | None = None
-    num_strands: int = eqx.field(static=True, default=0)
+    # §16's streak factor per point, None without streaks: the shading package's formula
+    # (`streak_factors`), computed once per scene, as it reads no shading parameter;
+    # applied by the shading stage (`point_colors`).
+    streak: Float[Array, " P"] | None = None
     shading_inputs: Any = None
 
 
@@ -183,8 +182,13 @@ def _geometry_stage(scene: Scene, alpha, order, cutoff: float, placement: Placem
         shading=scene.shading,
         height=scene.camera.height,
         width=scene.camera.width,
-        streaks=scene.streaks,
-        strand_of_point=None if scene.streaks is None else jnp.asarray(setup.strand_of_point),
-        num_strands=scene.strands.num_strands,
+        streak=_streak(scene, setup.strand_of_point, dtype),
         shading_inputs=None if extra is None else jax.tree.map(lambda x: jnp.asarray(x, dtype), extra),
     )
+
+
+def _streak(scene: Scene, strand_of_point, dtype) -> Float[Array, " P"] | None:
+    """§16's streak factor of every point (`streak_factors`), None without streaks."""
+    if scene.streaks is None:
+        return None
+    return streak_factors(scene.streaks, strand_of_point, scene.strands.num_strands, dtype)

@@ -25,7 +25,6 @@ from jaxtyping import Array, Float
 from .._composite import composite
 from ._light import LightParams, light_rgb, lit_to_light, occluder_direct
 from ._model import Reflectance, ShadingPoints
-from ._streaks import streak_factors
 from ._transmittance import transmittance
 
 if TYPE_CHECKING:
@@ -36,7 +35,6 @@ __all__ = [
     "light_factor",
     "scattered_factor",
     "combine",
-    "point_streaks",
     "point_colors",
     "occluder_colors",
     "shading_stage",
@@ -91,22 +89,10 @@ def combine(
     return colors
 
 
-def point_streaks(geometry: Geometry) -> Float[Array, " P"] | None:
-    """§16: each point's streak factor (`streak_factors`), None without streaks."""
-    if geometry.streaks is None or geometry.strand_of_point is None:
-        return None
-    return streak_factors(
-        geometry.streaks, geometry.strand_of_point, geometry.num_strands, geometry.tangent.dtype
-    )
-
-
-def point_colors(
-    geometry: Geometry, params, light: LightParams | None = None, streak: Float[Array, " P"] | None = None
-) -> Float[Array, "P 3"]:
+def point_colors(geometry: Geometry, params, light: LightParams | None = None) -> Float[Array, "P 3"]:
     """Shaded colour at every strand point (Gouraud, kim-2003 §5): the model's reflectance
     lit by `light_factor`, times the streak factor (§16) where the scene has streaks.
-    `light`: the light's direction and colour instead of the geometry's (module docstring).
-    `streak`: `point_streaks(geometry)`, if already computed."""
+    `light`: the light's direction and colour instead of the geometry's (module docstring)."""
     model = geometry.shading
     if not isinstance(params, model.params_type):
         raise TypeError(
@@ -119,9 +105,8 @@ def point_colors(
         light_factor(geometry, params.kappa, light),
         scattered_factor(geometry, light) if reflectance.scattered else None,
     )
-    streak = point_streaks(geometry) if streak is None else streak
-    if streak is not None:  # §16: the streak texture modulates the whole colour
-        colors = colors * streak[:, None]
+    if geometry.streak is not None:  # §16: the streak texture modulates the whole colour
+        colors = colors * geometry.streak[:, None]
     return colors
 
 
@@ -139,6 +124,7 @@ def occluder_colors(geometry: Geometry, params, light: LightParams | None = None
     return params.ambient[None, :] * color[None, :] + direct
 
 
+@eqx.filter_jit
 def shading_stage(geometry: Geometry, params, light: LightParams | None = None) -> Float[Array, "H W 4"]:
     """The image from the geometry stage and the shading parameters (`[H, W, 4]`):
     the composite of the point colours over the backdrop (the occluder's colour where it
@@ -152,15 +138,7 @@ def shading_stage(geometry: Geometry, params, light: LightParams | None = None) 
     and not for one with an occluder (ValueError). Ω and V stay the scene light's
     (docs/model.md §3). `light=None`: the scene's light, exactly as without the argument.
     """
-    # The streak factors are computed before the compiled stage, op by op: compiled into
-    # it, XLA's fused arithmetic rounds them differently, and furball_animated's image
-    # moved by up to 9 float32 ulp (measured). Under an outer trace they are traced too.
-    return _shading_stage(geometry, params, light, point_streaks(geometry))
-
-
-@eqx.filter_jit
-def _shading_stage(geometry: Geometry, params, light: LightParams | None, streak) -> Float[Array, "H W 4"]:
-    rgb = composite(geometry, point_colors(geometry, params, light, streak), paired=True)
+    rgb = composite(geometry, point_colors(geometry, params, light), paired=True)
     backdrop = geometry.backdrop
     if geometry.occluder_pixel is not None:
         backdrop = backdrop.at[geometry.occluder_pixel].set(occluder_colors(geometry, params, light))

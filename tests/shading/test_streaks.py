@@ -12,7 +12,6 @@ from helpers import PIXEL_TOL, small_furball_scene, unexplained_pixels
 import hairjax as hj
 from hairjax._errors import SceneError
 from hairjax._shading import point_colors
-from hairjax._shading._stage import point_streaks
 from hairjax._shading._streaks import Streaks, streak_factor, streak_prefix, streak_texture
 
 
@@ -53,8 +52,8 @@ def test_streaks_scale_each_hairs_whole_colour():
     scene = small_furball_scene(strands=30, size=32, streaks=streaks)
     plain = scene.replace(streaks=None)
     geom, geom_plain = hj.geometry_stage(scene), hj.geometry_stage(plain)
-    assert point_streaks(geom_plain) is None  # a scene without streaks computes none
-    factor = np.asarray(point_streaks(geom))
+    assert geom_plain.streak is None  # a scene without streaks computes none
+    factor = np.asarray(geom.streak)
     strand = scene.strands.strand_of_point
     for s in range(scene.strands.num_strands):  # one value per hair: streaks run along it
         assert np.ptp(factor[strand == s]) == 0
