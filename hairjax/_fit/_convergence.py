@@ -219,7 +219,11 @@ def solve(
         done, result = terminate(opt, fn, z, problem, state)
         stalled = _stalled(losses, steps, stop.stall_steps)
     return Solved(
-        z, steps, _termination(outcome, bool(done), result, restarts, stop), restarts, outcome == "diverged"
+        z=z,
+        steps=steps,
+        termination=_termination(outcome, bool(done), result, restarts, stop),
+        restarts=restarts,
+        diverged=outcome == "diverged",
     )
 
 

@@ -169,7 +169,18 @@ def _start(scene, targets: FitTargets, variables: FitVariables, init) -> _Start:
     if opacity:  # the strands' opacity joins them (docs/fitting.md, "Fitting the strands' opacity")
         initial_alpha = start_alpha(scenes)
         point = OpacityParams(init, jnp.asarray(initial_alpha, dtype=jnp.result_type(float)))
-    return _Start(scenes, arrays, model, names, scalar, point, init, initial_light, initial_alpha, heldout)
+    return _Start(
+        scenes=scenes,
+        arrays=arrays,
+        model=model,
+        names=names,
+        scalar=scalar,
+        point=point,
+        initial=init,
+        initial_light=initial_light,
+        initial_alpha=initial_alpha,
+        heldout=heldout,
+    )
 
 
 def _held_out(holdout: tuple, scenes: list[Scene], lit: bool) -> HeldOut:
@@ -213,7 +224,7 @@ def _solve(solver, least_squares: bool, problem: Problem, losses: list, stop: Fi
         # Only gains are fitted: one linear least-squares solve is the whole fit.
         losses.append(float(half_square(residuals, z, problem)))
         report(1, losses[-1])
-        return Solved(z, 1, "converged", 0, False)
+        return Solved(z=z, steps=1, termination="converged", restarts=0, diverged=False)
     rtol, atol = float(solver.rtol), float(solver.atol)
     return solve(
         solver,

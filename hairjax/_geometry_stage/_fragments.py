@@ -88,7 +88,8 @@ def _on_host(raster, labels, hit_depth, lap):
     release_heap(n_frags * 16)  # the raster's 4 fields, handed back to the system
     lap("sort fragments")
     i0, coverage, t = grouped.fields
-    return CameraFragments(PaddedFragments(grouped.pixel, i0, coverage, t), count, drawn=n_frags > 0)
+    padded = PaddedFragments(pixel=grouped.pixel, i0=i0, coverage=coverage, t=t)
+    return CameraFragments(padded=padded, count=count, drawn=n_frags > 0)
 
 
 def _on_device(raster, labels, hit_depth, lap):
@@ -114,7 +115,8 @@ def _on_device(raster, labels, hit_depth, lap):
     # Covered before the depth test: read back only when nothing is left after it.
     drawn = grouped.kept > 0 or bool(jnp.any(candidates.coverage > 0))
     i0, coverage, t = grouped.fields
-    return CameraFragments(PaddedFragments(grouped.pixel, i0, coverage, t), grouped.kept, drawn)
+    padded = PaddedFragments(pixel=grouped.pixel, i0=i0, coverage=coverage, t=t)
+    return CameraFragments(padded=padded, count=grouped.kept, drawn=drawn)
 
 
 def _in_front(candidates, hit_depth):

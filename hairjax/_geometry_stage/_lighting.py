@@ -71,7 +71,7 @@ def occluder_view(occluder: Occluder, light: Light, view: View, lap: Callable[[s
     color = np.asarray(occluder.color, np.float64)
     direct = color * np.asarray(light.color, dtype=np.float64) * lambert[:, None]
     lap("occluder")
-    return OccluderView(hit_depth, pixel, surface, color, direct)
+    return OccluderView(hit_depth=hit_depth, pixel=pixel, surface=surface, color=color, direct=direct)
 
 
 def shadow_plan(
@@ -102,11 +102,11 @@ def shadow_plan(
     plan = scene.shadows.setup(shadow_inputs)
     lap("shadow set-up")
     if occluder is None:
-        return ShadowPlan(plan)
+        return ShadowPlan(plan=plan)
     light_view = occluder_light_view(light, strands.points, scene.occluder, scene.shadows.resolution)
     depth_map, _, _ = occluder_hits(light_view, scene.occluder)
     shadows = ShadowPlan(
-        plan,
+        plan=plan,
         light_visibility=occluder_visibility(light_view, depth_map, strands.points),
         occluder_visibility=occluder_visibility(light_view, depth_map, occluder.surface),
     )

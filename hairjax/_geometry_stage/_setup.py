@@ -144,11 +144,13 @@ def visibility_order(scene: Scene, order=None) -> VisibleSegments:
     drawable_mask = (depth[segments[:, 0]] > cam.near) & (depth[segments[:, 1]] > cam.near)
     if order is not None:
         order = _given_order(order, len(segments))
-        return VisibleSegments(view, xy, depth, segments, order[drawable_mask[order]])
+        return VisibleSegments(
+            view=view, xy=xy, depth=depth, segments=segments, order=order[drawable_mask[order]]
+        )
     order = scene.ordering.order(
         scene.strands, segments, segment_depth(depth, segments), np.flatnonzero(drawable_mask)
     )
-    return VisibleSegments(view, xy, depth, segments, order)
+    return VisibleSegments(view=view, xy=xy, depth=depth, segments=segments, order=order)
 
 
 def _given_order(order, n_segments: int) -> np.ndarray:
@@ -258,7 +260,7 @@ def _point_shading(scene: Scene, lap: _Laps) -> _PointShading:
         base_color = base_color * inputs.color_factor
     if any(x is not None for x in (inputs.extra, inputs.color_factor, inputs.segment_alpha)):
         lap("shading inputs")
-    return _PointShading(tangent, base_color, inputs)
+    return _PointShading(tangent=tangent, base_color=base_color, inputs=inputs)
 
 
 def _camera_raster(scene: Scene, visible: VisibleSegments, seg_strand: np.ndarray) -> _CameraRaster:
@@ -277,9 +279,16 @@ def _camera_raster(scene: Scene, visible: VisibleSegments, seg_strand: np.ndarra
         view.perspective,
     )
     raster = RibbonRaster(
-        xy[s0], xy[s1], depth[s0], depth[s1], widths, view.width, view.height, view.perspective
+        xy0=xy[s0],
+        xy1=xy[s1],
+        z0=depth[s0],
+        z1=depth[s1],
+        width=widths,
+        image_width=view.width,
+        image_height=view.height,
+        perspective=view.perspective,
     )
-    return _CameraRaster(raster, s0.astype(np.int32))
+    return _CameraRaster(raster=raster, labels=s0.astype(np.int32))
 
 
 def _with_segment_alpha(

@@ -2,7 +2,7 @@
 quality settings, per renderer, resumable. One engine; the one-knob sweep and the joint
 search are two spaces it walks.
 
-`run_search(scene, out, space)` evaluates settings of `space` with the JAX path and the GL
+`run_search(scene, out, space, store)` evaluates settings of `space` with the JAX path and the GL
 path: every setting of the space in order (`search=None`), or those the Pareto search of
 `_pareto.py` asks for. Each point is measured against that path's converged reference
 (`_measure.py`: exact shadows, exact ordering, the finest supersampling of the space) or a
@@ -136,6 +136,7 @@ def run_search(
     out,
     space: Space,
     store: Store,
+    *,
     paths: Sequence[str] = PATHS,
     repeats: int = 3,
     search: SearchConfig | None = None,
@@ -175,7 +176,16 @@ def run_search(
     stored = store.load(out)
     store.rewrite(out, stored)
     with progress_of(progress, store.title) as report:
-        run = _Run(scene, out, space, store, repeats, cost, target, report)
+        run = _Run(
+            scene=scene,
+            out=out,
+            space=space,
+            store=store,
+            repeats=repeats,
+            cost=cost,
+            target=target,
+            report=report,
+        )
         if search is None or not isinstance(space, KnobSpace):
             return _every_setting(run, paths, stored)
         return _pareto(run, space, paths, stored, search)
@@ -253,13 +263,23 @@ def run_sweep(
     `target`: an `[H, W, 3|4]` image (e.g. `reference_image`'s physically based one) that
     every point of both paths is measured against instead of each path's converged
     reference: the error then includes the model's own (docs/results.md). `progress`:
-    `run_search`'s calls (True and False, the older flags, are taken for one release:
-    True draws `reporter("sweep")`)."""
+    `run_search`'s calls, or True for `reporter("sweep")`'s line or bar, False for none."""
     knobs = dict(KNOBS if knobs is None else knobs)
     repeats = check_run(knobs, paths, repeats)
     given = None if target is None else target_reference(scene, target)
     space = one_knob_space(scene, knobs)
-    return run_search(scene, out, space, SWEEP_STORE, paths, repeats, None, restart, progress, cost, given)
+    return run_search(
+        scene,
+        out,
+        space,
+        SWEEP_STORE,
+        paths=paths,
+        repeats=repeats,
+        restart=restart,
+        progress=progress,
+        cost=cost,
+        target=given,
+    )
 
 
 def run_joint(
@@ -282,4 +302,15 @@ def run_joint(
     knobs = dict(JOINT_KNOBS if knobs is None else knobs)
     repeats = check_run(knobs, paths, repeats, empty_values=False)
     space = knob_space(scene, knobs)
-    return run_search(scene, out, space, JOINT_STORE, paths, repeats, search, restart, progress, cost)
+    return run_search(
+        scene,
+        out,
+        space,
+        JOINT_STORE,
+        paths=paths,
+        repeats=repeats,
+        search=search,
+        restart=restart,
+        progress=progress,
+        cost=cost,
+    )

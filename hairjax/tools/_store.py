@@ -131,9 +131,23 @@ class Store:
         write_json(path, config)
 
 
-# (config, points, one_knob, space, title, other): the files each command has always written.
-SWEEP_STORE = Store("sweep.json", "points.jsonl", True, "knobs", "sweep", other="joint.json")
-JOINT_STORE = Store("joint.json", "joint.jsonl", False, "space", "joint search", other="sweep.json")
+# The files each command has always written.
+SWEEP_STORE = Store(
+    config="sweep.json",
+    points="points.jsonl",
+    one_knob=True,
+    space="knobs",
+    title="sweep",
+    other="joint.json",
+)
+JOINT_STORE = Store(
+    config="joint.json",
+    points="joint.jsonl",
+    one_knob=False,
+    space="space",
+    title="joint search",
+    other="sweep.json",
+)
 
 
 def store_of(config: dict) -> Store:
