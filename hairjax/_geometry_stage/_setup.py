@@ -15,7 +15,6 @@ occluder runs no occluder test. Cached per scene (`_cache`).
 from __future__ import annotations
 
 import dataclasses
-import time
 import warnings
 from typing import Any, NamedTuple
 
@@ -32,6 +31,7 @@ from .._geometry._placement import Placement, placement_of
 from .._geometry._projection import View, camera_view
 from .._geometry._raster import Arrays
 from .._geometry._raster_plan import RibbonRaster, ribbon_widths
+from .._laps import Laps
 from .._scene._scene import Scene
 from .._shading import PointInputs
 from .._values._strands import tangents, unit_rows
@@ -186,20 +186,6 @@ def warn_empty_view(scene: Scene) -> None:
     )
 
 
-class _Laps:
-    """The set-up's wall-clock time per step, in seconds by name (`timings`); a step may
-    run in parts, which add up. Calling it with a name ends that step's part."""
-
-    def __init__(self) -> None:
-        self.timings: dict[str, float] = {}
-        self._clock = time.perf_counter()
-
-    def __call__(self, name: str) -> None:
-        now = time.perf_counter()
-        self.timings[name] = self.timings.get(name, 0.0) + now - self._clock
-        self._clock = now
-
-
 @dataclasses.dataclass(frozen=True)
 class _PointShading:
     """The shading model's per-point inputs (§17's, or none) and what follows from them:
@@ -223,7 +209,7 @@ class _CameraRaster(NamedTuple):
 def _prepare(scene: Scene, order, placement: Placement) -> GeometrySetup:
     """`prepare`'s set-up, computed: its steps in order, each timed (`GeometrySetup.timings`)."""
     release_shared()  # a forgotten scene's fragments, before this one's are allocated
-    lap = _Laps()
+    lap = Laps()
     check_capacity(scene, placement=placement)  # the closed-form items, before anything is projected
     visible = visibility_order(scene, order)
     seg_strand = scene.strands.strand_of_point[visible.segments[:, 0]]
@@ -250,7 +236,7 @@ def _prepare(scene: Scene, order, placement: Placement) -> GeometrySetup:
     return _geometry_setup(scene, visible.view, shading, padded, fragments.count, occluder, shadows, lap)
 
 
-def _point_shading(scene: Scene, lap: _Laps) -> _PointShading:
+def _point_shading(scene: Scene, lap: Laps) -> _PointShading:
     """The strands' tangents, the shading model's per-point inputs and the base colour."""
     strands = scene.strands
     tangent = tangents(strands.points, strands.offsets)
@@ -317,7 +303,7 @@ def _geometry_setup(
     count: int,
     occluder: OccluderView | None,
     shadows: ShadowPlan,
-    lap: _Laps,
+    lap: Laps,
 ) -> GeometrySetup:
     """The steps' results as the geometry stage reads them: the per-point inputs in its
     float precision (it reads nothing else of them), the image's backdrop and the

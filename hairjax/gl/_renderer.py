@@ -14,13 +14,13 @@ strands on the GPU, `_patches` the hair-patch passes (§18).
 from __future__ import annotations
 
 import dataclasses
-import time
 
 import numpy as np
 
 from .._geometry._projection import camera_view
 from .._geometry._shadows import light_frame, with_receivers
 from .._geometry_stage._setup import visibility_order
+from .._laps import Laps
 from .._patches import scene_patches, scene_point_colors
 from .._scene._scene import Scene
 from . import _deep_maps, _exact_opacity, _opacity_maps  # noqa: F401 (they register their passes)
@@ -72,7 +72,7 @@ def render_gl(
         return _render_patches(scene, params, omega, order, occluder)
     ctx = get_context()
     progs = programs(ctx)
-    lap = _Laps(ctx)
+    lap = Laps(wait=ctx.finish)  # seconds by pass, each waiting for GL's queued work
     view, _, depth, _, order = visibility_order(scene, order)
     depth_far = camera_depth_far(scene, view, depth)
     lighting = scene.occluder is not None and scene.shadows.casts
@@ -108,20 +108,6 @@ def render_gl(
             surface.release()
 
 
-class _Laps:
-    """Seconds by pass: each call `lap(name)` waits for GL to finish (glFinish) and adds the
-    time since the previous call to `timings[name]`."""
-
-    def __init__(self, ctx):
-        self.ctx, self.timings, self.clock = ctx, {}, time.perf_counter()
-
-    def __call__(self, name: str) -> None:
-        self.ctx.finish()
-        now = time.perf_counter()
-        self.timings[name] = self.timings.get(name, 0.0) + now - self.clock
-        self.clock = now
-
-
 def _given_omega(strands: Strands, omega) -> np.ndarray:
     """`omega` as `float32[P]`, uploaded for the camera pass."""
     omega = np.asarray(omega, dtype="f4").reshape(strands.count)
@@ -130,7 +116,7 @@ def _given_omega(strands: Strands, omega) -> np.ndarray:
 
 
 def _shadows(
-    ctx, progs, scene: Scene, strands: Strands, surface: OccluderSurface | None, clip_slices: bool, lap: _Laps
+    ctx, progs, scene: Scene, strands: Strands, surface: OccluderSurface | None, clip_slices: bool, lap: Laps
 ) -> tuple[np.ndarray, OccluderLight | None]:
     """(Ω per strand point, uploaded for the camera pass; the occluder's part of the light,
     None without an occluder): the scene's shadow method's passes from the light, over the
@@ -168,12 +154,12 @@ def _render_patches(scene: Scene, params, omega, order, occluder) -> GLResult:
     checks visibility and compositing, not the shading (the ribbon path checks that)."""
     if omega is not None or order is not None or occluder is not None:
         raise ValueError("a hair-patch scene takes none of `omega`, `order`, `occluder`")
-    clock = time.perf_counter()
+    lap = Laps()
     colors = np.asarray(scene_point_colors(scene, params), np.float64)
     head = patch_head(scene, params)
-    shaded = time.perf_counter()
+    lap("point colours (JAX)")
     image = render_patches_gl(
         get_context(), camera_view(scene.camera), scene_patches(scene), colors, scene.background, head
     )
-    timings = {"point colours (JAX)": shaded - clock, "four passes": time.perf_counter() - shaded}
-    return GLResult(image, None, timings)
+    lap("four passes")  # its image read back: GL has finished
+    return GLResult(image, None, lap.timings)
