@@ -155,7 +155,7 @@ def timed_calls(fn, repeats: int, after: Callable[[int, Any, float], None] | Non
         runs_s.append(seconds)
         if after is not None:
             after(k, result, seconds)
-    return TimedCalls(warm_up_s, runs_s, result)
+    return TimedCalls(warm_up_s=warm_up_s, runs_s=runs_s, last=result)
 
 
 def median_time(fn, repeats: int, after: Callable[[int], None] | None = None) -> float:

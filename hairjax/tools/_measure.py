@@ -22,7 +22,7 @@ import numpy as np
 from .._io._files import atomic_path
 from .._scene._scene import Scene
 from .._supersample import supersample
-from ._compare import check_repeats, image_stats
+from ._compare import check_repeats, image_stats, timed_calls
 from ._knobs import KNOBS, SweepError, reference_scene
 
 __all__ = ["PATHS", "renderer", "measure", "errors", "path_reference", "target_reference", "scene_digest"]
@@ -79,7 +79,7 @@ def renderer(path: str) -> Renderer:
 
 def measure(run: Renderer, scene: Scene, s: int, repeats: int):
     """(image, Ω, median seconds, all seconds): one untimed warm-up (compilation, shader
-    builds), then `repeats` timed renders (none: the median is NaN)."""
+    builds), then `repeats` timed renders (`timed_calls`; none: the median is NaN)."""
     omega: dict[str, np.ndarray | None] = {}
 
     def image_of(sc):
@@ -87,13 +87,13 @@ def measure(run: Renderer, scene: Scene, s: int, repeats: int):
         omega.setdefault("first", om)
         return image
 
-    image = supersample(image_of, scene, s)
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        supersample(lambda sc: run(sc)[0], scene, s)
-        times.append(time.perf_counter() - start)
-    return np.asarray(image), omega["first"], float(np.median(times)) if times else float("nan"), times
+    def render():
+        return supersample(image_of, scene, s)
+
+    if not repeats:  # a cost model charges the setting's time: the error's render only
+        return np.asarray(render()), omega["first"], float("nan"), []
+    timed = timed_calls(render, repeats)
+    return np.asarray(timed.last), omega["first"], timed.median_s, timed.runs_s
 
 
 def errors(image: np.ndarray, omega, reference: dict, kappa: float) -> dict:
