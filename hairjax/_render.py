@@ -22,7 +22,7 @@ from ._cache import forget
 from ._geometry._capacity import refuses_out_of_memory
 from ._geometry._placement import Placement
 from ._geometry_stage._estimate import check_capacity
-from ._geometry_stage._setup import prepare
+from ._geometry_stage._setup import prepare, render_cutoff
 from ._geometry_stage._stage import geometry_stage
 from ._progress import Progress
 from ._scene._scene import Scene
@@ -93,7 +93,7 @@ def render_profiled(
 
     forget(scene)
     t0 = time.perf_counter()
-    setup = prepare(scene, placement=placement)
+    setup = prepare(scene, placement=placement, cutoff=render_cutoff())
     t1 = time.perf_counter()
     t1p = step(1, "geometry set-up")
     geometry = jax.block_until_ready(geometry_stage(scene, placement=placement))

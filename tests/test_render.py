@@ -149,10 +149,12 @@ def test_geometry_reused_and_unneeded_work_skipped(monkeypatch):
     calls, opacity_calls = [], []
     original = setup_mod._prepare
     monkeypatch.setattr(setup_mod, "_prepare", lambda s, *rest: calls.append(s) or original(s, *rest))
-    original_weights = stage_mod.composite_weights
-    monkeypatch.setattr(
-        stage_mod, "composite_weights", lambda *a: opacity_calls.append(1) or original_weights(*a)
-    )
+    # The render's weights: the host loop's on the CPU, JAX's on another device.
+    for name in ("composite_weights", "host_weights"):
+        original_weights = getattr(stage_mod, name)
+        monkeypatch.setattr(
+            stage_mod, name, lambda *a, original=original_weights: opacity_calls.append(1) or original(*a)
+        )
 
     def forbidden(*args, **kwargs):
         raise AssertionError("this stage must not run for this scene")

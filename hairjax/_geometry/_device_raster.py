@@ -217,23 +217,25 @@ def group_on_device(
     device (`GroupedOnDevice`), as `group_by_pixel` gives on the host. One value read
     back: F. `capacity` (optional): a function of F giving the arrays' length
     (`fragment_bucket`); entries from F on are then padding, pixel `n_pixels` and fields
-    0. Without it the arrays hold the F entries."""
-    key, index, count = _sorted_by_pixel(pixel, keep, n_pixels)
-    count = int(count)
+    0. Without it the arrays hold the F entries.
+
+    The kept entries are gathered first, so the sort reads only them: the candidates'
+    uncovered, occluded and hidden ones are never sorted."""
+    count = int(jnp.count_nonzero(keep))
     size = count if capacity is None else capacity(count)
-    kept = min(size, key.shape[0])  # a bucket may outgrow the candidates: padded below
-    key, index = key[:kept], index[:kept]
-    real = jnp.arange(kept) < count
+    if pixel.shape[0] == 0:  # no entry to gather from: padding only
+        zeros = tuple(jnp.zeros(size, f.dtype) for f in fields)
+        return GroupedOnDevice(jnp.full(size, n_pixels, pixel.dtype), zeros, 0)
+    index = jnp.nonzero(keep, size=size, fill_value=0)[0]
+    key, index = _sorted_by_pixel(pixel, index, count, n_pixels)
+    real = jnp.arange(size) < count
     grouped = tuple(jnp.where(real, jnp.take(f, index, mode="clip"), 0) for f in fields)  # clip: in range
-    pad = lambda x, value: jnp.pad(x, (0, size - kept), constant_values=value)  # noqa: E731
-    return GroupedOnDevice(pad(key, n_pixels), tuple(pad(f, 0) for f in grouped), count)
+    return GroupedOnDevice(key, grouped, count)
 
 
-@functools.partial(jax.jit, static_argnums=2)
-def _sorted_by_pixel(pixel, keep, n_pixels):
-    """Kept entries' pixels ascending, stably (the dropped ones keyed past the last
-    pixel), the permutation, and the count kept."""
-    key = jnp.where(keep, pixel, n_pixels)
-    index = jnp.arange(pixel.shape[0], dtype=jnp.int32)
-    key, index = lax.sort((key, index), num_keys=1, is_stable=True)
-    return key, index, jnp.count_nonzero(keep)
+@functools.partial(jax.jit, static_argnums=3)
+def _sorted_by_pixel(pixel, index, count, n_pixels):
+    """The pixels of the entries at `index` (the kept ones in order, then padding from
+    `count` on, keyed past the last pixel) ascending, stably, and their entries."""
+    key = jnp.where(jnp.arange(index.shape[0]) < count, pixel[index], n_pixels)
+    return lax.sort((key, index), num_keys=1, is_stable=True)

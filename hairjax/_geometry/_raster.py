@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+from collections.abc import Callable
 from typing import no_type_check
 
 import jax
@@ -46,6 +47,7 @@ __all__ = [
     "ribbon_coverage",
     "ribbon_widths",
     "PARALLEL_MIN",
+    "EVERY_COVERED",
 ]
 
 # NumPy on the host (the compiled loops'), JAX arrays on a device (`_device_raster`).
@@ -53,6 +55,9 @@ Arrays = np.ndarray | jax.Array
 
 # Below this many candidates one thread rasterises: more cost more than they save.
 PARALLEL_MIN = 1 << 20
+
+# `raster_loop`'s `seen` that writes every covered candidate: no occluder, no cut.
+EVERY_COVERED = (np.empty(0), np.empty(0), np.empty(0), np.empty(0), 0.0)
 
 
 def ribbon_coverage(d, width) -> np.ndarray:
@@ -180,6 +185,7 @@ def rasterize_parts(
     depth: bool = True,
     labels: np.ndarray | None = None,
     parts: int | None = None,
+    seen: Callable[[int], tuple] | None = None,
 ) -> list[Fragments]:
     """`rasterize`'s fragments in `parts` pieces, rasterised at once on as many threads:
     each piece holds the fragments of a contiguous run of segments (about equal in
@@ -219,7 +225,9 @@ def rasterize_parts(
         parts = host_threads() if capacity >= PARALLEL_MIN else 1
     bounds = split_evenly(columns, parts)
     # Where each piece's share begins (the last: the fields' length), `check_memory`'s.
-    starts = check_memory(raster, bounds, seg_start, np.dtype(dtype), depth, image_width, image_height)
+    counting = functools.partial(raster, EVERY_COVERED)
+    starts = check_memory(counting, bounds, seg_start, np.dtype(dtype), depth, image_width, image_height)
+    seen = seen or (lambda k: EVERY_COVERED)
     size = starts[-1]
     # `Fragments`' fields, in the order the loop writes them (`raster_loop`).
     fields = dict(
@@ -235,8 +243,8 @@ def rasterize_parts(
     ]
     filled = in_parallel(
         [
-            functools.partial(raster, a, b, False, *share.values())
-            for a, b, share in zip(bounds[:-1], bounds[1:], shares)
+            functools.partial(raster, seen(k), a, b, False, *share.values())
+            for k, (a, b, share) in enumerate(zip(bounds[:-1], bounds[1:], shares))
         ]
     )
     return [_written(share, k, depth) for share, k in zip(shares, filled)]
@@ -278,6 +286,7 @@ def count_fragments(
         image_height,
         bool(perspective),
         False,
+        EVERY_COVERED,
     )
     ints, floats = np.empty(0, np.int32), np.empty(0, dtype)  # not written when counting
     bounds = split_evenly(plan.columns, host_threads())

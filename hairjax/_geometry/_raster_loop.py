@@ -20,7 +20,7 @@ from .._constants import PIXEL_CENTRE
 from ._coverage import coverage_formula
 from ._host import compile_loop
 
-__all__ = ["coverage_loop", "raster_loop"]
+__all__ = ["coverage_loop", "raster_loop", "seen_through_loop"]
 
 # no_type_check on the loops: the tests' jaxtyping hook would otherwise wrap them before
 # numba compiles them.
@@ -62,15 +62,79 @@ def _depth_loop(dtype_name: str):
 
 
 @functools.cache
+def seen_through_loop():
+    """`seen_through(alpha, pixel, transmittance, hidden, cutoff)` compiled by numba:
+    whether a fragment of opacity `alpha` at `pixel` is seen through at least `cutoff` of
+    its pixel's running `transmittance`, which it then dims; a hidden one dims `hidden`
+    instead (`[H·W]` float64 each, in place; `_seen`). T only falls along a pixel's run
+    (docs/model.md §6): once below the cutoff, every later fragment is hidden."""
+
+    @compile_loop(error_model="numpy")
+    @no_type_check
+    def seen_through(alpha, pixel, transmittance, hidden, cutoff):
+        through = 1.0 - alpha
+        if transmittance[pixel] < cutoff:
+            hidden[pixel] *= through
+            return False
+        transmittance[pixel] *= through
+        return True
+
+    return seen_through
+
+
+@functools.cache
+def _passes_loop(dtype_name: str):
+    """The raster loop's test of a covered candidate (`passes`), compiled by numba for
+    floats of `dtype_name`."""
+    depth_at, seen_through = _depth_loop(dtype_name), seen_through_loop()
+
+    @compile_loop(**_LOOP_OPTIONS)
+    @no_type_check
+    def passes(seen, pixel, label, cov, za, zb, t, perspective):
+        """Whether a covered candidate is written: `seen` = (hit, opacity, transmittance,
+        hidden, cutoff) leaves out one behind the occluder's `hit` depth at its pixel
+        (`[H·W]` float64; empty: no occluder) and, with `opacity` (`[labels]` float64,
+        each label's segment's α; empty: no cut), one hidden (`seen_through`)."""
+        hit, opacity, transmittance, hidden, cutoff = seen
+        if hit.size > 0 and not depth_at(za, zb, t, perspective) < hit[pixel]:
+            return False  # behind the occluder (kim-2003 §3: depth test on)
+        return opacity.size == 0 or seen_through(opacity[label] * cov, pixel, transmittance, hidden, cutoff)
+
+    return passes
+
+
+@functools.cache
+def _rows_loop(dtype_name: str):
+    """`in_image(row0, rows, across)` compiled by numba for floats of `dtype_name`: the
+    range of a column's candidate rows (from row0, `rows` of them) whose centres may lie
+    in the image, `across` rows wide, with one to spare each side. The others would be
+    skipped one by one, and a ribbon far wider than the image has millions of them.
+    Where row0 is not exact in the float type, all rows."""
+    exact_limit = _float_type(dtype_name)(
+        1 << 23
+    )  # integers below it and their sums with a row index are exact
+
+    @compile_loop(**_LOOP_OPTIONS)
+    @no_type_check
+    def in_image(row0, rows, across):
+        if abs(row0) < exact_limit:
+            return max(0, int(-row0) - 1), min(rows, int(across - row0) + 2)
+        return 0, rows
+
+    return in_image
+
+
+@functools.cache
 def raster_loop(dtype_name: str):
     """The raster loop compiled by numba for floats of `dtype_name` (on first use; cached
     on disk, `compile_loop`); every constant has that type, so no operation widens to
     float64. It returns the number of covered candidates of segments first … last − 1 and,
-    unless count_only, writes them to `out` (pixel, segment, coverage, t, depth)."""
+    unless count_only, writes those `seen` passes (`passes`) to `out` (pixel, segment,
+    coverage, t, depth)."""
     F = _float_type(dtype_name)
     one, centre = F(1.0), F(PIXEL_CENTRE)
-    exact_limit = F(1 << 23)  # integers below it and their sums with a row index are exact
-    coverage, depth_at = coverage_loop(dtype_name), _depth_loop(dtype_name)
+    in_image = _rows_loop(dtype_name)
+    coverage, passes, depth_at = coverage_loop(dtype_name), _passes_loop(dtype_name), _depth_loop(dtype_name)
 
     @compile_loop(**_LOOP_OPTIONS)
     @no_type_check
@@ -84,6 +148,7 @@ def raster_loop(dtype_name: str):
         image_height,
         perspective,
         with_depth,
+        seen,
         first,
         last,
         count_only,
@@ -107,15 +172,8 @@ def raster_loop(dtype_name: str):
                 k = F(lo[i] + j)
                 b_line = b_origin + (k + centre - a_origin) * slope
                 row0 = np.floor(b_line - offset - centre) + one
-                # Only the rows whose centres may lie in the image (one to spare each side):
-                # the rest would `continue` below, and a ribbon far wider than the image
-                # has millions of them. Where row0 is not exact in float32, all rows.
-                r_first, r_last = 0, rows
-                if abs(row0) < exact_limit:
-                    across = image_height if x_major else image_width
-                    r_first = max(0, int(-row0) - 1)
-                    r_last = min(rows, int(across - row0) + 2)
-                for r in range(r_first, r_last):
+                across = image_height if x_major else image_width
+                for r in range(*in_image(row0, rows, across)):
                     m = row0 + F(r)
                     px = k if x_major else m
                     py = m if x_major else k
@@ -130,11 +188,16 @@ def raster_loop(dtype_name: str):
                     cov = coverage(abs(rx * dy - ry * dx) * inv_len, w0 + t * (w1 - w0))
                     if not cov > 0:
                         continue
+                    pixel = np.int32(py) * image_width + np.int32(px)
                     if not count_only:
-                        out_pixel[filled] = np.int32(py) * image_width + np.int32(px)
-                        out_segment[filled] = labels[i]
-                        out_coverage[filled] = cov
-                        out_t[filled] = t
+                        if not passes(seen, pixel, labels[i], cov, za, zb, t, perspective):
+                            continue
+                        out_pixel[filled], out_segment[filled], out_coverage[filled], out_t[filled] = (
+                            pixel,
+                            labels[i],
+                            cov,
+                            t,
+                        )
                         if with_depth:
                             out_depth[filled] = depth_at(za, zb, t, perspective)
                     filled += 1

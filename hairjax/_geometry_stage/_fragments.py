@@ -1,6 +1,7 @@
 """The set-up's camera fragments (docs/model.md §5, §6, §13): the ribbons rasterised
 nearest segment first, the occluder's depth test (kim-2003 §3: depth test on, hair does
-not write depth), and the stable grouping by pixel that leaves each pixel's fragments
+not write depth) and, for a render, the hidden fragments' cut (`_seen`), both as the
+fragments are made, and the stable grouping by pixel that leaves each pixel's fragments
 front to back, padded to the fragments' bucket (`fragment_bucket`) so that the geometry
 stage's programs compile once per bucket.
 
@@ -25,8 +26,9 @@ from .._geometry._device_raster import device_candidates, group_on_device
 from .._geometry._group import group_parts
 from .._geometry._host import release_heap
 from .._geometry._placement import Placement
-from .._geometry._raster import Arrays, rasterize_parts
+from .._geometry._raster import Arrays, count_fragments
 from .._geometry._raster_plan import RibbonRaster
+from .._geometry._seen import Seen, rasterize_seen, seen_on_device
 
 __all__ = ["PaddedFragments", "CameraFragments", "camera_fragments"]
 
@@ -44,64 +46,71 @@ class PaddedFragments(NamedTuple):
 @dataclasses.dataclass(frozen=True)
 class CameraFragments:
     """`padded`, of which the first `count` entries are fragments; `drawn`: whether the
-    raster covered any pixel before the occluder's depth test."""
+    raster covered any pixel before the occluder's depth test; `hidden`: each pixel's
+    product of the (1 − α) of the hidden fragments left out (`[H·W]`, None when none
+    were cut: `_seen`)."""
 
     padded: PaddedFragments
     count: int
     drawn: bool
+    hidden: Arrays | None = None
 
 
 def camera_fragments(
-    raster: RibbonRaster,
-    labels: np.ndarray,
-    hit_depth: np.ndarray | None,
-    placement: Placement,
-    lap: Callable[[str], None],
+    raster: RibbonRaster, labels: np.ndarray, seen: Seen, placement: Placement, lap: Callable[[str], None]
 ) -> CameraFragments:
     """The camera's fragments of `raster`, each naming its entry of `labels` (`[E]`
-    int32: its segment's first point), behind none of the occluder's `hit_depth` (`[H·W]`
-    per pixel centre; None: no occluder), grouped on the host or on the device as
-    `placement` says. `lap(name)` times each step."""
+    int32: its segment's first point), without those `seen` leaves out (`Seen`: behind
+    the occluder's depth at their pixel centre, or hidden behind nearer fragments),
+    grouped on the host or on the device as `placement` says. `lap(name)` times each
+    step."""
     place = _on_device if placement == "device" else _on_host
-    return place(raster, labels, hit_depth, lap)
+    return place(raster, labels, seen, lap)
 
 
-def _on_host(raster, labels, hit_depth, lap):
-    """By the host's compiled loops: the raster in pieces, one per core
-    (`rasterize_parts`), read where they are by the counting sort (`group_parts`), into
-    aligned arrays that the geometry stage shares with JAX (`_host`)."""
-    with_depth = hit_depth is not None
-    pieces = rasterize_parts(**raster._asdict(), depth=with_depth, labels=labels)
-    n_frags = sum(piece.size for piece in pieces)
-    lap("rasterize")
-    if with_depth:
-        pieces = [piece.take(np.flatnonzero(piece.depths < hit_depth[piece.pixel])) for piece in pieces]
-        lap("occluder")
-    # Only what compositing needs is grouped: segment, coverage, t (not depth).
+def _on_host(raster, labels, seen, lap):
+    """By the host's compiled loops: the raster in pieces, one per core, the occluded and
+    hidden fragments left out as they are met (`rasterize_seen`), read where they are by
+    the counting sort (`group_parts`), into aligned arrays that the geometry stage shares
+    with JAX (`_host`)."""
+    pieces, hidden = rasterize_seen(raster, labels, seen)
     count = sum(piece.size for piece in pieces)
+    lap("rasterize")
     grouped = group_parts(
         [(piece.pixel, piece.segment, piece.coverage, piece.t) for piece in pieces],
         raster.pixels,
         fragment_bucket(count),
     )
     del pieces
-    release_heap(n_frags * 16)  # the raster's 4 fields, handed back to the system
+    release_heap(count * 16)  # the raster's 4 fields, handed back to the system
     lap("sort fragments")
     i0, coverage, t = grouped.fields
     padded = PaddedFragments(pixel=grouped.pixel, i0=i0, coverage=coverage, t=t)
-    return CameraFragments(padded=padded, count=count, drawn=n_frags > 0)
+    return CameraFragments(padded=padded, count=count, drawn=count > 0 or _covers_any(raster), hidden=hidden)
 
 
-def _on_device(raster, labels, hit_depth, lap):
+def _on_device(raster, labels, seen, lap):
     """As XLA programs on JAX's default device (`_device_raster`): every candidate of the
-    same raster plan, then one stable sort by pixel that also drops the uncovered and
-    occluded candidates. JAX arrays."""
-    candidates = device_candidates(**raster._asdict(), depth=hit_depth is not None, labels=labels)
+    same raster plan, the occluded and hidden ones marked (`seen_on_device`), then one
+    stable sort by pixel of those left. JAX arrays."""
+    candidates = device_candidates(**raster._asdict(), depth=seen.hit is not None, labels=labels)
     keep = candidates.coverage > 0
     jax.block_until_ready(keep)  # the lap times the raster, not its dispatch
     lap("rasterize")
-    if hit_depth is not None:
-        keep &= _in_front(candidates, hit_depth)
+    covered = keep
+    if seen.hit is not None:
+        keep &= _in_front(candidates, seen.hit)
+    hidden = None
+    if seen.opacity is not None:
+        keep, hidden = seen_on_device(
+            candidates.pixel,
+            keep,
+            candidates.segment,
+            candidates.coverage,
+            seen.opacity,
+            seen.cutoff,
+            raster.pixels,
+        )
     grouped = group_on_device(
         candidates.pixel,
         keep,
@@ -113,10 +122,16 @@ def _on_device(raster, labels, hit_depth, lap):
     )
     lap("sort fragments")
     # Covered before the depth test: read back only when nothing is left after it.
-    drawn = grouped.kept > 0 or bool(jnp.any(candidates.coverage > 0))
+    drawn = grouped.kept > 0 or bool(jnp.any(covered))
     i0, coverage, t = grouped.fields
     padded = PaddedFragments(pixel=grouped.pixel, i0=i0, coverage=coverage, t=t)
-    return CameraFragments(padded=padded, count=grouped.kept, drawn=drawn)
+    return CameraFragments(padded=padded, count=grouped.kept, drawn=drawn, hidden=hidden)
+
+
+def _covers_any(raster: RibbonRaster) -> bool:
+    """Whether `raster` covers any pixel: counted (writing nothing) where the occluder or
+    the cut left no fragment, for `CameraFragments.drawn`."""
+    return bool(count_fragments(*raster, limit=np.iinfo(np.int64).max))
 
 
 def _in_front(candidates, hit_depth):

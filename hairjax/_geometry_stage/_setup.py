@@ -25,21 +25,31 @@ import numpy as np
 from .._cache import cached
 from .._errors import EmptyViewWarning
 from .._geometry._capacity import refuses_out_of_memory
+from .._geometry._hidden import drawn_cutoff
 from .._geometry._host import release_heap, release_shared
 from .._geometry._ordering import segment_depth
 from .._geometry._placement import Placement, placement_of
 from .._geometry._projection import View, camera_view
 from .._geometry._raster import Arrays
 from .._geometry._raster_plan import RibbonRaster, ribbon_widths
+from .._geometry._seen import SETUP_MARGIN, Seen
 from .._laps import Laps
 from .._scene._scene import Scene
 from .._shading import PointInputs
 from .._values._strands import tangents, unit_rows
 from ._estimate import check_capacity
-from ._fragments import PaddedFragments, camera_fragments
+from ._fragments import CameraFragments, PaddedFragments, camera_fragments
 from ._lighting import OccluderView, ShadowPlan, occluder_view, shadow_plan, to_light
 
-__all__ = ["GeometrySetup", "VisibleSegments", "prepare", "visibility_order", "to_light", "warn_empty_view"]
+__all__ = [
+    "GeometrySetup",
+    "VisibleSegments",
+    "prepare",
+    "render_cutoff",
+    "visibility_order",
+    "to_light",
+    "warn_empty_view",
+]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -66,6 +76,9 @@ class GeometrySetup:
     strand_of_point: np.ndarray  # [P] int32: a fragment's strand is strand_of_point[frag_i0]
     backdrop: np.ndarray  # [H*W, 3] the background behind the hair (0 on the occluder)
     opaque: np.ndarray  # [H*W] the occluder covers the pixel centre
+    # [H*W] each pixel's product of (1 − α) over the hidden fragments the set-up left out
+    # (`_seen`), which its transmittance keeps; None when it kept every fragment
+    hidden: Arrays | None
     shadow: Any  # the shadow method's plan (None without shadows); with an
     #                              occluder, its surface points follow the strands'
     timings: dict
@@ -94,24 +107,42 @@ class GeometrySetup:
 
 
 @refuses_out_of_memory
-def prepare(scene: Scene, *, order=None, placement: Placement | None = None) -> GeometrySetup:
-    """The NumPy geometry set-up of `scene`, cached per scene object and placement (`_cache`).
+def prepare(
+    scene: Scene, *, order=None, placement: Placement | None = None, cutoff: float = 0.0
+) -> GeometrySetup:
+    """The NumPy geometry set-up of `scene`, cached per scene object, placement and cutoff
+    (`_cache`).
 
     `order`: a draw order to use instead of the scene's (see `visibility_order`); such a
     set-up is computed afresh, not cached. `placement`: where the raster and the grouping
-    run, "host" or "device" (`_placement`; None: `default_placement()`)."""
+    run, "host" or "device" (`_placement`; None: `default_placement()`). `cutoff`: leave
+    out the camera fragments seen, at the scene's strand opacities, through a
+    transmittance below it (`_seen`; a render's is `render_cutoff()`); 0, the default,
+    keeps every one, as a traced opacity needs."""
     where = placement_of(placement)
+    cutoff = float(cutoff)
     # The set-up depends on concrete geometry only: evaluate it eagerly even when
     # `render` is being traced (e.g. under jax.jit or jax.grad).
     if order is not None:
         with jax.ensure_compile_time_eval():
-            return _prepare(scene, order, where)
+            return _prepare(scene, order, where, cutoff)
 
     def compute():
         with jax.ensure_compile_time_eval():
-            return _prepare(scene, None, where)
+            return _prepare(scene, None, where, cutoff)
 
-    return cached(scene, f"setup on the {where}", compute)
+    key = f"setup on the {where}" + (f", cutoff {cutoff!r}" if cutoff > 0 else "")
+    return cached(scene, key, compute)
+
+
+def render_cutoff(stage_cutoff: float | None = None) -> float:
+    """The set-up's cutoff for a geometry stage that leaves out the fragments hidden at
+    `stage_cutoff` (None: `drawn_cutoff` of the working precision; 0: none): SETUP_MARGIN
+    times it, and never above the drawn cutoff's, so that every positive cutoff shares one
+    set-up (`_seen`)."""
+    drawn = drawn_cutoff(jnp.result_type(float))
+    stage_cutoff = drawn if stage_cutoff is None else float(stage_cutoff)
+    return SETUP_MARGIN * min(stage_cutoff, drawn)
 
 
 class VisibleSegments(NamedTuple):
@@ -206,7 +237,7 @@ class _CameraRaster(NamedTuple):
     labels: np.ndarray
 
 
-def _prepare(scene: Scene, order, placement: Placement) -> GeometrySetup:
+def _prepare(scene: Scene, order, placement: Placement, cutoff: float) -> GeometrySetup:
     """`prepare`'s set-up, computed: its steps in order, each timed (`GeometrySetup.timings`)."""
     release_shared()  # a forgotten scene's fragments, before this one's are allocated
     lap = Laps()
@@ -222,8 +253,12 @@ def _prepare(scene: Scene, order, placement: Placement) -> GeometrySetup:
     occluder = (
         None if scene.occluder is None else occluder_view(scene.occluder, scene.light, visible.view, lap)
     )
-    hit_depth = None if occluder is None else occluder.hit_depth
-    fragments = camera_fragments(camera.raster, camera.labels, hit_depth, placement, lap)
+    seen = Seen(
+        hit=None if occluder is None else occluder.hit_depth,
+        opacity=None if cutoff <= 0 else _label_opacity(scene, shading.inputs, visible.segments),
+        cutoff=cutoff,
+    )
+    fragments = camera_fragments(camera.raster, camera.labels, seen, placement, lap)
     # Hair whose segments all have length 0 (or that has none: one-point strands) draws
     # nothing from any camera; that is not the camera's fault, so no warning then.
     points, segments = scene.strands.points, visible.segments
@@ -233,7 +268,17 @@ def _prepare(scene: Scene, order, placement: Placement) -> GeometrySetup:
     shadows = shadow_plan(scene, segments, seg_strand, shading.inputs.segment_alpha, occluder, placement, lap)
     if shadows.plan is not None:  # the shadow set-up's transients, trimmed for a scene this large
         release_heap(padded.pixel.size * 20)
-    return _geometry_setup(scene, visible.view, shading, padded, fragments.count, occluder, shadows, lap)
+    return _geometry_setup(scene, visible.view, shading, padded, fragments, occluder, shadows, lap)
+
+
+def _label_opacity(scene: Scene, inputs: PointInputs, segments: np.ndarray) -> np.ndarray:
+    """`[P]` float64: the opacity of the segment each point starts, its strand's α times
+    the segment's alpha texture (§17's; none: 1), as the geometry stage weighs its
+    fragments (`fragment_alpha`, `_with_segment_alpha`)."""
+    opacity = np.asarray(scene.strands.alpha, np.float64)[scene.strands.strand_of_point]
+    if inputs.segment_alpha is not None:
+        opacity[segments[:, 0]] *= inputs.segment_alpha
+    return opacity
 
 
 def _point_shading(scene: Scene, lap: Laps) -> _PointShading:
@@ -300,7 +345,7 @@ def _geometry_setup(
     view: View,
     shading: _PointShading,
     padded: PaddedFragments,
-    count: int,
+    fragments: CameraFragments,
     occluder: OccluderView | None,
     shadows: ShadowPlan,
     lap: Laps,
@@ -314,6 +359,7 @@ def _geometry_setup(
     opaque = np.zeros(hw, bool) if occluder is None else occluder.opaque
     backdrop[opaque] = 0.0  # the shading stage adds the occluder's colour (§13)
     dtype = jnp.result_type(float)
+    count = fragments.count
     return GeometrySetup(
         view=view,
         tangent=shading.tangent.astype(dtype),
@@ -329,6 +375,7 @@ def _geometry_setup(
         strand_of_point=scene.strands.strand_of_point.astype(np.int32),
         backdrop=backdrop,
         opaque=opaque,
+        hidden=fragments.hidden,
         shadow=shadows.plan,
         timings=lap.timings,
         shading_inputs=shading.inputs,

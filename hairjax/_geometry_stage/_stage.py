@@ -11,6 +11,7 @@ from typing import Any
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float
 
 from .._cache import cached
@@ -19,10 +20,11 @@ from .._geometry._capacity import refuses_out_of_memory
 from .._geometry._hidden import drawn_cutoff, keep_visible
 from .._geometry._host import release_heap, to_device
 from .._geometry._placement import Placement, placement_of
+from .._geometry._weights import host_weights
 from .._scene._scene import Scene
 from .._shading import AbstractShadingModel
 from .._shading._streaks import streak_factors
-from ._setup import prepare
+from ._setup import prepare, render_cutoff
 
 __all__ = ["Geometry", "composite_weights", "fragment_alpha", "geometry_stage"]
 
@@ -69,15 +71,21 @@ def fragment_alpha(alpha, strand_of_point, frag_i0, frag_coverage):
 
 
 @eqx.filter_jit
-def composite_weights(alpha, strand_of_point, frag_i0, frag_coverage, frag_pixel, opaque, cutoff=0.0):
+def composite_weights(
+    alpha, strand_of_point, frag_i0, frag_coverage, frag_pixel, opaque, cutoff=0.0, hidden=None
+):
     """(weights `[F]`, transmittance `[HW]`, alpha channel `[HW]`, visible `[F]`) of the
     set-up's fragments (sorted by pixel, front to back within a pixel) at the per-strand
     opacities `alpha` (docs/model.md §6). `visible` marks the fragments seen through a
     transmittance of at least `cutoff` (`_hidden`): all of them at 0. A fragment's strand
     (`strand_of_point[frag_i0]`) and its pixel's first and last fragment are derived here
-    (`pixel_weights`), not stored with the fragments (BENCHMARKS.md "Memory")."""
+    (`pixel_weights`), not stored with the fragments (BENCHMARKS.md "Memory").
+    `hidden` (`[HW]`, optional): the transmittance of fragments the set-up left out
+    (`GeometrySetup.hidden`), multiplied into each pixel's."""
     frag_alpha = fragment_alpha(alpha, strand_of_point, frag_i0, frag_coverage)
     weights, transmittance = pixel_weights(frag_alpha, frag_pixel, opaque.shape[0])
+    if hidden is not None:
+        transmittance = transmittance * hidden
     alpha_channel = 1.0 - transmittance * (1.0 - opaque)
     # w = α·T, so T ≥ c is w ≥ c·α; a fragment with α = 0 counts as seen (it adds 0).
     return weights, transmittance, alpha_channel, weights >= cutoff * frag_alpha
@@ -111,7 +119,7 @@ def geometry_stage(
 
         def compute():
             with jax.ensure_compile_time_eval():
-                return _geometry_stage(scene, scene.strands.alpha, order, cut, where)
+                return _geometry_stage(scene, scene.strands.alpha, order, cut, where, concrete=True)
 
         if order is not None:
             return compute()
@@ -121,34 +129,21 @@ def geometry_stage(
     return _geometry_stage(scene, alpha, order, 0.0, where)
 
 
-def _geometry_stage(scene: Scene, alpha, order, cutoff: float, placement: Placement) -> Geometry:
+def _geometry_stage(
+    scene: Scene, alpha, order, cutoff: float, placement: Placement, *, concrete: bool = False
+) -> Geometry:
     """The geometry stage, the fragments hidden at `cutoff` left out (none at 0; a
-    positive cutoff needs a concrete `alpha`), its set-up placed at `placement`."""
-    setup = prepare(scene, order=order, placement=placement)
+    positive cutoff needs a `concrete` `alpha`: the scene's), its set-up placed at
+    `placement`. The weights of a concrete α on the CPU are the host loop's
+    (`host_weights`), else JAX's (`composite_weights`)."""
+    setup = prepare(scene, order=order, placement=placement, cutoff=render_cutoff(cutoff))
     dtype = jnp.result_type(float)
     alpha = jnp.asarray(alpha, dtype=dtype)
     hw = scene.camera.width * scene.camera.height
-    # The fragments padded to their bucket (`fragment_bucket`: pixel H·W, coverage 0, so
-    # weight 0), so that the programs below compile once per bucket. Shared with the
-    # set-up's aligned arrays where the dtypes agree (`_host`); sent once, for compositing
-    # and the Geometry alike (a copy each on a GPU).
-    pixel, i0, coverage, t = setup.padded_fragments
-    frag_pixel, frag_i0 = to_device(pixel, jnp.int32), to_device(i0, jnp.int32)
-    weights, transmittance, alpha_channel, visible = composite_weights(
-        alpha,
-        jnp.asarray(setup.strand_of_point),
-        frag_i0,
-        to_device(coverage, dtype),
-        frag_pixel,
-        jnp.asarray(setup.opaque, dtype),
-        jnp.asarray(cutoff, dtype),  # an array, not a static float: one compilation for every cutoff
-    )
-    fragments: tuple[jax.Array, ...] = (frag_pixel, frag_i0, to_device(t, dtype), weights)
-    if cutoff > 0 and not bool(jnp.all(visible)):
-        # The padding (α = 0: "seen") is cut too, and the kept ones padded to their bucket.
-        fragments = keep_visible(visible & (frag_pixel < hw), *fragments, fills=(hw, 0, 0, 0))
-    del visible
-    release_heap(weights.size * 12)  # compositing's temporaries: α, the scan's runs
+    if concrete and all(_on_cpu(x) for x in setup.padded_fragments):
+        fragments, transmittance, alpha_channel = _weighed_on_host(setup, alpha, cutoff, dtype)
+    else:
+        fragments, transmittance, alpha_channel = _weighed_in_jax(setup, alpha, cutoff, dtype, hw)
     omega = occluder_omega = None
     if setup.shadow is not None:
         omega = scene.shadows.omega(setup.shadow, alpha)
@@ -185,6 +180,60 @@ def _geometry_stage(scene: Scene, alpha, order, cutoff: float, placement: Placem
         streak=_streak(scene, setup.strand_of_point, dtype),
         shading_inputs=None if extra is None else jax.tree.map(lambda x: jnp.asarray(x, dtype), extra),
     )
+
+
+def _on_cpu(x) -> bool:
+    """Whether `x`, a set-up's array, lives on the host: NumPy's, or a JAX array on the CPU."""
+    return isinstance(x, np.ndarray) or all(d.platform == "cpu" for d in x.devices())
+
+
+def _weighed_on_host(setup, alpha, cutoff: float, dtype):
+    """(fragments (pixel, i0, t, weight), transmittance, alpha channel) of the set-up at
+    the concrete `alpha`, by the host loop (`host_weights`), shared with JAX (`_host`)."""
+    w = host_weights(
+        np.asarray(alpha),
+        setup.strand_of_point,
+        setup.padded_fragments,
+        setup.opaque,
+        setup.hidden,
+        cutoff,
+        dtype,
+    )
+    fragments = (
+        to_device(w.pixel, jnp.int32),
+        to_device(w.i0, jnp.int32),
+        to_device(w.t, dtype),
+        to_device(w.weight, dtype),
+    )
+    return fragments, jnp.asarray(w.transmittance), jnp.asarray(w.alpha_channel)
+
+
+def _weighed_in_jax(setup, alpha, cutoff: float, dtype, hw: int):
+    """`_weighed_on_host`'s results by JAX (`composite_weights`): differentiable in a
+    traced `alpha`, and where the set-up's fragments are on a device."""
+    # The fragments padded to their bucket (`fragment_bucket`: pixel H·W, coverage 0, so
+    # weight 0), so that the programs below compile once per bucket. Shared with the
+    # set-up's aligned arrays where the dtypes agree (`_host`); sent once, for compositing
+    # and the Geometry alike (a copy each on a GPU).
+    pixel, i0, coverage, t = setup.padded_fragments
+    frag_pixel, frag_i0 = to_device(pixel, jnp.int32), to_device(i0, jnp.int32)
+    weights, transmittance, alpha_channel, visible = composite_weights(
+        alpha,
+        jnp.asarray(setup.strand_of_point),
+        frag_i0,
+        to_device(coverage, dtype),
+        frag_pixel,
+        jnp.asarray(setup.opaque, dtype),
+        jnp.asarray(cutoff, dtype),  # an array, not a static float: one compilation for every cutoff
+        None if setup.hidden is None else jnp.asarray(setup.hidden, dtype),
+    )
+    fragments: tuple[jax.Array, ...] = (frag_pixel, frag_i0, to_device(t, dtype), weights)
+    if cutoff > 0 and not bool(jnp.all(visible)):
+        # The padding (α = 0: "seen") is cut too, and the kept ones padded to their bucket.
+        fragments = keep_visible(visible & (frag_pixel < hw), *fragments, fills=(hw, 0, 0, 0))
+    del visible
+    release_heap(weights.size * 12)  # compositing's temporaries: α, the scan's runs
+    return fragments, transmittance, alpha_channel
 
 
 def _streak(scene: Scene, strand_of_point, dtype) -> Float[Array, " P"] | None:

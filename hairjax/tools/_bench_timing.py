@@ -126,11 +126,11 @@ def _measure_pairs(scene, repeats: int, progress) -> dict:
 
 
 def _measure_jax(scene, repeats: int, progress) -> dict:
-    from .._geometry_stage._setup import prepare
+    from .._geometry_stage._setup import prepare, render_cutoff
     from .._geometry_stage._stage import geometry_stage
 
     runs, substeps = _time_renders(scene, repeats, progress)
-    setup = prepare(scene)  # the last run's, cached
+    setup = prepare(scene, cutoff=render_cutoff())  # the last run's, cached
     geom = geometry_stage(scene)
     shading = _time_shading(geom, scene.params, repeats, progress)
     runs["shading"] = shading.runs_s

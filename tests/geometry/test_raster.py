@@ -236,7 +236,7 @@ def raster_calls(monkeypatch):
     loop = _raster.raster_loop("float32")
 
     def spy(*args):
-        calls.append(args[11])  # count_only
+        calls.append(args[12])  # count_only, after the segment range (`raster_loop`)
         return loop(*args)
 
     monkeypatch.setattr(_raster, "raster_loop", lambda name: spy)
