@@ -40,7 +40,14 @@ from .._geometry._raster_plan import RibbonRaster, raster_plan
 from .._geometry._shadows import MAX_MAP_CELLS, light_raster
 from .._scene._scene import Scene
 
-__all__ = ["Need", "fixed_needs", "fragment_needs", "check_capacity", "ribbon_pixel_bound"]
+__all__ = [
+    "Need",
+    "fixed_needs",
+    "fragment_needs",
+    "check_capacity",
+    "ribbon_pixel_bound",
+    "scene_light_raster",
+]
 
 # Bytes held at the render's peak, read off the code that allocates them (the JAX arrays
 # as floats of the working precision); against measured peaks: docs/model.md §5.
@@ -212,11 +219,29 @@ def _over(needs: list[Need]) -> SceneTooLarge | None:
     return None
 
 
-def check_capacity(scene: Scene, camera_raster=None, *, placement: Placement = "host") -> None:
+def scene_light_raster(scene: Scene):
+    """The light's frame and raster of `scene`'s shadows (`light_raster`), None without."""
+    if not scene.shadows.casts:
+        return None
+    strands = scene.strands
+    segments = strands.segments()
+    return light_raster(
+        strands.points,
+        segments,
+        strands.strand_of_point[segments[:, 0]],
+        strands.width,
+        scene.light,
+        scene.shadows.resolution,
+        strands.width_units,
+    )
+
+
+def check_capacity(scene: Scene, camera_raster=None, *, light=None, placement: Placement = "host") -> None:
     """Refuse (`SceneTooLarge`) a render of `scene` whose estimate exceeds the memory
     available: the closed-form items (`fixed_needs`); with the camera's `camera_raster`
     (`rasterize`'s arguments) also the fragments, bounded, then counted where the bound
-    is over (module docstring), for the set-up at `placement` (`_placement`)."""
+    is over (module docstring), for the set-up at `placement` (`_placement`). `light`:
+    the light's frame and raster (`scene_light_raster`) where made already."""
     needs = fixed_needs(scene)
     refusal = _over(needs)
     if refusal is not None:
@@ -226,19 +251,9 @@ def check_capacity(scene: Scene, camera_raster=None, *, placement: Placement = "
         raise SceneTooLarge(f"{keys}: {cells:,} map cells exceed the {MAX_MAP_CELLS:,} the maps can index")
     if camera_raster is None:
         return
-    light = None
-    if scene.shadows.casts:
-        strands = scene.strands
-        segments = strands.segments()
-        _, light = light_raster(
-            strands.points,
-            segments,
-            strands.strand_of_point[segments[:, 0]],
-            strands.width,
-            scene.light,
-            scene.shadows.resolution,
-            strands.width_units,
-        )
+    if light is None:
+        light = scene_light_raster(scene)
+    light = None if light is None else light[1]
     bounded = needs + fragment_needs(scene, camera_raster, light, placement=placement)
     if _over(bounded) is None:
         return

@@ -82,9 +82,11 @@ def shadow_plan(
     occluder: OccluderView | None,
     placement: Placement,
     lap: Callable[[str], None],
+    light_raster=None,
 ) -> ShadowPlan:
     """The shadow method's plan for Ω (§7), with an occluder's surface points among its
-    receivers, and the occluder's own shadow: a depth test in the light's view (§13)."""
+    receivers, and the occluder's own shadow: a depth test in the light's view (§13).
+    `light_raster`: the light's frame and raster, where made already (`ShadowInputs`)."""
     if not scene.shadows.casts:
         return ShadowPlan()
     strands, light = scene.strands, scene.light
@@ -98,6 +100,7 @@ def shadow_plan(
         segment_alpha=segment_alpha,
         width_units=strands.width_units,
         placement=placement,
+        raster=light_raster,
     )
     plan = scene.shadows.setup(shadow_inputs)
     lap("shadow set-up")

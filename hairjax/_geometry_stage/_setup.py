@@ -37,7 +37,7 @@ from .._laps import Laps
 from .._scene._scene import Scene
 from .._shading import PointInputs
 from .._values._strands import tangents, unit_rows
-from ._estimate import check_capacity
+from ._estimate import check_capacity, scene_light_raster
 from ._fragments import CameraFragments, PaddedFragments, camera_fragments
 from ._lighting import OccluderView, ShadowPlan, occluder_view, shadow_plan, to_light
 
@@ -247,8 +247,9 @@ def _prepare(scene: Scene, order, placement: Placement, cutoff: float) -> Geomet
     lap("project+order")
     shading = _point_shading(scene, lap)
     camera = _camera_raster(scene, visible, seg_strand)
+    light = scene_light_raster(scene)  # made once, for the estimate and the shadow method
     # With the fragments, before the image's arrays and theirs.
-    check_capacity(scene, camera.raster, placement=placement)
+    check_capacity(scene, camera.raster, light=light, placement=placement)
     lap("capacity")
     occluder = (
         None if scene.occluder is None else occluder_view(scene.occluder, scene.light, visible.view, lap)
@@ -265,7 +266,9 @@ def _prepare(scene: Scene, order, placement: Placement, cutoff: float) -> Geomet
     if not fragments.drawn and np.any(points[segments[:, 0]] != points[segments[:, 1]]):
         warn_empty_view(scene)
     padded = _with_segment_alpha(fragments.padded, shading.inputs.segment_alpha, points.shape[0], segments)
-    shadows = shadow_plan(scene, segments, seg_strand, shading.inputs.segment_alpha, occluder, placement, lap)
+    shadows = shadow_plan(
+        scene, segments, seg_strand, shading.inputs.segment_alpha, occluder, placement, lap, light
+    )
     if shadows.plan is not None:  # the shadow set-up's transients, trimmed for a scene this large
         release_heap(padded.pixel.size * 20)
     return _geometry_setup(scene, visible.view, shading, padded, fragments, occluder, shadows, lap)

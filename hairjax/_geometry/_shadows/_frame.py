@@ -41,7 +41,10 @@ class ShadowInputs(NamedTuple):
       per-point results get P + Q entries;
     - `segment_alpha` `[E]`: a factor on each segment's opacity (the alpha texture, §17);
     - `placement`: where the light's raster runs, for a method that can run it on the
-      device (`rasterizes_on_device`; `_placement`)."""
+      device (`rasterizes_on_device`; `_placement`);
+    - `raster`: the light's frame and raster (`light_raster` of these inputs at the
+      method's resolution) where the set-up has made them already, for its capacity
+      estimate; None: made here."""
 
     points: np.ndarray
     segments: np.ndarray
@@ -52,6 +55,7 @@ class ShadowInputs(NamedTuple):
     segment_alpha: np.ndarray | None = None
     width_units: str = "pixels"
     placement: Placement = "host"
+    raster: tuple | None = None
 
 
 def map_margin(width: np.ndarray) -> int:
@@ -200,7 +204,7 @@ def light_fragments(inputs: ShadowInputs, resolution: int, *, on_device: bool = 
     (`_device_raster`): the fragments are then JAX arrays there, the per-point arrays
     NumPy still."""
     seg_strand = inputs.seg_strand
-    frame, raster = light_raster(
+    frame, raster = inputs.raster or light_raster(
         inputs.points, inputs.segments, seg_strand, inputs.width, inputs.light, resolution, inputs.width_units
     )
     seg_ids = frame.drawable
