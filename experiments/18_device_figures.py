@@ -203,7 +203,8 @@ def time_jax(scene, repeats: int, label: str, placement=None) -> dict:
     progress(f"{label}: JAX warm-up render (compiles)")
     timed = timed_calls(lambda: hj.render_profiled(scene, placement=placement), repeats, after)
     image, warm_up = timed.last[0], timed.warm_up_s
-    setup = hj.experimental.prepare(scene, placement=placement)  # the last run's, cached
+    # The last run's, cached: a render's set-up leaves the hidden fragments out.
+    setup = hj.experimental.prepare(scene, placement=placement, cutoff=hj.experimental.render_cutoff())
     shadow = getattr(setup, "shadow", None)
     coverage = getattr(shadow, "frag_coverage", None)
     return {

@@ -18,6 +18,7 @@ from ._geometry._placement import Placement as Placement
 from ._geometry._placement import default_placement as default_placement
 from ._geometry._projection import camera_view as camera_view
 from ._geometry_stage._setup import prepare as prepare
+from ._geometry_stage._setup import render_cutoff as render_cutoff
 from ._geometry_stage._setup import visibility_order as visibility_order
 from ._io._files import atomic_path as atomic_path
 from ._io._files import write_csv as write_csv
@@ -43,6 +44,7 @@ __all__ = [
     "hair_centre",
     "key_light",
     "prepare",
+    "render_cutoff",
     "renderer_band",
     "segment_depth",
     "shade_views",

@@ -153,3 +153,24 @@ def test_every_positive_cutoff_shares_one_set_up_and_a_traced_opacity_the_full_o
     grad = hj.render(scene, alpha=jnp.asarray(scene.strands.alpha))  # every fragment: α may move
     assert np.all(np.isfinite(np.asarray(grad)))
     assert prepare(scene).frag_pixel.size > prepare(scene, cutoff=render_cutoff()).frag_pixel.size
+
+
+def test_both_kernels_give_the_same_geometry_though_the_device_cuts_less(monkeypatch):
+    """The set-up on the host (numba's loops) and on the device (XLA's programs, here on
+    the CPU device), the device walking its candidates 64 at a time so that its bound
+    does cut: it keeps more fragments than the host's exact cut, and the geometry stage's
+    own cut then leaves the same fragments with the same weights, bit for bit."""
+    import functools
+
+    from hairjax._geometry_stage import _fragments
+
+    monkeypatch.setattr(_fragments, "seen_on_device", functools.partial(seen_on_device, chunk=64))
+    host_scene, device_scene = _dense_scene(shadows="none"), _dense_scene(shadows="none")
+    host = prepare(host_scene, placement="host", cutoff=render_cutoff())
+    device = prepare(device_scene, placement="device", cutoff=render_cutoff())
+    every = prepare(host_scene, placement="host").frag_pixel.size
+    assert host.frag_pixel.size < device.frag_pixel.size < every
+    got = real_fragments(geometry_stage(device_scene, placement="device"))
+    want = real_fragments(geometry_stage(host_scene, placement="host"))
+    for name in FRAGMENT_FIELDS:
+        np.testing.assert_array_equal(got[name], want[name], err_msg=name)
