@@ -51,18 +51,24 @@ def host_weights(alpha, strand_of_point, padded, opaque, hidden, cutoff: float, 
     hw = opaque.shape[0]
     alpha, strand_of_point = np.asarray(alpha, dtype), np.asarray(strand_of_point, np.int32)
     coverage, t = np.asarray(coverage, dtype), np.asarray(t, dtype)
-    weigh, compact = _loops(dtype.name)
-    weight = aligned_empty(pixel.shape[0], dtype)
+    weigh, weigh_seen = _loops(dtype.name)
     transmittance = np.ones(hw, dtype)
-    cutoff = dtype.type(cutoff)
-    count, kept = weigh(alpha, strand_of_point, pixel, i0, coverage, hw, cutoff, transmittance, weight)
-    weight[count:] = 0  # the bucket's padding
-    fields: tuple[np.ndarray, ...] = (pixel, i0, t, weight)
-    if kept < count:  # into new buffers: the set-up's own stay whole
-        fields = tuple(aligned_empty(fragment_bucket(kept), f.dtype) for f in fields)
-        compact(alpha, strand_of_point, pixel, i0, coverage, t, weight, count, cutoff, *fields)
+    n = pixel.shape[0]
+    if cutoff > 0:  # the seen ones into new buffers, in one pass: the set-up's stay whole
+        fields: tuple[np.ndarray, ...] = tuple(
+            aligned_empty(n, d) for d in (np.int32, np.int32, dtype, dtype)
+        )
+        args = (alpha, strand_of_point, pixel, i0, coverage, t, hw, dtype.type(cutoff), transmittance)
+        kept = weigh_seen(*args, *fields)
+        size = fragment_bucket(kept)
         for field, fill in zip(fields, (hw, 0, 0, 0)):
-            field[kept:] = fill
+            field[kept:size] = fill  # the bucket's padding
+        fields = tuple(field[:size] for field in fields)
+    else:  # every fragment kept: the set-up's own buffers, and the weights
+        weight = aligned_empty(n, dtype)
+        count = weigh(alpha, strand_of_point, pixel, i0, coverage, hw, transmittance, weight)
+        weight[count:] = 0  # the bucket's padding
+        fields = (pixel, i0, t, weight)
     if hidden is not None:
         transmittance *= np.asarray(hidden).astype(dtype)
     one = dtype.type(1)
@@ -75,45 +81,45 @@ def host_weights(alpha, strand_of_point, padded, opaque, hidden, cutoff: float, 
 def _loops(dtype_name: str):
     """The weights' loops compiled by numba for floats of `dtype_name` (on first use;
     cached on disk, `compile_loop`); every constant has that type, so no product widens:
-    `weigh`, each fragment's weight and each pixel's T; `compact`, the seen fragments
-    moved to new buffers."""
+    `weigh` writes every fragment's weight, `weigh_seen` the fragments seen through at
+    least the cutoff with their weights; both each pixel's T."""
     F = np.float32 if dtype_name == "float32" else np.float64
     one = F(1.0)
 
+    @compile_loop(error_model="numpy", inline="always")
+    @no_type_check
+    def over(alpha, strand_of_point, i0, coverage, p, k, transmittance):
+        """(α, w = α·T) of fragment k at pixel p, whose (1 − α) then dims T."""
+        a = alpha[strand_of_point[i0[k]]] * coverage[k]
+        seen_through = transmittance[p]
+        transmittance[p] = seen_through * (one - a)
+        return a, a * seen_through
+
     @compile_loop(error_model="numpy")
     @no_type_check
-    def weigh(alpha, strand_of_point, pixel, i0, coverage, hw, cutoff, transmittance, weight):
-        """(fragments before the padding, those seen through at least `cutoff`)."""
+    def weigh(alpha, strand_of_point, pixel, i0, coverage, hw, transmittance, weight):
+        """The number of fragments (before the bucket's padding)."""
+        for k in range(pixel.size):
+            if pixel[k] >= hw:
+                return k  # the bucket's padding, after every fragment
+            weight[k] = over(alpha, strand_of_point, i0, coverage, pixel[k], k, transmittance)[1]
+        return pixel.size
+
+    @compile_loop(error_model="numpy")
+    @no_type_check
+    def weigh_seen(alpha, strand_of_point, pixel, i0, coverage, t, hw, cutoff, transmittance, *out):
+        """The number of fragments seen, written to `out` (pixel, i0, t, weight)."""
+        out_pixel, out_i0, out_t, out_weight = out
         kept = 0
-        count = 0
         for k in range(pixel.size):
             p = pixel[k]
             if p >= hw:
                 break  # the bucket's padding, after every fragment
-            a = alpha[strand_of_point[i0[k]]] * coverage[k]
-            seen_through = transmittance[p]
-            weight[k] = a * seen_through
-            transmittance[p] = seen_through * (one - a)
+            a, weight = over(alpha, strand_of_point, i0, coverage, p, k, transmittance)
             # T ≥ c as w ≥ c·α, the JAX path's test: α = 0 counts as seen (it adds 0).
-            if weight[k] >= cutoff * a:
+            if weight >= cutoff * a:
+                out_pixel[kept], out_i0[kept], out_t[kept], out_weight[kept] = p, i0[k], t[k], weight
                 kept += 1
-            count += 1
-        return count, kept
+        return kept
 
-    @compile_loop(error_model="numpy")
-    @no_type_check
-    def compact(alpha, strand_of_point, pixel, i0, coverage, t, weight, count, cutoff, *out):
-        out_pixel, out_i0, out_t, out_weight = out
-        kept = 0
-        for k in range(count):
-            a = alpha[strand_of_point[i0[k]]] * coverage[k]
-            if weight[k] >= cutoff * a:
-                out_pixel[kept], out_i0[kept], out_t[kept], out_weight[kept] = (
-                    pixel[k],
-                    i0[k],
-                    t[k],
-                    weight[k],
-                )
-                kept += 1
-
-    return weigh, compact
+    return weigh, weigh_seen

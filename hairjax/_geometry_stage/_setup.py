@@ -302,21 +302,23 @@ def _camera_raster(scene: Scene, visible: VisibleSegments, seg_strand: np.ndarra
     sort of their fragments by pixel then leaves each pixel's front to back (§6). Depth is
     interpolated for the occluder's depth test only."""
     near_first = visible.order[::-1]
-    s0, s1 = visible.segments[near_first, 0], visible.segments[near_first, 1]
-    view, xy, depth, strands = visible.view, visible.xy, visible.depth, scene.strands
+    s0 = visible.segments[near_first, 0]
+    view, strands = visible.view, scene.strands
+    # A segment joins consecutive points (`Strands.segments`), so each point's (x, y, depth)
+    # and its successor's are six consecutive floats of `ends`: one gather of them per
+    # segment, where the segments in draw order are far apart, instead of one per end and
+    # field (six of 1.5 M random reads took 0.3–0.4 s at 100k strands, this one 0.1 s).
+    ends = np.column_stack([visible.xy, visible.depth]).reshape(-1)
+    both = ends[(3 * s0)[:, None] + np.arange(6)]  # [E, 6]: x₀, y₀, z₀, x₁, y₁, z₁
+    z0, z1 = both[:, 2], both[:, 5]
     widths = ribbon_widths(
-        strands.width[seg_strand[near_first]],
-        strands.width_units,
-        depth[s0],
-        depth[s1],
-        view.focal,
-        view.perspective,
+        strands.width[seg_strand[near_first]], strands.width_units, z0, z1, view.focal, view.perspective
     )
     raster = RibbonRaster(
-        xy0=xy[s0],
-        xy1=xy[s1],
-        z0=depth[s0],
-        z1=depth[s1],
+        xy0=both[:, 0:2],
+        xy1=both[:, 3:5],
+        z0=z0,
+        z1=z1,
         width=widths,
         image_width=view.width,
         image_height=view.height,
