@@ -15,6 +15,8 @@ alpha, so Ω is differentiable in opacity.
 from __future__ import annotations
 
 import dataclasses
+import functools
+from typing import no_type_check
 
 import equinox as eqx
 import jax
@@ -23,6 +25,7 @@ import numpy as np
 from jaxtyping import Array, Float, Int
 
 from ..._constants import SHADOW_FILTER_RADIUS
+from .._host import compile_loop
 from .._projection import View
 from .._raster import Arrays
 from ._base import AbstractShadowMethod, check_resolution, register_shadow_method
@@ -91,17 +94,12 @@ class OpacityMaps(AbstractShadowMethod):
             )
         on_device = self.rasterizes_on_device and inputs.placement == "device"
         lf = light_fragments(inputs, resolution, on_device=on_device)
-        xp = jnp if isinstance(lf.frags.depths, jax.Array) else np  # where the light's fragments are
-        # A fragment in [D_j, D_{j+1}) counts towards planes j + 1 … N (strictly nearer).
-        # The clip fires only through rounding (a depth ulps below D₀ → slice 0); D_N gives N.
-        # int32: (N + 1)·R² ≤ MAX_MAP_CELLS < 2³¹.
-        j = xp.clip(xp.floor(lf.frame.slice_coordinate(lf.frags.depths, maps)), 0, maps).astype(np.int32)
         plane, f = point_planes(lf.frame, maps)
         return OpacityMapSetup(
             view=lf.frame.view,
             frag_strand=lf.frag_strand,
             frag_coverage=lf.frag_coverage,
-            frag_cell=j * np.int32(resolution**2) + lf.frags.pixel,
+            frag_cell=_frag_cells(lf.frame, lf.frags.depths, lf.frags.pixel, maps, resolution),
             plane=plane.astype(np.int32),
             f=f,
             texel=np.where(lf.inside, lf.ty * resolution + lf.tx, -1).astype(np.int32),
@@ -126,6 +124,36 @@ class OpacityMaps(AbstractShadowMethod):
 def _map_opacity(alpha, frag_strand, frag_coverage, frag_cell, plane, f, texel, maps, resolution):
     omega = opacity_maps(alpha[frag_strand] * frag_coverage, frag_cell, maps, resolution)
     return point_opacity(omega, plane, f, texel)
+
+
+def _frag_cells(frame: LightFrame, depth, pixel, maps: int, resolution: int):
+    """Each light fragment's map cell j·R² + pixel (int32: (N + 1)·R² ≤ MAX_MAP_CELLS <
+    2³¹), j its slice, `floor(slice_coordinate)` clipped to 0 … N: a fragment in
+    [D_j, D_{j+1}) counts towards planes j + 1 … N (strictly nearer). The clip fires only
+    through rounding (a depth ulps below D₀ → slice 0); D_N gives N. On the host one
+    compiled pass (`_cells_loop`) writes them: NumPy's six passes, each into fresh pages,
+    took 0.2–0.4 s for the 16.6 M fragments of 100k strands."""
+    if isinstance(depth, jax.Array):
+        j = jnp.clip(jnp.floor(frame.slice_coordinate(depth, maps)), 0, maps).astype(np.int32)
+        return j * np.int32(resolution**2) + pixel
+    f = depth.dtype.type  # slice_coordinate's arithmetic, in the depths' precision
+    cell = np.empty(depth.shape, np.int32)
+    _cells_loop()(depth, pixel, f(frame.zmin), f(maps), f(frame.span), np.int32(resolution**2), cell)
+    return cell
+
+
+@functools.cache
+def _cells_loop():
+    """`_frag_cells`' host pass compiled by numba (on first use; cached on disk)."""
+
+    @compile_loop(error_model="numpy")
+    @no_type_check
+    def cells(depth, pixel, zmin, maps, span, texels, out):
+        for k in range(depth.size):
+            u = np.floor((depth[k] - zmin) * maps / span)  # slice_coordinate, in its precision
+            out[k] = np.int32(min(max(u, 0), maps)) * texels + pixel[k]
+
+    return cells
 
 
 def point_planes(frame: LightFrame, maps: int) -> tuple[np.ndarray, np.ndarray]:
