@@ -25,6 +25,9 @@ against the device's free memory and NumPy's against the host's.
 from __future__ import annotations
 
 import dataclasses
+import functools
+import math
+from typing import no_type_check
 
 import jax
 import jax.numpy as jnp
@@ -34,6 +37,7 @@ from .._errors import SceneTooLarge
 from .._geometry import _capacity, _device_raster
 from .._geometry._capacity import fragment_bytes, memory_size
 from .._geometry._device_raster import candidate_bytes
+from .._geometry._host import compile_loop
 from .._geometry._placement import Placement
 from .._geometry._raster import count_fragments
 from .._geometry._raster_plan import RibbonRaster, raster_plan
@@ -112,32 +116,58 @@ def ribbon_pixel_bound(xy0, xy1, width, image_width: int, image_height: int) -> 
     in K ⊕ [−½, ½]², so there are at most area(K) + extent_x(K) + extent_y(K) + 1 of them;
     K's area is at most the rectangle's, the image's, and either side times the image's
     extent across it, and its extents at most the rectangle's bounding box clipped to the
-    image."""
+    image. The bound of each segment is one compiled step (`_bound_loop`): NumPy's two dozen
+    passes over the 2 M ribbons of 100k strands, camera and light, took 0.27 s."""
     xy0, xy1 = np.asarray(xy0, np.float64), np.asarray(xy1, np.float64)
     width = np.asarray(width, np.float64)
-    width = width.max(axis=1) if width.ndim == 2 else np.broadcast_to(width, xy0.shape[:1])
-    delta = xy1 - xy0
-    length = np.hypot(delta[:, 0], delta[:, 1])
-    with np.errstate(invalid="ignore", divide="ignore"):  # length 0: no pixel, masked below
-        ux, uy = np.abs(delta[:, 0]) / length, np.abs(delta[:, 1]) / length
-    # A little beyond w + 1 and L: the loop's float32 may place a centre ulps inside.
-    across = width + 1.0 + 1e-3 * (1.0 + width)
-    along = length * (1.0 + 1e-6) + 1e-3
-    centre = 0.5 * (xy0 + xy1)
-    half_x, half_y = 0.5 * (along * ux + across * uy), 0.5 * (along * uy + across * ux)
-    span_x = np.minimum(centre[:, 0] + half_x, image_width) - np.maximum(centre[:, 0] - half_x, 0.0)
-    span_y = np.minimum(centre[:, 1] + half_y, image_height) - np.maximum(centre[:, 1] - half_y, 0.0)
-    area = np.minimum.reduce(
-        [
-            along * across,
-            along * (image_width * uy + image_height * ux),
-            across * (image_width * ux + image_height * uy),
-            np.maximum(span_x, 0.0) * np.maximum(span_y, 0.0),
-        ]
+    # The wider end: np.maximum of the two columns, as `max(axis=1)` over 2 is 10× as slow.
+    width = np.maximum(width[:, 0], width[:, 1]) if width.ndim == 2 else np.broadcast_to(width, xy0.shape[:1])
+    bound = np.empty(xy0.shape[0])
+    _bound_loop()(
+        np.ascontiguousarray(xy0),
+        np.ascontiguousarray(xy1),
+        np.ascontiguousarray(width),
+        image_width,
+        image_height,
+        bound,
     )
-    bound = area + np.maximum(span_x, 0.0) + np.maximum(span_y, 0.0) + 1.0
-    # Zero-length segments, and ribbons that miss the image, cover nothing.
-    return np.where((length > 0) & (span_x >= 0) & (span_y >= 0), np.ceil(bound), 0.0)
+    return bound
+
+
+@functools.cache
+def _bound_loop():
+    """`ribbon_pixel_bound`'s per-segment bound compiled by numba (on first use; cached on
+    disk), in float64."""
+
+    @compile_loop(error_model="numpy")
+    @no_type_check
+    def bound(xy0, xy1, width, image_width, image_height, out):
+        for i in range(out.size):
+            dx, dy = xy1[i, 0] - xy0[i, 0], xy1[i, 1] - xy0[i, 1]
+            length = math.hypot(dx, dy)
+            if not length > 0:
+                out[i] = 0.0  # a zero-length segment covers nothing
+                continue
+            ux, uy = abs(dx) / length, abs(dy) / length
+            # A little beyond w + 1 and L: the loop's float32 may place a centre ulps inside.
+            across = width[i] + 1.0 + 1e-3 * (1.0 + width[i])
+            along = length * (1.0 + 1e-6) + 1e-3
+            cx, cy = 0.5 * (xy0[i, 0] + xy1[i, 0]), 0.5 * (xy0[i, 1] + xy1[i, 1])
+            half_x, half_y = 0.5 * (along * ux + across * uy), 0.5 * (along * uy + across * ux)
+            span_x = min(cx + half_x, image_width) - max(cx - half_x, 0.0)
+            span_y = min(cy + half_y, image_height) - max(cy - half_y, 0.0)
+            if not (span_x >= 0 and span_y >= 0):
+                out[i] = 0.0  # the ribbon misses the image
+                continue
+            area = min(
+                along * across,
+                along * (image_width * uy + image_height * ux),
+                across * (image_width * ux + image_height * uy),
+                max(span_x, 0.0) * max(span_y, 0.0),
+            )
+            out[i] = math.ceil(area + max(span_x, 0.0) + max(span_y, 0.0) + 1.0)
+
+    return bound
 
 
 def _fragments(raster, limit: int | None) -> tuple[int, bool]:
