@@ -83,7 +83,18 @@ class Strands:
             self.visibility.write(np.ascontiguousarray(values, "f4").tobytes())
         self.visibility_written = visibility is not None
 
-    def vertex_array(self, prog, index_buffer):
+    def screen_buffer(self, frame):
+        """The strand points in the light's raster (`frame.xy`, `frame.depth`: the host's
+        float64 projection, docs/model.md §7) as float32 `in_screen`, for a light pass's
+        `vertex_array`; its caller releases it."""
+        p = self.count
+        screen = np.column_stack([frame.xy[:p], frame.depth[:p]]).astype("f4")
+        return self.ctx.buffer(screen.tobytes() if screen.size else b"\0" * 12)
+
+    def vertex_array(self, prog, index_buffer, screen=None):
+        """The program's vertex array over `index_buffer`; `screen` (`screen_buffer`'s)
+        for a light pass."""
+        given = [] if screen is None else [(screen, "3f", "in_screen")]
         return self.ctx.vertex_array(
             prog,
             [
@@ -95,6 +106,7 @@ class Strands:
                 (self.omega, "f", "in_omega"),
                 (self.visibility, "f", "in_visibility"),
                 *self.extra,
+                *given,
             ],
             index_buffer=index_buffer,
             index_element_size=4,

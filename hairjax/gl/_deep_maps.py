@@ -46,8 +46,9 @@ def deep_opacity_maps(
     omega_buf = ctx.buffer(np.zeros(points.count, "f4").tobytes())
     maps = _DeepBuffers.make(ctx, r)
     depth_prog, layer_prog, comp = progs["deep_first"], progs["deep_layers"], progs["omega_deep"]
-    depth_vao = strands.vertex_array(depth_prog, ibo)
-    layer_vao = strands.vertex_array(layer_prog, ibo)
+    screen = strands.screen_buffer(frame)
+    depth_vao = strands.vertex_array(depth_prog, ibo, screen)
+    layer_vao = strands.vertex_array(layer_prog, ibo, screen)
     depth_range = float(shadows.depth_range(frame))
     try:
         ctx.viewport = (0, 0, r, r)
@@ -86,6 +87,7 @@ def deep_opacity_maps(
             ctx,
             depth_vao,
             layer_vao,
+            screen,
             ibo,
             ids,
             omega_buf,

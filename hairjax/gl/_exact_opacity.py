@@ -32,8 +32,9 @@ def exact_opacity(
     counts = ctx.buffer(np.zeros(r * r, "u4").tobytes())
     cursor = ctx.buffer(np.zeros(r * r, "u4").tobytes())
     prog = progs["light_list"]
-    vao = strands.vertex_array(prog, ibo)
-    buffers = [ibo, target, fbo, counts, cursor, vao]
+    screen = strands.screen_buffer(frame)
+    vao = strands.vertex_array(prog, ibo, screen)
+    buffers = [ibo, screen, target, fbo, counts, cursor, vao]
     try:
         fbo.use()
         ctx.viewport = (0, 0, r, r)

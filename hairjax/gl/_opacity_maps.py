@@ -40,7 +40,8 @@ def opacity_maps(
     omega_buf = ctx.buffer(np.zeros(points.count, "f4").tobytes())
     maps = _MapBuffers.make(ctx, r)
     prog, comp = progs["light_slice"], progs["omega_maps"]
-    vao = strands.vertex_array(prog, ibo)
+    screen = strands.screen_buffer(frame)
+    vao = strands.vertex_array(prog, ibo, screen)
     try:
         maps.fbo.use()
         ctx.viewport = (0, 0, r, r)
@@ -69,7 +70,9 @@ def opacity_maps(
         return np.frombuffer(omega_buf.read(), dtype="f4").copy()
     finally:
         ctx.disable(moderngl.BLEND)
-        release(ctx, vao, ibo, id_buf, omega_buf, maps.fbo, maps.prev_fbo, maps.current, maps.previous)
+        release(
+            ctx, vao, screen, ibo, id_buf, omega_buf, maps.fbo, maps.prev_fbo, maps.current, maps.previous
+        )
 
 
 class _SliceDraws(NamedTuple):

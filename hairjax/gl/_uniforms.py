@@ -60,6 +60,7 @@ def light_pass_uniforms(scene: Scene, frame: LightFrame) -> dict:
     return dict(
         raster_size=(float(r), float(r)),
         shade=False,
+        given_screen=True,  # the strands' `screen_buffer` (`Strands.vertex_array`)
         world_width=scene.strands.width_units == "world",
         light_perspective=bool(frame.view.perspective),
         resolution=r,

@@ -118,3 +118,31 @@ def test_a_wrong_layer_coordinate_fails_the_check(gl, lookup):
     # And the real shader is back afterwards.
     slack = np.abs(render_gl(scene).omega - omega) - omega_uncertainty(scene)
     assert np.all(slack <= rounding_bound(scene, omega))
+
+
+def test_the_light_passes_draw_the_hosts_projection(gl, monkeypatch):
+    """The light passes read each point's place in the light's raster from the host's
+    float64 projection (`Strands.screen_buffer`, docs/model.md §7), as the JAX raster
+    does: GL's Ω is then closer to JAX's than with its own float32 projection, and a
+    buffer moved by two texels moves it."""
+    from hairjax.gl import _buffers, _uniforms, render_gl
+
+    scene = ball()
+    omega = np.asarray(hj.geometry_stage(scene).omega)
+    given = np.abs(render_gl(scene).omega - omega)
+    original = _uniforms.light_pass_uniforms
+    monkeypatch.setattr(  # the shader's own projection, as before the host's was given
+        _uniforms, "light_pass_uniforms", lambda *a: {**original(*a), "given_screen": False}
+    )
+    for module in ("_deep_maps", "_opacity_maps", "_exact_opacity"):
+        monkeypatch.setattr(f"hairjax.gl.{module}.light_pass_uniforms", _uniforms.light_pass_uniforms)
+    projected = np.abs(render_gl(scene).omega - omega)
+    assert given.sum() < projected.sum() and given.max() <= projected.max()
+    monkeypatch.undo()
+    screen_buffer = _buffers.Strands.screen_buffer
+
+    def moved(self, frame):
+        return screen_buffer(self, frame.__class__(**{**frame.__dict__, "xy": frame.xy + 2.0}))
+
+    monkeypatch.setattr(_buffers.Strands, "screen_buffer", moved)
+    assert np.abs(render_gl(scene).omega - omega).max() > 10 * given.max()

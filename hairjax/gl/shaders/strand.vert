@@ -13,8 +13,10 @@ in float in_visibility;  // §13: 0 where the occluder shadows the point
 in float in_streak;        // §16: the hair's streak coordinate u_i (bound only with streaks)
 in vec3 in_normal;         // §17 (Scheuermann scenes only): strand normal
 in vec2 in_maps;           // §17: shift texture σ, noise mask m
+in vec3 in_screen;         // light passes: the point in the light's raster, projected on the host
 
 uniform View view;
+uniform bool given_screen; // light passes: in_screen, not project(view, in_position) (§7)
 uniform bool world_width;  // §5: in_width in world units, w·f/D pixels here (w·f orthographic)
 uniform bool shade;        // camera pass: shade points; light passes: geometry only
 uniform Shading shading;
@@ -40,7 +42,10 @@ out VertexOut {
 } vout;
 
 void main() {
-    vout.screen = project(view, in_position);
+    // The light passes take the host's float64 projection, rounded once, as the JAX
+    // raster does (§7): projected here in float32, a fragment ulps from a layer boundary
+    // could fall on its other side.
+    vout.screen = given_screen ? in_screen : project(view, in_position);
     vout.alpha = in_alpha;
     // Drawn segments lie beyond the near plane, so D > 0 where the width is used.
     vout.width = world_width ? in_width * view.focal / (view.perspective ? vout.screen.z : 1.0)
