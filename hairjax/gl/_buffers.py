@@ -31,6 +31,10 @@ def _release(buffers: list) -> None:
         b.release()
 
 
+# Light-raster coordinates beyond this are clipped to it: far off any raster, and within float32.
+FAR_OFF_RASTER = 1e30
+
+
 class Strands:
     """The strands on the GPU: one buffer per point attribute, shared by every pass."""
 
@@ -88,7 +92,10 @@ class Strands:
         float64 projection, docs/model.md §7) as float32 `in_screen`, for a light pass's
         `vertex_array`; its caller releases it."""
         p = self.count
-        screen = np.column_stack([frame.xy[:p], frame.depth[:p]]).astype("f4")
+        # The clip fires for a point light at the hair's centre (near ≈ 1e-303: xy up to
+        # 1e300, beyond float32); such a point lies far off the raster either way.
+        xy = np.clip(frame.xy[:p], -FAR_OFF_RASTER, FAR_OFF_RASTER)
+        screen = np.column_stack([xy, frame.depth[:p]]).astype("f4")
         return self.ctx.buffer(screen.tobytes() if screen.size else b"\0" * 12)
 
     def vertex_array(self, prog, index_buffer, screen=None):
