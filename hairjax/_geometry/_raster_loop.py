@@ -1,7 +1,8 @@
 """The host raster's compiled loops (docs/model.md §5): for each segment of a raster plan
 (`_raster_plan`), its columns and the candidate rows around its line in each, every
 candidate's coverage (`coverage_formula`, the device program's formula too), position t
-and depth, the covered ones written out. Compiled by numba for JAX's default float
+and depth, the covered ones written out, but for those behind the occluder or hidden
+behind nearer fragments (`_seen`). Compiled by numba for JAX's default float
 precision (float32, or float64 with x64 on); `_raster` runs them in pieces on every core.
 
 The loop contracts a·b + c into fused multiply-adds where LLVM finds them, as XLA's CPU
@@ -92,9 +93,8 @@ def _rows_loop(dtype_name: str):
     in the image, `across` rows wide, with one to spare each side. The others would be
     skipped one by one, and a ribbon far wider than the image has millions of them.
     Where row0 is not exact in the float type, all rows."""
-    exact_limit = _float_type(dtype_name)(
-        1 << 23
-    )  # integers below it and their sums with a row index are exact
+    # Integers below it, and their sums with a row index, are exact.
+    exact_limit = _float_type(dtype_name)(1 << 23)
 
     @compile_loop(**_LOOP_OPTIONS, inline="always")
     @no_type_check

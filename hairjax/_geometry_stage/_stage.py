@@ -1,7 +1,9 @@
 """The geometry stage (docs/model.md §6, §7): from the set-up and the strands' opacity, the
 compositing weights, each pixel's transmittance and alpha, and Ω at every point — JAX,
-differentiable in the per-strand opacity. Its output, `Geometry`, is all the shading stage
-reads: no shading parameter enters here.
+differentiable in the per-strand opacity. At the scene's own opacities, which nothing
+differentiates, the weights on the CPU are the host loop's instead (`host_weights`,
+multiplied in order, §6). Its output, `Geometry`, is all the shading stage reads: no
+shading parameter enters here.
 """
 
 from __future__ import annotations
