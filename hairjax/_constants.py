@@ -12,6 +12,14 @@ PIXEL_HALF_EXTENT = 0.5
 # depth are sampled (docs/model.md §5), lies half its extent from its corner.
 PIXEL_CENTRE = PIXEL_HALF_EXTENT
 
+# GL draws each ribbon as a quad (hairjax/gl/shaders/ribbon.geom) that holds every pixel
+# centre the ribbon covers (docs/model.md §5: 0 ≤ s < L and d < w/2 + PIXEL_HALF_EXTENT)
+# with this many pixels to spare on each side, for where GL rounds the quad's corners: the
+# float32 corners (≤ 1e-4 px at 2048 px) and the snap to the subpixel grid, at most
+# 1/32 px (GL_SUBPIXEL_BITS ≥ 4). The fragment shader decides coverage, so a larger spare
+# changes no image; it only makes fragments that are discarded.
+RIBBON_QUAD_SPARE = 0.125
+
 # Opacity maps are sampled with a (2r + 1)² box filter around the texel of the point
 # (kim-2003 §4.1 uses 3 × 3).
 SHADOW_FILTER_RADIUS = 1

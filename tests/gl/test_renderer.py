@@ -178,3 +178,46 @@ def test_world_width_ribbons_match(gl, light):
     # The check sees the width: the same strands 1 pixel wide render visibly differently.
     pixels = scene.replace(strands=scene.strands.replace(width=1.0, width_units="pixels"))
     assert np.abs(np.asarray(hj.render(pixels)) - jax_image).max() > 1e-2
+
+
+def _render_with_quad_spare(scene, spare: float):
+    """`render_gl(scene)` with the ribbon quads' spare (`RIBBON_QUAD_SPARE`) set to `spare`."""
+    from hairjax import _constants
+    from hairjax.gl import _programs, render_gl
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(_constants, "RIBBON_QUAD_SPARE", spare)
+        _programs.clear_cache()
+        try:
+            return render_gl(scene)
+        finally:
+            patch.undo()
+            _programs.clear_cache()
+
+
+@pytest.mark.parametrize("method", ["opacity-maps", "deep", "exact"])
+def test_the_ribbon_quad_holds_every_covered_pixel(gl, method):
+    """docs/model.md §5: the quad each ribbon is drawn as holds every pixel centre the
+    ribbon covers, so the fragment shader alone decides coverage. With RIBBON_QUAD_SPARE
+    and with a whole pixel to spare, every pass (camera and light) gives the same image and
+    Ω, bit for bit; on ribbons of 1 and 2.5 pixels and of world width, from a point light.
+    A quad that cuts into the ribbon (spare −0.3) changes the image: the check can fail."""
+    from hairjax._constants import RIBBON_QUAD_SPARE
+
+    scene = small_furball_scene(strands=60, size=40, shadows=method, maps=8, resolution=32)
+    scenes = [
+        scene,
+        scene.replace(strands=scene.strands.replace(width=2.5)),
+        scene.replace(
+            strands=scene.strands.replace(width=0.06, width_units="world"),
+            light=hj.Light(kind="point", position=(2.0, 2.5, 1.5)),
+        ),
+    ]
+    tight = [_render_with_quad_spare(s, RIBBON_QUAD_SPARE) for s in scenes]
+    for s, t in zip(scenes, tight, strict=True):
+        spare = _render_with_quad_spare(s, 1.0)
+        np.testing.assert_array_equal(t.image, spare.image)
+        np.testing.assert_array_equal(t.omega, spare.omega)
+    cut = _render_with_quad_spare(scene, -0.3)
+    assert np.abs(cut.image - tight[0].image).max() > 1e-2
+    assert np.abs(cut.omega - tight[0].omega).max() > 1e-2

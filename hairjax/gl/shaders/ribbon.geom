@@ -1,7 +1,7 @@
 #version 450
 // §5: expand a segment into a screen-aligned quad that holds every pixel centre with
-// 0 ≤ s < L and d < w/2 + ½ (with one pixel to spare; w the wider end's width); the
-// fragment shader decides.
+// 0 ≤ s < L and d < w/2 + ½ (w the wider end's width), with RIBBON_QUAD_SPARE pixels to
+// spare on each side for GL's rounding of the corners; the fragment shader decides.
 #include "hairjax_model"
 
 layout(lines) in;
@@ -34,9 +34,10 @@ void main() {
     if (!(len > 0.0)) return;  // zero-length segments draw nothing (§5)
     vec2 u = d / len;
     vec2 n = vec2(-u.y, u.x);
-    float reach = 0.5 * max(vin[0].width, vin[1].width) + PIXEL_HALF_EXTENT + 1.0;
-    vec2 corners[4] = vec2[4](a - u - n * reach, a - u + n * reach,
-                              b + u - n * reach, b + u + n * reach);
+    float reach = 0.5 * max(vin[0].width, vin[1].width) + PIXEL_HALF_EXTENT + RIBBON_QUAD_SPARE;
+    vec2 along = RIBBON_QUAD_SPARE * u;
+    vec2 corners[4] = vec2[4](a - along - n * reach, a - along + n * reach,
+                              b + along - n * reach, b + along + n * reach);
     for (int i = 0; i < 4; ++i) {
         p0 = a;
         delta = d;
