@@ -83,10 +83,12 @@ def shadow_plan(
     placement: Placement,
     lap: Callable[[str], None],
     light_raster=None,
+    opacity: np.ndarray | None = None,
 ) -> ShadowPlan:
     """The shadow method's plan for Ω (§7), with an occluder's surface points among its
     receivers, and the occluder's own shadow: a depth test in the light's view (§13).
-    `light_raster`: the light's frame and raster, where made already (`ShadowInputs`)."""
+    `light_raster`: the light's frame and raster, where made already; `opacity`: the
+    strand opacities the plan serves, where only those (`ShadowInputs`)."""
     if not scene.shadows.casts:
         return ShadowPlan()
     strands, light = scene.strands, scene.light
@@ -101,6 +103,7 @@ def shadow_plan(
         width_units=strands.width_units,
         placement=placement,
         raster=light_raster,
+        opacity=opacity,
     )
     plan = scene.shadows.setup(shadow_inputs)
     lap("shadow set-up")

@@ -266,8 +266,10 @@ def _prepare(scene: Scene, order, placement: Placement, cutoff: float) -> Geomet
     if not fragments.drawn and np.any(points[segments[:, 0]] != points[segments[:, 1]]):
         warn_empty_view(scene)
     padded = _with_segment_alpha(fragments.padded, shading.inputs.segment_alpha, points.shape[0], segments)
+    # A cut set-up serves the scene's own opacities only (`_seen`): so may its shadow plan.
+    opacity = scene.strands.alpha if cutoff > 0 else None
     shadows = shadow_plan(
-        scene, segments, seg_strand, shading.inputs.segment_alpha, occluder, placement, lap, light
+        scene, segments, seg_strand, shading.inputs.segment_alpha, occluder, placement, lap, light, opacity
     )
     if shadows.plan is not None:  # the shadow set-up's transients, trimmed for a scene this large
         release_heap(padded.pixel.size * 20)

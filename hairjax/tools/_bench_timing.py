@@ -151,7 +151,7 @@ def _measure_jax(scene, repeats: int, progress) -> dict:
         "points": int(scene.strands.num_points),
         "segments": int(len(segments)),
         "fragments": int(len(setup.frag_pixel)),
-        "shadow_fragments": (None if setup.shadow is None else int(len(setup.shadow.frag_coverage))),
+        "shadow_fragments": (None if setup.shadow is None else setup.shadow.fragments),
         "image_finite": _finite(image),
         "dtype": str(image.dtype),
     }

@@ -98,3 +98,49 @@ def test_more_maps_converge_to_exact():
     ]
     assert errors[0] > errors[1] > errors[2]
     assert errors[2] < 0.1 * errors[0]
+
+
+@pytest.mark.parametrize("x64", [False, True], ids=["float32", "float64"])
+def test_a_renders_plan_sums_the_fragments_as_jax_does(x64):
+    """A render's set-up plans Ω for the scene's own opacities (`ShadowInputs.opacity`):
+    opacity maps then sum each cell's fragment alpha on the host and keep no fragments.
+    Ω equals the fragment plan's, which JAX sums, bit for bit: with the alpha texture's
+    factor (§17), an occluder's receivers (§13) and a point light. A traced α still gets
+    the fragment plan, and reversing the host's order of additions changes Ω."""
+    import jax
+    import jax.numpy as jnp
+    from helpers import scheuermann_scene, small_furball_scene
+
+    from hairjax._geometry_stage._setup import prepare, render_cutoff
+
+    with jax.enable_x64(x64):
+        furball = small_furball_scene(strands=80, size=32, maps=16, resolution=32, alpha=0.45)
+        scenes = [
+            furball,
+            furball.replace(
+                light=hj.Light(kind="point", position=(1.5, 2.0, 1.0)),
+                occluder=hj.Occluder(center=(0.0, 0.0, 0.0), radius=0.3),
+            ),
+            scheuermann_scene(size=32, strands=60, alpha_texture=(1.0, 0.7, 0.35)),
+        ]
+        for scene in scenes:
+            summed, full = prepare(scene, cutoff=render_cutoff()).shadow, prepare(scene).shadow
+            assert summed.frag_cell is None and summed.slices is not None and full.slices is None
+            assert summed.fragments == full.fragments > 500
+            alpha = jnp.asarray(scene.strands.alpha, jnp.result_type(float))
+            omega = np.asarray(scene.shadows.omega(summed, alpha))
+            np.testing.assert_array_equal(omega, np.asarray(scene.shadows.omega(full, alpha)))
+            np.testing.assert_array_equal(
+                omega[: scene.strands.num_points], np.asarray(geometry_stage(scene).omega)
+            )
+        # NumPy's unbuffered np.add.at, in fragment order, gives the same sums; reversed, not.
+        dtype = summed.slices.dtype
+        frag_alpha = np.asarray(alpha)[full.frag_strand] * np.asarray(full.frag_coverage).astype(dtype)
+        forward, backward = np.zeros_like(summed.slices), np.zeros_like(summed.slices)
+        np.add.at(forward, full.frag_cell, frag_alpha)
+        np.add.at(backward, full.frag_cell[::-1], frag_alpha[::-1])
+        np.testing.assert_array_equal(forward, summed.slices)
+        assert not np.array_equal(backward, summed.slices)
+        # A traced α gets the fragment plan: Ω has a gradient in it.
+        grad = jax.grad(lambda a: geometry_stage(scene, a).omega.sum())(alpha)
+        assert np.all(np.isfinite(grad)) and np.abs(grad).max() > 0

@@ -46,11 +46,13 @@ class AbstractShadowMethod(abc.ABC):
     def setup(self, inputs: ShadowInputs) -> Any:
         """What Ω needs that does not depend on opacity (NumPy; the fragments may be JAX
         arrays on an accelerator, docs/model.md §5), for `inputs`' strand points and then
-        its receivers (the occluder's surface points, §13)."""
+        its receivers (the occluder's surface points, §13); where `inputs.opacity` is
+        given, what it needs for those opacities alone, if the method folds them in."""
 
     @abc.abstractmethod
     def omega(self, setup, alpha: Float[Array, " S"]) -> Float[Array, " PQ"]:
-        """Ω at every point of `setup` for per-strand opacity `alpha` (JAX)."""
+        """Ω at every point of `setup` for per-strand opacity `alpha` (JAX): the
+        opacities the setup was planned for, where it was (`ShadowInputs.opacity`)."""
 
     def planned_maps(self) -> tuple[int, str]:
         """The map cells its Ω accumulates (JAX floats; 0 for a method without maps) and

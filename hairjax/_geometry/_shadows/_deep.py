@@ -76,6 +76,11 @@ class DeepSetup:
     texel: np.ndarray
     first_depth: np.ndarray
 
+    @property
+    def fragments(self) -> int:
+        """How many light fragments it was planned from."""
+        return len(self.frag_coverage)
+
 
 @register_shadow_method
 @dataclasses.dataclass(frozen=True)

@@ -35,6 +35,11 @@ class ExactSetup:
     index: np.ndarray
     weight: np.ndarray
 
+    @property
+    def fragments(self) -> int:
+        """How many light fragments it was planned from."""
+        return len(self.frag_coverage)
+
 
 @register_shadow_method
 @dataclasses.dataclass(frozen=True)

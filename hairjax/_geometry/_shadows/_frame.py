@@ -6,6 +6,7 @@ ribbons rasterised from the light, and the receivers' texels (`LightFragments`).
 from __future__ import annotations
 
 import dataclasses
+import functools
 from typing import NamedTuple
 
 import jax.numpy as jnp
@@ -32,7 +33,7 @@ __all__ = [
 
 class ShadowInputs(NamedTuple):
     """What a shadow method plans Ω from (`AbstractShadowMethod.setup`): the geometry
-    alone, no opacity (docs/model.md §7).
+    and, for a render, the opacities it is planned for (docs/model.md §7).
 
     - `points` `[P, 3]`, `segments` `[E, 2]` (point indices), `seg_strand` `[E]` (each
       segment's strand), `width` `[S]` (per strand, in `width_units`: "pixels" or "world");
@@ -44,7 +45,10 @@ class ShadowInputs(NamedTuple):
       device (`rasterizes_on_device`; `_placement`);
     - `raster`: the light's frame and raster (`light_raster` of these inputs at the
       method's resolution) where the set-up has made them already, for its capacity
-      estimate; None: made here."""
+      estimate; None: made here;
+    - `opacity` `[S]`: the strand opacities Ω is wanted at, where they are known when it
+      is planned (a render's set-up: the scene's α). A method may then fold them into its
+      plan, which serves those opacities only. None: a plan for any α (a traced one)."""
 
     points: np.ndarray
     segments: np.ndarray
@@ -56,6 +60,7 @@ class ShadowInputs(NamedTuple):
     width_units: str = "pixels"
     placement: Placement = "host"
     raster: tuple | None = None
+    opacity: np.ndarray | None = None
 
 
 def map_margin(width: np.ndarray) -> int:
@@ -153,17 +158,29 @@ class LightFragments:
     """The strands rasterised from the light, with the points that receive shadow.
 
     `frame`: the light's frame with the receivers appended to its points; `frags`: the
-    light-space fragments (`_raster.Fragments`); `frag_strand[F]`, `frag_coverage[F]`
-    (times the segments' alpha texture, §17); per receiving point its texel `tx`, `ty`
-    and `inside` (seen and on the map)."""
+    light-space fragments (`_raster.Fragments`, `frags.segment` indexing the drawn
+    segments); per drawn segment its strand `segment_strand` and the alpha texture's
+    factor `segment_factor` (§17; None without); per receiving point its texel `tx`, `ty`
+    and `inside` (seen and on the map). `frag_strand[F]` and `frag_coverage[F]` (times the
+    factor) are gathered per fragment on first use: a plan that sums the fragments on the
+    host reads the tables instead."""
 
     frame: LightFrame
     frags: Fragments
-    frag_strand: Arrays
-    frag_coverage: Arrays
+    segment_strand: Arrays
+    segment_factor: Arrays | None
     tx: np.ndarray
     ty: np.ndarray
     inside: np.ndarray
+
+    @functools.cached_property
+    def frag_strand(self) -> Arrays:
+        return self.segment_strand[self.frags.segment]
+
+    @functools.cached_property
+    def frag_coverage(self) -> Arrays:
+        coverage = self.frags.coverage
+        return coverage if self.segment_factor is None else coverage * self.segment_factor[self.frags.segment]
 
 
 def light_raster(points, segments, seg_strand, width, light, resolution: int, width_units: str = "pixels"):
@@ -215,20 +232,17 @@ def light_fragments(inputs: ShadowInputs, resolution: int, *, on_device: bool = 
     tx = np.floor(np.clip(xy[:, 0], -1, resolution)).astype(np.int64)
     ty = np.floor(np.clip(xy[:, 1], -1, resolution)).astype(np.int64)
     inside = seen & (tx >= 0) & (tx < resolution) & (ty >= 0) & (ty < resolution)
-    coverage = frags.coverage
-    # Per drawn segment first (small tables), then one gather per fragment.
+    # Per drawn segment (small tables), gathered per fragment where a plan asks.
     strand: Arrays = seg_strand[seg_ids].astype(np.int32)  # int32: the plan keeps it
     factor: Arrays | None = None if inputs.segment_alpha is None else inputs.segment_alpha[seg_ids]
     if on_device:  # the tables go to the fragments' device, the factor in their precision
         strand = jnp.asarray(strand)
-        factor = None if factor is None else jnp.asarray(factor, coverage.dtype)
-    if factor is not None:
-        coverage = coverage * factor[frags.segment]
+        factor = None if factor is None else jnp.asarray(factor, frags.coverage.dtype)
     return LightFragments(
         frame=frame,
         frags=frags,
-        frag_strand=strand[frags.segment],
-        frag_coverage=coverage,
+        segment_strand=strand,
+        segment_factor=factor,
         tx=tx,
         ty=ty,
         inside=inside,

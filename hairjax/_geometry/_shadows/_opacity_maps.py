@@ -9,7 +9,9 @@ D_i ≤ z ≤ D_{i+1} gets
 
 with Ω̄ the 3 × 3 box average around the point's texel (texels outside the map count 0).
 Set-up (NumPy, geometry only) plans the gathers; evaluation (JAX) is linear in fragment
-alpha, so Ω is differentiable in opacity.
+alpha, so Ω is differentiable in opacity. A render's set-up, planned for the scene's own
+opacities (`ShadowInputs.opacity`), sums each slice's fragment alpha on the host instead,
+in fragment order as JAX's segment sum does, bit for bit, and keeps no fragments.
 """
 
 from __future__ import annotations
@@ -29,7 +31,7 @@ from .._host import compile_loop
 from .._projection import View
 from .._raster import Arrays
 from ._base import AbstractShadowMethod, check_resolution, register_shadow_method
-from ._frame import LightFrame, ShadowInputs, light_fragments
+from ._frame import LightFragments, LightFrame, ShadowInputs, light_fragments
 
 __all__ = [
     "OpacityMaps",
@@ -38,6 +40,7 @@ __all__ = [
     "box_filter",
     "opacity_maps",
     "accumulated_maps",
+    "stacked_maps",
     "point_opacity",
     "MAX_MAP_CELLS",
 ]
@@ -48,18 +51,22 @@ MAX_MAP_CELLS = 1 << 28
 
 @dataclasses.dataclass(frozen=True)
 class OpacityMapSetup:
-    """What Ω needs that does not depend on opacity: light-space fragments
-    `frag_strand[F]`, `frag_coverage[F]` and `frag_cell[F]` = slice · R² + texel (slice N:
-    beyond the last plane, dropped); per point the plane index `plane[P]`, its weight
-    `f[P]` and texel `texel[P]` (−1 outside)."""
+    """What Ω needs: per point the plane index `plane[P]`, its weight `f[P]` and texel
+    `texel[P]` (−1 outside); and either the light-space fragments `frag_strand[F]`,
+    `frag_coverage[F]` and `frag_cell[F]` = slice · R² + texel (slice N: beyond the last
+    plane, dropped), for any opacity, or, planned for given opacities (a render's), their
+    fragment alpha summed per cell, `slices[(N + 1) · R²]` in JAX's float precision.
+    `fragments`: how many light fragments it was planned from."""
 
     view: View
-    frag_strand: Arrays
-    frag_coverage: Arrays
-    frag_cell: Arrays
     plane: np.ndarray
     f: np.ndarray
     texel: np.ndarray
+    fragments: int
+    frag_strand: Arrays | None = None
+    frag_coverage: Arrays | None = None
+    frag_cell: Arrays | None = None
+    slices: np.ndarray | None = None
 
 
 @register_shadow_method
@@ -95,18 +102,34 @@ class OpacityMaps(AbstractShadowMethod):
         on_device = self.rasterizes_on_device and inputs.placement == "device"
         lf = light_fragments(inputs, resolution, on_device=on_device)
         plane, f = point_planes(lf.frame, maps)
+        # Planned for the scene's opacities (a render's), the fragments are summed here.
+        opacity = None if on_device else inputs.opacity
+        slices = None if opacity is None else _summed_slices(lf, opacity, maps, resolution)
+        summed = slices is not None
+        frags = lf.frags
         return OpacityMapSetup(
             view=lf.frame.view,
-            frag_strand=lf.frag_strand,
-            frag_coverage=lf.frag_coverage,
-            frag_cell=_frag_cells(lf.frame, lf.frags.depths, lf.frags.pixel, maps, resolution),
             plane=plane.astype(np.int32),
             f=f,
             texel=np.where(lf.inside, lf.ty * resolution + lf.tx, -1).astype(np.int32),
+            fragments=int(frags.pixel.shape[0]),
+            frag_strand=None if summed else lf.frag_strand,
+            frag_coverage=None if summed else lf.frag_coverage,
+            frag_cell=None if summed else _frag_cells(lf.frame, frags.depths, frags.pixel, maps, resolution),
+            slices=slices,
         )
 
     def omega(self, setup: OpacityMapSetup, alpha):
         dtype = jnp.result_type(float)
+        if setup.slices is not None:  # planned for the scene's opacities: summed already
+            return _summed_opacity(
+                jnp.asarray(setup.slices, dtype),
+                setup.plane,
+                jnp.asarray(setup.f, dtype),
+                setup.texel,
+                self.maps,
+                self.resolution,
+            )
         return _map_opacity(
             alpha,
             setup.frag_strand,
@@ -126,6 +149,37 @@ def _map_opacity(alpha, frag_strand, frag_coverage, frag_cell, plane, f, texel, 
     return point_opacity(omega, plane, f, texel)
 
 
+@eqx.filter_jit
+def _summed_opacity(slices, plane, f, texel, maps, resolution):
+    return point_opacity(box_filter(stacked_maps(slices, maps, resolution)), plane, f, texel)
+
+
+def _summed_slices(lf: LightFragments, opacity: np.ndarray, maps: int, resolution: int) -> np.ndarray:
+    """`accumulated_maps`' per-cell sums at the strand `opacity`, on the host: one
+    compiled pass over the light fragments (`_sums_loop`), in their order, with JAX's
+    float precision and its roundings (the factor's product in float64, as NumPy
+    promotes it, rounded once; α times it rounded; then added), so the sums equal JAX's
+    segment sum bit for bit, without the per-fragment gathers and cells."""
+    dtype = np.dtype(jnp.result_type(float))
+    frags, frame = lf.frags, lf.frame
+    depth = frags.depths
+    f = depth.dtype.type  # slice_coordinate's arithmetic, in the depths' precision
+    seg_alpha = np.asarray(opacity).astype(dtype)[lf.segment_strand]
+    factor = np.empty(0) if lf.segment_factor is None else np.asarray(lf.segment_factor, np.float64)
+    slices = np.zeros((maps + 1) * resolution * resolution, dtype)
+    _sums_loop(dtype.name)(
+        depth,
+        frags.pixel,
+        frags.coverage.astype(dtype, copy=False),
+        frags.segment,
+        seg_alpha,
+        factor,
+        (f(frame.zmin), f(maps), f(frame.span), np.int32(resolution**2)),
+        slices,
+    )
+    return slices
+
+
 def _frag_cells(frame: LightFrame, depth, pixel, maps: int, resolution: int):
     """Each light fragment's map cell j·R² + pixel (int32: (N + 1)·R² ≤ MAX_MAP_CELLS <
     2³¹), j its slice, `floor(slice_coordinate)` clipped to 0 … N: a fragment in
@@ -143,17 +197,52 @@ def _frag_cells(frame: LightFrame, depth, pixel, maps: int, resolution: int):
 
 
 @functools.cache
+def _cell_of():
+    """`cell_of(depth, pixel, zmin, maps, span, texels)`: a fragment's map cell
+    (`_frag_cells`), compiled by numba to be inlined in the host passes."""
+
+    @compile_loop(error_model="numpy", inline="always")
+    @no_type_check
+    def cell_of(depth, pixel, zmin, maps, span, texels):
+        u = np.floor((depth - zmin) * maps / span)  # slice_coordinate, in its precision
+        return np.int32(min(max(u, 0), maps)) * texels + pixel
+
+    return cell_of
+
+
+@functools.cache
 def _cells_loop():
     """`_frag_cells`' host pass compiled by numba (on first use; cached on disk)."""
+    cell_of = _cell_of()
 
     @compile_loop(error_model="numpy")
     @no_type_check
     def cells(depth, pixel, zmin, maps, span, texels, out):
         for k in range(depth.size):
-            u = np.floor((depth[k] - zmin) * maps / span)  # slice_coordinate, in its precision
-            out[k] = np.int32(min(max(u, 0), maps)) * texels + pixel[k]
+            out[k] = cell_of(depth[k], pixel[k], zmin, maps, span, texels)
 
     return cells
+
+
+@functools.cache
+def _sums_loop(dtype_name: str):
+    """`_summed_slices`' host pass compiled by numba for sums in `dtype_name`. Compiled
+    without contraction: a fused multiply-add would round α·c and the sum once, where
+    JAX's product and scatter-add round each."""
+    F = np.float32 if dtype_name == "float32" else np.float64
+    cell_of = _cell_of()
+
+    @compile_loop(error_model="numpy")
+    @no_type_check
+    def sums(depth, pixel, coverage, segment, seg_alpha, factor, frame, out):
+        zmin, maps, span, texels = frame
+        with_factor = factor.size > 0
+        for k in range(depth.size):
+            seg = segment[k]
+            c = F(coverage[k] * factor[seg]) if with_factor else coverage[k]
+            out[cell_of(depth[k], pixel[k], zmin, maps, span, texels)] += seg_alpha[seg] * c
+
+    return sums
 
 
 def point_planes(frame: LightFrame, maps: int) -> tuple[np.ndarray, np.ndarray]:
@@ -190,6 +279,12 @@ def accumulated_maps(
     in slices 0 … i − 1."""
     cells = resolution * resolution
     slices = jax.ops.segment_sum(frag_alpha, frag_cell, num_segments=(maps + 1) * cells)
+    return stacked_maps(slices, maps, resolution)
+
+
+def stacked_maps(slices: Float[Array, " c"], maps: int, resolution: int) -> Float[Array, "n1 r r"]:
+    """`accumulated_maps` from each cell's summed fragment alpha (`[(N + 1) · R²]`, slice
+    N dropped): plane i holds slices 0 … i − 1."""
     slices = slices.reshape(maps + 1, resolution, resolution)[:maps]
     return jnp.concatenate([jnp.zeros_like(slices[:1]), jnp.cumsum(slices, axis=0)])
 
