@@ -8,8 +8,9 @@ EGL context, this script measures in one process:
   / 512² and 100k / 1024²: the JAX full render as `hairjax bench` times it
   (`render_profiled`: the host set-up with its sub-steps, the opacity stage, the shading
   stage, each waited for), the shading stage alone (warm calls on the last geometry), the
-  GL renderer's full render (`hairjax.gl.render_gl`, wall time of the call, with its passes)
-  and the fragment counts;
+  GL renderer's full render (`hairjax.gl.render_gl`, wall time of the call, with its passes),
+  again with its ribbons by vertex pulling instead of the geometry shader, and the fragment
+  counts;
 - the warm 4-parameter fit (Kd, Ks, shininess, κ) of experiments/02_fit_speed.py's staged
   case (`hairjax.fit`, Levenberg-Marquardt) at 20k / 512²: one cold fit, then the median of
   `--fit-repeats` warm ones;
@@ -227,9 +228,9 @@ def time_shading(scene, repeats: int, label: str) -> dict:
     return stat(runs)
 
 
-def time_gl(scene, repeats: int, label: str) -> dict:
-    """`render_gl(scene)`'s wall time: one warm-up run (shader compilation), then `repeats`.
-    Any failure is returned as an error, not raised."""
+def time_gl(scene, repeats: int, label: str, ribbons: str = "geometry-shader") -> dict:
+    """`render_gl(scene, ribbons=ribbons)`'s wall time: one warm-up run (shader
+    compilation), then `repeats`. Any failure is returned as an error, not raised."""
     try:
         from hairjax.gl import render_gl
 
@@ -241,8 +242,8 @@ def time_gl(scene, repeats: int, label: str) -> dict:
                     passes.setdefault(key, []).append(value)
                 progress(f"{label}: GL run {k}/{repeats}: {seconds:.3f} s")
 
-        progress(f"{label}: GL warm-up render")
-        timed = timed_calls(lambda: render_gl(scene), repeats, after)
+        progress(f"{label}: GL warm-up render, ribbons by {ribbons}")
+        timed = timed_calls(lambda: render_gl(scene, ribbons=ribbons), repeats, after)
         result, warm_up, total = timed.last, timed.warm_up_s, timed.runs_s
         return {
             "status": "ok",
@@ -283,6 +284,9 @@ def jax_and_gl(out: dict, scene, repeats: int, label: str, save, shading: bool) 
     save()
     out["gl"] = time_gl(scene, repeats, label)
     out["jax_over_gl"] = ratio(out["jax"], out["gl"])
+    save()
+    # The ribbons without a geometry shader (hairjax/gl/_ribbons.py): the same image.
+    out["gl_vertex_pulling"] = time_gl(scene, repeats, label, "vertex-pulling")
     save()
 
 
@@ -468,6 +472,9 @@ def table(results: dict) -> str:
                         add(f"      {sub.split('/', 1)[1]}", st["median_s"])
         for name, st in (get(case, "gl", "passes") or {}).items():
             add(f"    GL {name}", None, st["median_s"])
+        pulled = get(case, "gl_vertex_pulling", "full_render", "median_s")
+        if pulled is not None:
+            add("    GL full render, ribbons by vertex pulling", None, pulled)
     fit = results.get("fit")
     if fit:
         if "error" in fit:

@@ -12,8 +12,9 @@ from .._scene._scene import Scene
 from ._buffers import Strands
 from ._context import check, release
 from ._occluder import OccluderLight, OccluderSurface, draw_occluder_color
+from ._ribbons import Ribbons
 from ._shading import lookup_texture, shading_uniforms, streak_texture, use_shading_textures
-from ._uniforms import light_uniforms, set_uniforms, vec, view_uniforms
+from ._uniforms import light_uniforms, vec, view_uniforms
 
 __all__ = ["blend_over", "camera_depth_far", "camera_pass"]
 
@@ -61,10 +62,12 @@ def camera_pass(
     depth_far: float,
     surface: OccluderSurface | None,
     occluder: OccluderLight | None,
+    expansion: str,
 ) -> np.ndarray:
     """The image (`float32[H, W, 4]`, row 0 at the top): the occluder's colour where
     `surface` covers the pixel (§13, lit by `occluder`), then the segments `order` far to near
-    as ribbons shaded at their points (§5, §6, §8), depths in (near, `depth_far`)."""
+    as ribbons shaded at their points (§5, §6, §8), depths in (near, `depth_far`), expanded
+    as `expansion` says (`_ribbons`)."""
     import moderngl
 
     cam = scene.camera
@@ -106,13 +109,11 @@ def camera_pass(
         fbo.depth_mask = False
         blend_over(ctx)
         ctx.blend_equation = moderngl.FUNC_ADD
-        prog = progs["camera"]
-        set_uniforms(prog, shade=True, eye=vec(view.origin), **shading_uniforms(scene, params), **common)
-        use_shading_textures(prog, scene, table, streak)
-        vao = strands.vertex_array(prog, ibo)
-        if len(order):
-            vao.render(moderngl.LINES, vertices=2 * len(order))
-        vao.release()
+        ribbons = Ribbons(ctx, progs, "camera", strands, ibo, len(order), expansion)
+        extra.append(ribbons)
+        ribbons.set_uniforms(shade=True, eye=vec(view.origin), **shading_uniforms(scene, params), **common)
+        use_shading_textures(ribbons.point_program, scene, table, streak)
+        ribbons.draw()
         check(ctx, "camera pass")
         data = np.frombuffer(color.read(), dtype="f4").reshape(h, w, 4)
         return data[::-1].copy()  # GL's row 0 is the bottom

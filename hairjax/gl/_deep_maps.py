@@ -16,6 +16,7 @@ from .._scene._scene import Scene
 from ._buffers import Points, Strands
 from ._context import check, release
 from ._programs import workgroups
+from ._ribbons import Ribbons
 from ._shadow_passes import register_gl_shadow_pass
 from ._uniforms import light_pass_uniforms, set_uniforms, view_uniforms
 
@@ -27,7 +28,15 @@ BOUNDARIES_PER_TARGET = 4
 
 @register_gl_shadow_pass("deep")
 def deep_opacity_maps(
-    ctx, progs, scene: Scene, strands: Strands, frame: LightFrame, points: Points, *, clip_slices: bool = True
+    ctx,
+    progs,
+    scene: Scene,
+    strands: Strands,
+    frame: LightFrame,
+    points: Points,
+    *,
+    clip_slices: bool = True,
+    expansion: str = "geometry-shader",
 ) -> np.ndarray:
     """z₀ by MIN blending; then for each group of four boundaries (1 … K and the total,
     K + 1), the layers drawn additively into one RGBA target and the points whose upper
@@ -40,26 +49,26 @@ def deep_opacity_maps(
         raise TypeError(f"the deep pass got shadows.method = {shadows.method!r}")
     k, r = shadows.layers, shadows.resolution
     ibo = strands.index_buffer(frame.drawable)
-    draw = 2 * len(frame.drawable)
     seen = np.flatnonzero(frame.seen).astype("u4")
     ids = ctx.buffer(seen.tobytes() if seen.size else b"\0" * 4)  # fires when no point is seen
     omega_buf = ctx.buffer(np.zeros(points.count, "f4").tobytes())
     maps = _DeepBuffers.make(ctx, r)
-    depth_prog, layer_prog, comp = progs["deep_first"], progs["deep_layers"], progs["omega_deep"]
+    comp = progs["omega_deep"]
     screen = strands.screen_buffer(frame)
-    depth_vao = strands.vertex_array(depth_prog, ibo, screen)
-    layer_vao = strands.vertex_array(layer_prog, ibo, screen)
+    segments = len(frame.drawable)
+    first = Ribbons(ctx, progs, "deep_first", strands, ibo, segments, expansion, screen)
+    layer = Ribbons(ctx, progs, "deep_layers", strands, ibo, segments, expansion, screen)
     depth_range = float(shadows.depth_range(frame))
     try:
         ctx.viewport = (0, 0, r, r)
         ctx.disable(moderngl.DEPTH_TEST)
         ctx.enable(moderngl.BLEND)
-        _depth_pass(ctx, maps, depth_prog, depth_vao, draw, light_pass_uniforms(scene, frame))
+        _depth_pass(ctx, maps, first, light_pass_uniforms(scene, frame))
         ctx.blend_equation = moderngl.FUNC_ADD
         ctx.blend_func = moderngl.ONE, moderngl.ONE
         maps.first.use(0)
-        set_uniforms(
-            layer_prog, first_map=0, layers=k, depth_range=depth_range, **light_pass_uniforms(scene, frame)
+        layer.set_uniforms(
+            first_map=0, layers=k, depth_range=depth_range, **light_pass_uniforms(scene, frame)
         )
         set_uniforms(
             comp,
@@ -77,7 +86,7 @@ def deep_opacity_maps(
         ids.bind_to_storage_buffer(1)
         omega_buf.bind_to_storage_buffer(2)
         groups = -(-(k + 1) // BOUNDARIES_PER_TARGET)  # ⌈(K + 1)/4⌉
-        _layer_passes(ctx, maps, layer_prog, layer_vao, comp, draw, len(seen), groups)
+        _layer_passes(ctx, maps, layer, comp, len(seen), groups)
         check(ctx, f"deep opacity maps: {groups} layer passes")
         return np.frombuffer(omega_buf.read(), dtype="f4").copy()
     finally:
@@ -85,8 +94,8 @@ def deep_opacity_maps(
         ctx.disable(moderngl.BLEND)
         release(
             ctx,
-            depth_vao,
-            layer_vao,
+            first,
+            layer,
             screen,
             ibo,
             ids,
@@ -122,32 +131,29 @@ class _DeepBuffers(NamedTuple):
         return cls(first, targets, first_fbo, fbos)
 
 
-def _depth_pass(ctx, maps: _DeepBuffers, prog, vao, draw: int, uniforms: dict) -> None:
+def _depth_pass(ctx, maps: _DeepBuffers, ribbons: Ribbons, uniforms: dict) -> None:
     """z₀: the nearest fragment per texel, by MIN blending; +∞ stays where no hair is."""
     import moderngl
 
     maps.first_fbo.use()
     maps.first_fbo.clear(float("inf"), 0.0, 0.0, 0.0)
     ctx.blend_equation = moderngl.MIN
-    set_uniforms(prog, **uniforms)
-    if draw:
-        vao.render(moderngl.LINES, vertices=draw)
+    ribbons.set_uniforms(**uniforms)
+    ribbons.draw()
     check(ctx, "deep opacity maps: depth pass")
 
 
-def _layer_passes(ctx, maps: _DeepBuffers, prog, vao, comp, draw: int, seen: int, groups: int) -> None:
+def _layer_passes(ctx, maps: _DeepBuffers, ribbons: Ribbons, comp, seen: int, groups: int) -> None:
     """Per group of four boundaries: the layers drawn additively into the group's target,
     then Ω of the `seen` points whose upper boundary is in the group, between it and the
     group before."""
-    import moderngl
 
     for g in range(groups):
         cur, prev = g % 2, (g + 1) % 2  # the group before is in the other target
         maps.fbos[cur].use()
         maps.fbos[cur].clear(0.0, 0.0, 0.0, 0.0)
-        set_uniforms(prog, group=g)
-        if draw:
-            vao.render(moderngl.LINES, vertices=draw)
+        ribbons.set_uniforms(group=g)
+        ribbons.draw()
         if seen:
             maps.first.use(0)
             maps.targets[prev].use(1)

@@ -10,6 +10,7 @@ from .._scene._scene import Scene
 from ._buffers import Points, Strands
 from ._context import check, release
 from ._programs import workgroups
+from ._ribbons import Ribbons
 from ._shadow_passes import register_gl_shadow_pass
 from ._uniforms import light_pass_uniforms, set_uniforms, view_uniforms
 
@@ -18,7 +19,15 @@ __all__ = ["exact_opacity"]
 
 @register_gl_shadow_pass("exact")
 def exact_opacity(
-    ctx, progs, scene: Scene, strands: Strands, frame: LightFrame, points: Points, *, clip_slices: bool = True
+    ctx,
+    progs,
+    scene: Scene,
+    strands: Strands,
+    frame: LightFrame,
+    points: Points,
+    *,
+    clip_slices: bool = True,
+    expansion: str = "geometry-shader",
 ) -> np.ndarray:
     """Ω without slicing: per-texel fragment lists (count, prefix sum, fill), then each
     point sums the alpha strictly nearer the light in its 3 × 3 texels. (No slices:
@@ -31,21 +40,18 @@ def exact_opacity(
     fbo = ctx.framebuffer(color_attachments=[target])
     counts = ctx.buffer(np.zeros(r * r, "u4").tobytes())
     cursor = ctx.buffer(np.zeros(r * r, "u4").tobytes())
-    prog = progs["light_list"]
     screen = strands.screen_buffer(frame)
-    vao = strands.vertex_array(prog, ibo, screen)
-    buffers = [ibo, screen, target, fbo, counts, cursor, vao]
+    ribbons = Ribbons(ctx, progs, "light_list", strands, ibo, len(frame.drawable), expansion, screen)
+    buffers = [ibo, screen, target, fbo, counts, cursor, ribbons]
     try:
         fbo.use()
         ctx.viewport = (0, 0, r, r)
         ctx.disable(moderngl.DEPTH_TEST | moderngl.BLEND)
-        set_uniforms(prog, fill=False, **light_pass_uniforms(scene, frame))
+        ribbons.set_uniforms(fill=False, **light_pass_uniforms(scene, frame))
         counts.bind_to_storage_buffer(0)
         cursor.bind_to_storage_buffer(1)
         check(ctx, "exact opacity set-up")
-        draw = 2 * len(frame.drawable)
-        if draw:
-            vao.render(moderngl.LINES, vertices=draw)
+        ribbons.draw()
         ctx.memory_barrier()
         check(ctx, "exact opacity: count pass")
         n_per_texel = np.frombuffer(counts.read(), dtype="u4")
@@ -56,9 +62,8 @@ def exact_opacity(
         buffers += [offsets, entries]
         offsets.bind_to_storage_buffer(2)
         entries.bind_to_storage_buffer(3)
-        set_uniforms(prog, fill=True)
-        if draw:
-            vao.render(moderngl.LINES, vertices=draw)
+        ribbons.set_uniforms(fill=True)
+        ribbons.draw()
         ctx.memory_barrier()
         check(ctx, "exact opacity: fill pass")
         seen = np.flatnonzero(frame.seen).astype("u4")

@@ -13,6 +13,7 @@ from .._scene._scene import Scene
 from ._buffers import Points, Strands
 from ._context import check, release
 from ._programs import workgroups
+from ._ribbons import Ribbons
 from ._shadow_passes import register_gl_shadow_pass
 from ._uniforms import light_pass_uniforms, set_uniforms, view_uniforms
 
@@ -21,7 +22,15 @@ __all__ = ["opacity_maps"]
 
 @register_gl_shadow_pass("opacity-maps")
 def opacity_maps(
-    ctx, progs, scene: Scene, strands: Strands, frame: LightFrame, points: Points, *, clip_slices: bool = True
+    ctx,
+    progs,
+    scene: Scene,
+    strands: Strands,
+    frame: LightFrame,
+    points: Points,
+    *,
+    clip_slices: bool = True,
+    expansion: str = "geometry-shader",
 ) -> np.ndarray:
     """kim-2003 Routine 2: B_current accumulates slice after slice (GL_ONE, GL_ONE), the
     points of slice i are evaluated between B_prev = Ω(D_i) and B_current = Ω(D_{i+1})."""
@@ -39,9 +48,9 @@ def opacity_maps(
     )  # none seen
     omega_buf = ctx.buffer(np.zeros(points.count, "f4").tobytes())
     maps = _MapBuffers.make(ctx, r)
-    prog, comp = progs["light_slice"], progs["omega_maps"]
+    comp = progs["omega_maps"]
     screen = strands.screen_buffer(frame)
-    vao = strands.vertex_array(prog, ibo, screen)
+    ribbons = Ribbons(ctx, progs, "light_slice", strands, ibo, len(draws.segments), expansion, screen)
     try:
         maps.fbo.use()
         ctx.viewport = (0, 0, r, r)
@@ -49,8 +58,8 @@ def opacity_maps(
         ctx.disable(moderngl.DEPTH_TEST)
         ctx.enable(moderngl.BLEND)
         ctx.blend_func = moderngl.ONE, moderngl.ONE
-        set_uniforms(
-            prog, zmin=float(frame.zmin), span=float(frame.span), maps=n, **light_pass_uniforms(scene, frame)
+        ribbons.set_uniforms(
+            zmin=float(frame.zmin), span=float(frame.span), maps=n, **light_pass_uniforms(scene, frame)
         )
         set_uniforms(
             comp,
@@ -65,13 +74,13 @@ def opacity_maps(
         points.buffer.bind_to_storage_buffer(0)
         id_buf.bind_to_storage_buffer(1)
         omega_buf.bind_to_storage_buffer(2)
-        _slice_passes(ctx, prog, comp, vao, maps, draws, slices, n)
+        _slice_passes(ctx, ribbons, comp, maps, draws, slices, n)
         check(ctx, f"{n} opacity-map passes")
         return np.frombuffer(omega_buf.read(), dtype="f4").copy()
     finally:
         ctx.disable(moderngl.BLEND)
         release(
-            ctx, vao, screen, ibo, id_buf, omega_buf, maps.fbo, maps.prev_fbo, maps.current, maps.previous
+            ctx, ribbons, screen, ibo, id_buf, omega_buf, maps.fbo, maps.prev_fbo, maps.current, maps.previous
         )
 
 
@@ -150,10 +159,11 @@ class _MapBuffers(NamedTuple):
         return cls(current, previous, fbo, prev_fbo)
 
 
-def _slice_passes(ctx, prog, comp, vao, maps: _MapBuffers, draws: _SliceDraws, slices: _PointSlices, n: int):
+def _slice_passes(
+    ctx, ribbons: Ribbons, comp, maps: _MapBuffers, draws: _SliceDraws, slices: _PointSlices, n: int
+):
     """For each slice i: B_prev = Ω(D_i), slice i's segments drawn into B_current, which
     then holds Ω(D_{i+1}); and Ω of slice i's points, between the two."""
-    import moderngl
 
     drawn_since_copy = True
     for i in range(n):
@@ -161,14 +171,14 @@ def _slice_passes(ctx, prog, comp, vao, maps: _MapBuffers, draws: _SliceDraws, s
             ctx.copy_framebuffer(maps.prev_fbo, maps.fbo)
             drawn_since_copy = False
         maps.fbo.use()
-        set_uniforms(prog, slice=i)
+        ribbons.set_uniforms(slice=i)
         if draws.starts is not None:  # clip_slices
-            count = draws.starts[i + 1] - draws.starts[i]
+            count = int(draws.starts[i + 1] - draws.starts[i])
             if count:
-                vao.render(moderngl.LINES, vertices=2 * int(count), first=2 * int(draws.starts[i]))
+                ribbons.draw(int(draws.starts[i]), count)
                 drawn_since_copy = True
         elif len(draws.segments):
-            vao.render(moderngl.LINES, vertices=2 * len(draws.segments))
+            ribbons.draw()
             drawn_since_copy = True
         count = int(slices.starts[i + 1] - slices.starts[i])
         if count:

@@ -49,20 +49,30 @@ def shader_source(name: str) -> str:
     return resources.files(__package__).joinpath("shaders", name).read_text()
 
 
+# The ribbon passes' fragment shaders: each is one program per way of drawing ribbons
+# (`_ribbons`): "<name>" with the geometry shader, "<name> pulled" by vertex pulling, whose
+# points are placed and shaded by "<name> points" (strand.vert alone, its outputs captured):
+# a program per pass, as each keeps its uniforms (a light pass's `given_screen`).
+_RIBBON_FRAGMENTS = {
+    "camera": "camera.frag",
+    "light_slice": "light_slice.frag",
+    "light_list": "light_list.frag",
+    "deep_first": "deep_first.frag",
+    "deep_layers": "deep_layers.frag",
+}
+_RIBBON_PROGRAMS = {
+    program: stages
+    for name, fragment in _RIBBON_FRAGMENTS.items()
+    for program, stages in (
+        (name, dict(vertex_shader="strand.vert", geometry_shader="ribbon.geom", fragment_shader=fragment)),
+        (f"{name} pulled", dict(vertex_shader="ribbon_pulled.vert", fragment_shader=fragment)),
+        (f"{name} points", dict(vertex_shader="strand.vert")),
+    )
+}
+# What "<name> points" captures per point, for the pulled ribbons (`_ribbons.POINT_FLOATS`).
+_POINT_OUTPUTS = ("VertexOut.screen", "VertexOut.color", "VertexOut.alpha", "VertexOut.width")
 _PROGRAMS = {
-    "camera": dict(vertex_shader="strand.vert", geometry_shader="ribbon.geom", fragment_shader="camera.frag"),
-    "light_slice": dict(
-        vertex_shader="strand.vert", geometry_shader="ribbon.geom", fragment_shader="light_slice.frag"
-    ),
-    "light_list": dict(
-        vertex_shader="strand.vert", geometry_shader="ribbon.geom", fragment_shader="light_list.frag"
-    ),
-    "deep_first": dict(
-        vertex_shader="strand.vert", geometry_shader="ribbon.geom", fragment_shader="deep_first.frag"
-    ),
-    "deep_layers": dict(
-        vertex_shader="strand.vert", geometry_shader="ribbon.geom", fragment_shader="deep_layers.frag"
-    ),
+    **_RIBBON_PROGRAMS,
     "occluder_sphere": dict(vertex_shader="fullscreen.vert", fragment_shader="occluder_sphere.frag"),
     "occluder_mesh": dict(vertex_shader="occluder_mesh.vert", fragment_shader="occluder_mesh.frag"),
     "occluder_color": dict(vertex_shader="fullscreen.vert", fragment_shader="occluder_color.frag"),
@@ -86,10 +96,12 @@ def programs(ctx) -> dict:
             '#include "hairjax_constants"', constants_glsl()
         )
         ctx.includes["hairjax_ribbon_fragment"] = shader_source("ribbon_fragment.glsl")
+        ctx.includes["hairjax_ribbon_quad"] = shader_source("ribbon_quad.glsl")
         built = {}
         for name, stages in _PROGRAMS.items():
+            captured = dict(varyings=_POINT_OUTPUTS) if name.endswith(" points") else {}
             try:
-                built[name] = ctx.program(**{k: shader_source(v) for k, v in stages.items()})
+                built[name] = ctx.program(**{k: shader_source(v) for k, v in stages.items()}, **captured)
             except Exception as err:
                 raise GLError(
                     f"shader program {name!r} ({', '.join(stages.values())}) failed to build:\n{err}"

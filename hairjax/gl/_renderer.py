@@ -30,6 +30,7 @@ from ._context import get_context
 from ._occluder import OccluderLight, OccluderSurface, occluder_shadow
 from ._patches import patch_head, render_patches_gl
 from ._programs import programs
+from ._ribbons import check_expansion
 from ._shadow_passes import gl_shadow_pass
 
 __all__ = ["GLResult", "render_gl"]
@@ -55,6 +56,7 @@ def render_gl(
     omega: np.ndarray | None = None,
     order: np.ndarray | None = None,
     occluder: OccluderLight | None = None,
+    ribbons: str = "geometry-shader",
 ) -> GLResult:
     """Render `scene` with OpenGL.
 
@@ -65,9 +67,12 @@ def render_gl(
     the camera pass in this segment order instead of sorting (`visibility_order`, e.g. an
     order reused from an earlier view); `occluder`: with `omega`, the occluder's part of
     the light to use (`occluder_light(scene, geometry)` gives the JAX renderer's); required
-    with `omega` when the scene has an occluder and shadows.
+    with `omega` when the scene has an occluder and shadows; `ribbons`: how the passes
+    expand segments into quads, "geometry-shader" or "vertex-pulling" (`_ribbons`: the
+    same images, bit for bit).
     """
     params = scene.params if params is None else params
+    check_expansion(ribbons)
     if scene.patches is not None:
         return _render_patches(scene, params, omega, order, occluder)
     ctx = get_context()
@@ -91,7 +96,7 @@ def render_gl(
                     "the light, pass occluder= too (occluder_light(scene, geometry))"
                 )
         elif scene.shadows.casts:
-            omega, made = _shadows(ctx, progs, scene, strands, surface, clip_slices, lap)
+            omega, made = _shadows(ctx, progs, scene, strands, surface, (clip_slices, ribbons), lap)
             if made is not None:  # the scene has an occluder: it takes part in the light
                 occluder = made
         else:
@@ -100,7 +105,9 @@ def render_gl(
         lit = lighting and occluder is not None
         strands.write_visibility(np.asarray(occluder.visibility, "f4") if lit and occluder else None)
         lit_by = occluder if lighting else None
-        image = camera_pass(ctx, progs, scene, params, strands, view, order, depth_far, surface, lit_by)
+        image = camera_pass(
+            ctx, progs, scene, params, strands, view, order, depth_far, surface, lit_by, ribbons
+        )
         lap("camera pass")
         return GLResult(image, omega, lap.timings, lit_by)
     finally:
@@ -116,11 +123,19 @@ def _given_omega(strands: Strands, omega) -> np.ndarray:
 
 
 def _shadows(
-    ctx, progs, scene: Scene, strands: Strands, surface: OccluderSurface | None, clip_slices: bool, lap: Laps
+    ctx,
+    progs,
+    scene: Scene,
+    strands: Strands,
+    surface: OccluderSurface | None,
+    drawn: tuple[bool, str],
+    lap: Laps,
 ) -> tuple[np.ndarray, OccluderLight | None]:
     """(Ω per strand point, uploaded for the camera pass; the occluder's part of the light,
     None without an occluder): the scene's shadow method's passes from the light, over the
-    strands' points and the occluder surface's points (§7, §13)."""
+    strands' points and the occluder surface's points (§7, §13), `drawn` = (clip_slices,
+    the ribbons' expansion) as `render_gl` says."""
+    clip_slices, expansion = drawn
     frame = light_frame(
         scene.strands.points,
         strands.segments,
@@ -133,7 +148,7 @@ def _shadows(
     try:
         frame = with_receivers(frame, points.receivers)
         omega_all = gl_shadow_pass(scene.shadows.method)(
-            ctx, progs, scene, strands, frame, points, clip_slices=clip_slices
+            ctx, progs, scene, strands, frame, points, clip_slices=clip_slices, expansion=expansion
         )
         omega = omega_all[: strands.count].copy()
         strands.write_omega(omega)

@@ -2,8 +2,9 @@
 name (`AbstractShadowMethod.method`, hairjax/_geometry/_shadows/), so that a new method is one GL
 module with `@register_gl_shadow_pass(name)` beside its JAX module.
 
-A pass is `fn(ctx, progs, scene, strands, frame, points, *, clip_slices) -> Ω` with Ω per
-point of `points` (strand points, then the occluder's receivers), float32.
+A pass is `fn(ctx, progs, scene, strands, frame, points, *, clip_slices, expansion) -> Ω`
+with Ω per point of `points` (strand points, then the occluder's receivers), float32;
+`expansion` says how it draws ribbons (`_ribbons.Ribbons`).
 """
 
 from __future__ import annotations

@@ -58,6 +58,7 @@ def counted_gl_work() -> Iterator[GLWork]:
 
     wrapped = [
         count(moderngl.VertexArray, "render", lambda a, k, r: add("draws", 1)),
+        count(moderngl.VertexArray, "transform", lambda a, k, r: add("draws", 1)),
         count(moderngl.ComputeShader, "run", lambda a, k, r: add("dispatches", 1)),
         count(moderngl.Framebuffer, "use", lambda a, k, r: add("binds", 1)),
         count(moderngl.Context, "finish", lambda a, k, r: add("waits", 1)),

@@ -22,8 +22,12 @@ def test_device_figures_run(tmp_path, capsys):
     parts = ("geometry set-up", "geometry opacity (JAX)", "shading")
     assert sum(stages[k]["median_s"] for k in parts) <= 1.5 * case["jax"]["full_render"]["median_s"]
     assert case["shading"]["median_s"] > 0 and case["jax"]["fragments"] > 0
+    # GL twice: ribbons by the geometry shader, then by vertex pulling.
+    assert case["gl"]["status"] == case["gl_vertex_pulling"]["status"] == "ok"
+    assert case["gl_vertex_pulling"]["full_render"]["median_s"] > 0
     assert "fit" not in data and "tressfx" not in data  # skipped sections leave no entry
-    assert "300 @ 32x32" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "300 @ 32x32" in printed and "GL full render, ribbons by vertex pulling" in printed
 
 
 @pytest.mark.slow

@@ -38,7 +38,6 @@ out VertexOut {
     vec3 color;
     float alpha;
     float width;
-    float level;
 } vout;
 
 void main() {
@@ -50,7 +49,6 @@ void main() {
     // Drawn segments lie beyond the near plane, so D > 0 where the width is used.
     vout.width = world_width ? in_width * view.focal / (view.perspective ? vout.screen.z : 1.0)
                              : in_width;
-    vout.level = 0.0;
     vout.color = vec3(0.0);
     if (shade) {
         vec3 L = point_light ? safe_normalize(light_vector - in_position) : light_vector;
