@@ -42,6 +42,7 @@ __all__ = [
     "Arrays",
     "Fragments",
     "rasterize",
+    "joined",
     "rasterize_parts",
     "count_fragments",
     "ribbon_coverage",
@@ -132,14 +133,14 @@ def rasterize(
     Columns along each segment's major axis are laid out here in NumPy; the per-pixel
     maths runs in one compiled loop over their candidate rows (`raster_loop`), in JAX's
     default float precision (float64 when x64 is enabled), in pieces on every core
-    (`rasterize_parts`) that are then moved together in place (`_joined`).
+    (`rasterize_parts`) that are then moved together in place (`joined`).
     """
     args = (xy0, xy1, z0, z1, width, image_width, image_height, perspective)
     pieces = rasterize_parts(*args, depth=depth, labels=labels)
-    return pieces[0] if len(pieces) == 1 else _joined(pieces)
+    return pieces[0] if len(pieces) == 1 else joined(pieces)
 
 
-def _joined(pieces: list[Fragments]) -> Fragments:
+def joined(pieces: list[Fragments]) -> Fragments:
     """`rasterize_parts`' pieces (views of the same fields, in order) moved together in
     place: each piece after the first is shifted down to follow the one before, so no
     second set of fields is allocated. The pages a shifted piece leaves stay with the

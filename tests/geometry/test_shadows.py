@@ -100,19 +100,25 @@ def test_more_maps_converge_to_exact():
     assert errors[2] < 0.1 * errors[0]
 
 
+@pytest.mark.parametrize("pieces", [1, 3], ids=["one piece", "three pieces"])
 @pytest.mark.parametrize("x64", [False, True], ids=["float32", "float64"])
-def test_a_renders_plan_sums_the_fragments_as_jax_does(x64):
+def test_a_renders_plan_sums_the_fragments_as_jax_does(x64, pieces, monkeypatch):
     """A render's set-up plans Ω for the scene's own opacities (`ShadowInputs.opacity`):
     opacity maps then sum each cell's fragment alpha on the host and keep no fragments.
     Ω equals the fragment plan's, which JAX sums, bit for bit: with the alpha texture's
-    factor (§17), an occluder's receivers (§13) and a point light. A traced α still gets
-    the fragment plan, and reversing the host's order of additions changes Ω."""
+    factor (§17), an occluder's receivers (§13) and a point light; with the light's
+    raster in one piece and in three, which the host sums piece after piece. A traced α
+    still gets the fragment plan, and reversing the host's order of additions changes Ω."""
     import jax
     import jax.numpy as jnp
     from helpers import scheuermann_scene, small_furball_scene
 
+    from hairjax._geometry import _raster
+    from hairjax._geometry._shadows import ShadowInputs, light_fragments
     from hairjax._geometry_stage._setup import prepare, render_cutoff
 
+    monkeypatch.setattr(_raster, "PARALLEL_MIN", 0)  # every raster in `pieces` pieces
+    monkeypatch.setattr(_raster, "host_threads", lambda: pieces)
     with jax.enable_x64(x64):
         furball = small_furball_scene(strands=80, size=32, maps=16, resolution=32, alpha=0.45)
         scenes = [
@@ -123,6 +129,12 @@ def test_a_renders_plan_sums_the_fragments_as_jax_does(x64):
             ),
             scheuermann_scene(size=32, strands=60, alpha_texture=(1.0, 0.7, 0.35)),
         ]
+        hair = furball.strands
+        segments = hair.segments()
+        inputs = ShadowInputs(
+            hair.points, segments, hair.strand_of_point[segments[:, 0]], hair.width, furball.light
+        )
+        assert len(light_fragments(inputs, 32).pieces) == pieces
         for scene in scenes:
             summed, full = prepare(scene, cutoff=render_cutoff()).shadow, prepare(scene).shadow
             assert summed.frag_cell is None and summed.slices is not None and full.slices is None

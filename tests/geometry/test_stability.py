@@ -383,29 +383,36 @@ def test_guard_plane_clamps():
 def test_guard_fragment_below_the_nearest_plane(monkeypatch):
     """OpacityMaps.setup's slice clip: a light-space fragment whose interpolated depth
     rounds below D₀ (u slightly < 0, only through rounding) goes to slice 0 (it counts for
-    planes 1 … N), never to slice −1; one at D_N to slice N (beyond the last plane)."""
+    planes 1 … N), never to slice −1; one at D_N to slice N (beyond the last plane). The
+    same in a render's plan, which sums the fragments on the host: its sums are the
+    fragment plan's, none written outside the maps."""
     import dataclasses as dc
 
     import hairjax._geometry._shadows as shadows_mod
     import hairjax._geometry._shadows._frame as frame_mod
 
-    real = frame_mod.rasterize
+    real = frame_mod.rasterize_parts
 
     def nudged(*args):
-        frags = real(*args)
+        (frags,) = real(*args)  # one piece at this size
         depth = frags.depth.copy()
         depth[np.argmin(depth)] = np.nextafter(depth.min(), -np.inf)  # one ulp below D₀
-        return dc.replace(frags, depth=depth)
+        return [dc.replace(frags, depth=depth)]
 
-    monkeypatch.setattr(frame_mod, "rasterize", nudged)
+    monkeypatch.setattr(frame_mod, "rasterize_parts", nudged)
     hair = hj.furball(6, 4, seed=1)
     segs = hair.segments()
     inputs = shadows_mod.ShadowInputs(
         hair.points, segs, hair.strand_of_point[segs[:, 0]], hair.width, hj.Light(direction=(0.3, -1.0, 0.2))
     )
-    setup = hj.Shadows("opacity-maps", 4, 16).setup(inputs)
+    method = hj.Shadows("opacity-maps", 4, 16)
+    setup = method.setup(inputs)
     slices = setup.frag_cell // 16**2
     assert slices.min() == 0 and slices.max() <= 4
+    summed = method.setup(inputs._replace(opacity=hair.alpha)).slices
+    expected = np.zeros_like(summed)  # the same products added in the same order (x64 here)
+    np.add.at(expected, setup.frag_cell, hair.alpha[setup.frag_strand] * setup.frag_coverage)
+    np.testing.assert_array_equal(summed, expected)
 
 
 def test_guard_exact_shadows_without_fragments(request):

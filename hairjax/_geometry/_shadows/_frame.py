@@ -16,7 +16,7 @@ from ..._constants import PIXEL_HALF_EXTENT, SHADOW_FILTER_RADIUS
 from .._device_raster import rasterize_on_device
 from .._placement import Placement
 from .._projection import View, light_view
-from .._raster import Arrays, Fragments, rasterize
+from .._raster import Arrays, Fragments, joined, rasterize_parts
 from .._raster_plan import RibbonRaster, ribbon_widths
 
 __all__ = [
@@ -157,21 +157,31 @@ def with_receivers(frame: LightFrame, receivers: np.ndarray | None) -> LightFram
 class LightFragments:
     """The strands rasterised from the light, with the points that receive shadow.
 
-    `frame`: the light's frame with the receivers appended to its points; `frags`: the
-    light-space fragments (`_raster.Fragments`, `frags.segment` indexing the drawn
-    segments); per drawn segment its strand `segment_strand` and the alpha texture's
-    factor `segment_factor` (§17; None without); per receiving point its texel `tx`, `ty`
-    and `inside` (seen and on the map). `frag_strand[F]` and `frag_coverage[F]` (times the
-    factor) are gathered per fragment on first use: a plan that sums the fragments on the
-    host reads the tables instead."""
+    `frame`: the light's frame with the receivers appended to its points; `pieces`: the
+    light-space fragments (`_raster.Fragments`, `segment` indexing the drawn segments) as
+    the raster wrote them, in pieces that in order are all of them; per drawn segment its
+    strand `segment_strand` and the alpha texture's factor `segment_factor` (§17; None
+    without); per receiving point its texel `tx`, `ty` and `inside` (seen and on the map).
+    `frags` (the pieces joined in place: read no piece after it), `frag_strand[F]` and
+    `frag_coverage[F]` (times the factor) are made on first use: a plan that sums the
+    fragments on the host reads the pieces and the tables instead."""
 
     frame: LightFrame
-    frags: Fragments
+    pieces: list[Fragments]
     segment_strand: Arrays
     segment_factor: Arrays | None
     tx: np.ndarray
     ty: np.ndarray
     inside: np.ndarray
+
+    @property
+    def count(self) -> int:
+        """The number of fragments."""
+        return sum(int(piece.pixel.shape[0]) for piece in self.pieces)
+
+    @functools.cached_property
+    def frags(self) -> Fragments:
+        return self.pieces[0] if len(self.pieces) == 1 else joined(self.pieces)
 
     @functools.cached_property
     def frag_strand(self) -> Arrays:
@@ -225,7 +235,7 @@ def light_fragments(inputs: ShadowInputs, resolution: int, *, on_device: bool = 
         inputs.points, inputs.segments, seg_strand, inputs.width, inputs.light, resolution, inputs.width_units
     )
     seg_ids = frame.drawable
-    frags = (rasterize_on_device if on_device else rasterize)(*raster)
+    pieces = [rasterize_on_device(*raster)] if on_device else rasterize_parts(*raster)
     frame = with_receivers(frame, inputs.receivers)
     xy, seen = frame.xy, frame.seen
     # Clip fires for a light at the hair's centre (near ≈ 1e-303: xy ~1e300, no int64); outside stays outside.
@@ -237,10 +247,10 @@ def light_fragments(inputs: ShadowInputs, resolution: int, *, on_device: bool = 
     factor: Arrays | None = None if inputs.segment_alpha is None else inputs.segment_alpha[seg_ids]
     if on_device:  # the tables go to the fragments' device, the factor in their precision
         strand = jnp.asarray(strand)
-        factor = None if factor is None else jnp.asarray(factor, frags.coverage.dtype)
+        factor = None if factor is None else jnp.asarray(factor, pieces[0].coverage.dtype)
     return LightFragments(
         frame=frame,
-        frags=frags,
+        pieces=pieces,
         segment_strand=strand,
         segment_factor=factor,
         tx=tx,
