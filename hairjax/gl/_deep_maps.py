@@ -87,6 +87,10 @@ def deep_opacity_maps(
         omega_buf.bind_to_storage_buffer(2)
         groups = -(-(k + 1) // BOUNDARIES_PER_TARGET)  # ⌈(K + 1)/4⌉
         _layer_passes(ctx, maps, layer, comp, len(seen), groups)
+        # The compute passes' Ω stores, before the read below. Nothing between the passes
+        # reads them, and GL orders a pass's texture reads before the next pass's
+        # writes to the targets: no barrier per pass.
+        ctx.memory_barrier()
         check(ctx, f"deep opacity maps: {groups} layer passes")
         return np.frombuffer(omega_buf.read(), dtype="f4").copy()
     finally:
@@ -160,4 +164,3 @@ def _layer_passes(ctx, maps: _DeepBuffers, ribbons: Ribbons, comp, seen: int, gr
             maps.targets[cur].use(2)
             set_uniforms(comp, group=g)
             comp.run(group_x=workgroups(seen))
-            ctx.memory_barrier()

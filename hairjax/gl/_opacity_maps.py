@@ -75,6 +75,10 @@ def opacity_maps(
         id_buf.bind_to_storage_buffer(1)
         omega_buf.bind_to_storage_buffer(2)
         _slice_passes(ctx, ribbons, comp, maps, draws, slices, n)
+        # The compute passes' Ω stores, before the read below. Nothing between the passes
+        # reads them, and GL orders a pass's texture reads before the next pass's
+        # writes to the maps: no barrier per pass.
+        ctx.memory_barrier()
         check(ctx, f"{n} opacity-map passes")
         return np.frombuffer(omega_buf.read(), dtype="f4").copy()
     finally:
@@ -186,4 +190,3 @@ def _slice_passes(
             maps.current.use(1)
             set_uniforms(comp, first=int(slices.starts[i]), count=count, plane=i)
             comp.run(group_x=workgroups(count))
-            ctx.memory_barrier()

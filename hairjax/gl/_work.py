@@ -1,5 +1,6 @@
-"""What GL renders ask of the GPU, counted: draw calls, compute dispatches, framebuffer
-binds (a pass binds its target), bytes uploaded and read back, and waits (glFinish).
+"""What GL renders ask of the GPU, counted: draw calls, compute dispatches, memory barriers,
+framebuffer binds (a pass binds its target), bytes uploaded and read back, and waits
+(glFinish).
 
 For `hairjax bench` (BENCHMARKS.md): times on llvmpipe are mostly the CPU's, while the
 counts show a change in the work itself on any driver. `counted_gl_work()` wraps
@@ -20,6 +21,7 @@ class GLWork:
 
     draws: int = 0
     dispatches: int = 0
+    barriers: int = 0
     binds: int = 0
     uploaded: int = 0  # bytes
     read_back: int = 0  # bytes
@@ -60,6 +62,7 @@ def counted_gl_work() -> Iterator[GLWork]:
         count(moderngl.VertexArray, "render", lambda a, k, r: add("draws", 1)),
         count(moderngl.VertexArray, "transform", lambda a, k, r: add("draws", 1)),
         count(moderngl.ComputeShader, "run", lambda a, k, r: add("dispatches", 1)),
+        count(moderngl.Context, "memory_barrier", lambda a, k, r: add("barriers", 1)),
         count(moderngl.Framebuffer, "use", lambda a, k, r: add("binds", 1)),
         count(moderngl.Context, "finish", lambda a, k, r: add("waits", 1)),
         count(moderngl.Context, "buffer", lambda a, k, r: add("uploaded", _nbytes(data_of(a, k)))),

@@ -133,7 +133,7 @@ def _gl_work(fields: tuple[str, str], unit: float = 1.0) -> Callable[[dict, dict
 
     def cell(c: dict, r: dict) -> str:
         work = r["gl"].get("work")
-        if work is None:
+        if work is None or any(f not in work for f in fields):
             return "-"
         return " / ".join(
             f"{work[f] / unit:,.0f}" if unit == 1.0 else f"{work[f] / unit:,.1f}" for f in fields
@@ -232,6 +232,7 @@ def _gl_rows(columns: _Columns, have_jax: bool) -> list[_Row]:
     rows = [_Row(f"GL {key}", columns.gl_cells(_gl_pass(key))) for key in GL_PASSES]
     rows += [
         _Row("  draws / binds", columns.gl_cells(_gl_work(("draws", "binds")))),
+        _Row("  dispatches / barriers", columns.gl_cells(_gl_work(("dispatches", "barriers")))),
         _Row("  MB uploaded / read", columns.gl_cells(_gl_work(("uploaded", "read_back"), 1e6))),
     ]
     rows.append(

@@ -221,3 +221,19 @@ def test_the_ribbon_quad_holds_every_covered_pixel(gl, method):
     cut = _render_with_quad_spare(scene, -0.3)
     assert np.abs(cut.image - tight[0].image).max() > 1e-2
     assert np.abs(cut.omega - tight[0].omega).max() > 1e-2
+
+
+@pytest.mark.parametrize("method", ["opacity-maps", "deep"])
+def test_the_map_passes_wait_once_not_once_a_pass(gl, method):
+    """The opacity-map and deep passes evaluate Ω after each slice or group, and nothing
+    reads it before the end: one memory barrier before the read-back, not one a pass
+    (GL orders each pass's texture reads before the next pass's writes). Ω is checked
+    against JAX's by the tests above and the disagreement band."""
+    from hairjax.gl import render_gl
+    from hairjax.gl._work import counted_gl_work
+
+    scene = small_furball_scene(strands=60, size=40, shadows=method, maps=8, resolution=32)
+    render_gl(scene)  # programs built, strands uploaded
+    with counted_gl_work() as work:
+        render_gl(scene)
+    assert work.dispatches >= 2 and work.barriers == 1  # 8 slices; the deep maps: 2 groups

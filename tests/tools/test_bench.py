@@ -187,6 +187,7 @@ def test_bench_quick_both_backends(tmp_path, capsys):
     work = gl["work"]
     assert work["draws"] > 0 and work["binds"] > 0 and work["read_back"] > 0
     assert 0 < work["uploaded"] and "draws / binds" in printed and "MB uploaded / read" in printed
+    assert work["dispatches"] > 0 and work["barriers"] > 0 and "dispatches / barriers" in printed
     # The format of stored runs from before the counts: "-" in those cells.
     old = {**config, "gl": {k: v for k, v in gl.items() if k != "work"}}
     table = format_table([{"strands": config["strands"], "size": config["width"]}], [old], "")
