@@ -144,8 +144,14 @@ def unexplained_pixels(scene, gl_image, jax_image):
 
 def render_gl_with_edited_shader(scene, omega, old: str, new: str, occluder=None):
     """`render_gl(scene, omega=omega, occluder=occluder).image` with `old` replaced by `new` in model.glsl
-    (which must contain it): a wrong shader, for tests that the cross-checks catch one.
-    The shader cache is cleared before and after, so later renders use the real shader."""
+    (which must contain it): a wrong shader, for tests that the cross-checks catch one."""
+    return gl_with_edited_shader(scene, "model.glsl", old, new, omega=omega, occluder=occluder).image
+
+
+def gl_with_edited_shader(scene, shader: str, old: str, new: str, **render):
+    """`render_gl(scene, **render)` with `old` replaced by `new` in the shader file `shader`
+    (which must contain it). The shader cache is cleared before and after, so later
+    renders use the real shader."""
     import pytest
 
     from hairjax.gl import _programs, render_gl
@@ -154,7 +160,7 @@ def render_gl_with_edited_shader(scene, omega, old: str, new: str, occluder=None
 
     def edited(name):
         text = original(name)
-        if name == "model.glsl":
+        if name == shader:
             assert old in text
             text = text.replace(old, new)
         return text
@@ -163,7 +169,7 @@ def render_gl_with_edited_shader(scene, omega, old: str, new: str, occluder=None
         patch.setattr(_programs, "shader_source", edited)
         _programs.clear_cache()
         try:
-            return render_gl(scene, omega=omega, occluder=occluder).image
+            return render_gl(scene, **render)
         finally:
             patch.undo()
             _programs.clear_cache()

@@ -17,7 +17,7 @@ from ._buffers import Points, Strands
 from ._context import check, release
 from ._programs import workgroups
 from ._ribbons import Ribbons
-from ._shadow_passes import register_gl_shadow_pass
+from ._shadow_passes import PassDrawing, register_gl_shadow_pass
 from ._uniforms import light_pass_uniforms, set_uniforms, view_uniforms
 
 __all__ = ["deep_opacity_maps"]
@@ -28,20 +28,12 @@ BOUNDARIES_PER_TARGET = 4
 
 @register_gl_shadow_pass("deep")
 def deep_opacity_maps(
-    ctx,
-    progs,
-    scene: Scene,
-    strands: Strands,
-    frame: LightFrame,
-    points: Points,
-    *,
-    clip_slices: bool = True,
-    expansion: str = "geometry-shader",
+    ctx, progs, scene: Scene, strands: Strands, frame: LightFrame, points: Points, drawing: PassDrawing
 ) -> np.ndarray:
     """z₀ by MIN blending; then for each group of four boundaries (1 … K and the total,
     K + 1), the layers drawn additively into one RGBA target and the points whose upper
     boundary is in the group evaluated between it and the group before. (Layers follow
-    each texel's z₀, not global depth slices: `clip_slices` does not apply.)"""
+    each texel's z₀, not global depth slices: `drawing.clip_slices` does not apply.)"""
     import moderngl
 
     shadows = scene.shadows
@@ -56,8 +48,8 @@ def deep_opacity_maps(
     comp = progs["omega_deep"]
     screen = strands.screen_buffer(frame)
     segments = len(frame.drawable)
-    first = Ribbons(ctx, progs, "deep_first", strands, ibo, segments, expansion, screen)
-    layer = Ribbons(ctx, progs, "deep_layers", strands, ibo, segments, expansion, screen)
+    first = Ribbons(ctx, progs, "deep_first", strands, ibo, segments, drawing.expansion, screen)
+    layer = Ribbons(ctx, progs, "deep_layers", strands, ibo, segments, drawing.expansion, screen)
     depth_range = float(shadows.depth_range(frame))
     try:
         ctx.viewport = (0, 0, r, r)

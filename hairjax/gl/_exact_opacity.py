@@ -11,7 +11,7 @@ from ._buffers import Points, Strands
 from ._context import check, release
 from ._programs import workgroups
 from ._ribbons import Ribbons
-from ._shadow_passes import register_gl_shadow_pass
+from ._shadow_passes import PassDrawing, register_gl_shadow_pass
 from ._uniforms import light_pass_uniforms, set_uniforms, view_uniforms
 
 __all__ = ["exact_opacity"]
@@ -19,19 +19,11 @@ __all__ = ["exact_opacity"]
 
 @register_gl_shadow_pass("exact")
 def exact_opacity(
-    ctx,
-    progs,
-    scene: Scene,
-    strands: Strands,
-    frame: LightFrame,
-    points: Points,
-    *,
-    clip_slices: bool = True,
-    expansion: str = "geometry-shader",
+    ctx, progs, scene: Scene, strands: Strands, frame: LightFrame, points: Points, drawing: PassDrawing
 ) -> np.ndarray:
     """Ω without slicing: per-texel fragment lists (count, prefix sum, fill), then each
     point sums the alpha strictly nearer the light in its 3 × 3 texels. (No slices:
-    `clip_slices` does not apply.)"""
+    `drawing.clip_slices` does not apply.)"""
     import moderngl
 
     r = scene.shadows.resolution
@@ -41,7 +33,7 @@ def exact_opacity(
     counts = ctx.buffer(np.zeros(r * r, "u4").tobytes())
     cursor = ctx.buffer(np.zeros(r * r, "u4").tobytes())
     screen = strands.screen_buffer(frame)
-    ribbons = Ribbons(ctx, progs, "light_list", strands, ibo, len(frame.drawable), expansion, screen)
+    ribbons = Ribbons(ctx, progs, "light_list", strands, ibo, len(frame.drawable), drawing.expansion, screen)
     buffers = [ibo, screen, target, fbo, counts, cursor, ribbons]
     try:
         fbo.use()

@@ -14,7 +14,7 @@ from ._buffers import Points, Strands
 from ._context import check, release
 from ._programs import workgroups
 from ._ribbons import Ribbons
-from ._shadow_passes import register_gl_shadow_pass
+from ._shadow_passes import PassDrawing, register_gl_shadow_pass
 from ._uniforms import light_pass_uniforms, set_uniforms, view_uniforms
 
 __all__ = ["opacity_maps"]
@@ -22,15 +22,7 @@ __all__ = ["opacity_maps"]
 
 @register_gl_shadow_pass("opacity-maps")
 def opacity_maps(
-    ctx,
-    progs,
-    scene: Scene,
-    strands: Strands,
-    frame: LightFrame,
-    points: Points,
-    *,
-    clip_slices: bool = True,
-    expansion: str = "geometry-shader",
+    ctx, progs, scene: Scene, strands: Strands, frame: LightFrame, points: Points, drawing: PassDrawing
 ) -> np.ndarray:
     """kim-2003 Routine 2: B_current accumulates slice after slice (GL_ONE, GL_ONE), the
     points of slice i are evaluated between B_prev = Ω(D_i) and B_current = Ω(D_{i+1})."""
@@ -40,7 +32,7 @@ def opacity_maps(
     if not isinstance(shadows, OpacityMaps):  # the pass registered for it: never fires
         raise TypeError(f"the opacity-maps pass got shadows.method = {shadows.method!r}")
     n, r = shadows.maps, shadows.resolution
-    draws = _slice_draws(frame, strands.segments, n, clip_slices)
+    draws = _slice_draws(frame, strands.segments, n, drawing.clip_slices)
     ibo = strands.index_buffer(draws.segments)
     slices = _points_by_slice(frame, n)
     id_buf = ctx.buffer(
@@ -50,7 +42,7 @@ def opacity_maps(
     maps = _MapBuffers.make(ctx, r)
     comp = progs["omega_maps"]
     screen = strands.screen_buffer(frame)
-    ribbons = Ribbons(ctx, progs, "light_slice", strands, ibo, len(draws.segments), expansion, screen)
+    ribbons = Ribbons(ctx, progs, "light_slice", strands, ibo, len(draws.segments), drawing.expansion, screen)
     try:
         maps.fbo.use()
         ctx.viewport = (0, 0, r, r)

@@ -31,7 +31,7 @@ from ._occluder import OccluderLight, OccluderSurface, occluder_shadow
 from ._patches import patch_head, render_patches_gl
 from ._programs import programs
 from ._ribbons import check_expansion
-from ._shadow_passes import gl_shadow_pass
+from ._shadow_passes import PassDrawing, gl_shadow_pass
 
 __all__ = ["GLResult", "render_gl"]
 
@@ -96,7 +96,9 @@ def render_gl(
                     "the light, pass occluder= too (occluder_light(scene, geometry))"
                 )
         elif scene.shadows.casts:
-            omega, made = _shadows(ctx, progs, scene, strands, surface, (clip_slices, ribbons), lap)
+            omega, made = _shadows(
+                ctx, progs, scene, strands, surface, PassDrawing(clip_slices, ribbons), lap
+            )
             if made is not None:  # the scene has an occluder: it takes part in the light
                 occluder = made
         else:
@@ -128,14 +130,12 @@ def _shadows(
     scene: Scene,
     strands: Strands,
     surface: OccluderSurface | None,
-    drawn: tuple[bool, str],
+    drawing: PassDrawing,
     lap: Laps,
 ) -> tuple[np.ndarray, OccluderLight | None]:
     """(Ω per strand point, uploaded for the camera pass; the occluder's part of the light,
     None without an occluder): the scene's shadow method's passes from the light, over the
-    strands' points and the occluder surface's points (§7, §13), `drawn` = (clip_slices,
-    the ribbons' expansion) as `render_gl` says."""
-    clip_slices, expansion = drawn
+    strands' points and the occluder surface's points (§7, §13), drawn as `drawing` says."""
     frame = light_frame(
         scene.strands.points,
         strands.segments,
@@ -147,9 +147,7 @@ def _shadows(
     points = Points(ctx, strands, None if surface is None else surface.points)
     try:
         frame = with_receivers(frame, points.receivers)
-        omega_all = gl_shadow_pass(scene.shadows.method)(
-            ctx, progs, scene, strands, frame, points, clip_slices=clip_slices, expansion=expansion
-        )
+        omega_all = gl_shadow_pass(scene.shadows.method)(ctx, progs, scene, strands, frame, points, drawing)
         omega = omega_all[: strands.count].copy()
         strands.write_omega(omega)
         lap("shadows")

@@ -2,16 +2,27 @@
 name (`AbstractShadowMethod.method`, hairjax/_geometry/_shadows/), so that a new method is one GL
 module with `@register_gl_shadow_pass(name)` beside its JAX module.
 
-A pass is `fn(ctx, progs, scene, strands, frame, points, *, clip_slices, expansion) -> Ω`
-with Ω per point of `points` (strand points, then the occluder's receivers), float32;
-`expansion` says how it draws ribbons (`_ribbons.Ribbons`).
+A pass is `fn(ctx, progs, scene, strands, frame, points, drawing) -> Ω` with Ω per point
+of `points` (strand points, then the occluder's receivers), float32; `drawing` (a
+`PassDrawing`) says how it draws.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import NamedTuple
 
-__all__ = ["register_gl_shadow_pass", "gl_shadow_pass"]
+__all__ = ["PassDrawing", "register_gl_shadow_pass", "gl_shadow_pass"]
+
+
+class PassDrawing(NamedTuple):
+    """How a render's shadow pass draws: `clip_slices`, only the segments whose depth range
+    meets a slice (kim-2003 §4.2; a pass without slices ignores it), and the ribbons'
+    `expansion` (`_ribbons.Ribbons`)."""
+
+    clip_slices: bool = True
+    expansion: str = "geometry-shader"
+
 
 _PASSES: dict[str, Callable] = {}
 

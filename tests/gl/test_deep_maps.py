@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from helpers import MAX_BAND, PIXEL_TOL, unexplained_pixels
+from helpers import MAX_BAND, PIXEL_TOL, gl_with_edited_shader, unexplained_pixels
 
 import hairjax as hj
 from hairjax._disagreement import omega_uncertainty
@@ -91,28 +91,14 @@ def test_more_layer_passes_and_a_set_spacing(gl, lookup):
 @pytest.mark.parametrize("lookup", ["layer", "depth"])
 def test_a_wrong_layer_coordinate_fails_the_check(gl, lookup):
     """Layers 1 % thinner in GLSL than in JAX: Ω differs where no boundary explains it."""
-    from hairjax.gl import _programs, render_gl
+    from hairjax.gl import render_gl
 
     scene = ball(lookup=lookup)
     omega = np.asarray(hj.geometry_stage(scene).omega)
-    original = _programs.shader_source
-
-    def edited(name):
-        text = original(name)
-        if name == "model.glsl":
-            old = "return (z - z0) * float(layers) / depth_range;"
-            assert old in text
-            text = text.replace(old, "return (z - z0) * float(layers) / (0.99 * depth_range);")
-        return text
-
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(_programs, "shader_source", edited)
-        _programs.clear_cache()
-        try:
-            wrong = render_gl(scene).omega
-        finally:
-            patch.undo()
-            _programs.clear_cache()
+    old = "return (z - z0) * float(layers) / depth_range;"
+    wrong = gl_with_edited_shader(
+        scene, "model.glsl", old, old.replace("/ depth_range", "/ (0.99 * depth_range)")
+    ).omega
     slack = np.abs(wrong - omega) - omega_uncertainty(scene)
     assert np.sum(slack > rounding_bound(scene, omega)) > 20
     # And the real shader is back afterwards.

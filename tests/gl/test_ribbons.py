@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from helpers import small_furball_scene
+from helpers import gl_with_edited_shader, small_furball_scene
 
 import hairjax as hj
 from hairjax.gl._work import counted_gl_work
@@ -47,27 +47,12 @@ def test_both_expansions_give_the_same_image_and_omega(gl, method):
 def test_the_pulled_ribbons_read_their_segments(gl):
     """A draw that starts one segment late (`first_segment` shifted) draws other ribbons:
     the check above would see a wrong index into the segments' ends."""
-    from hairjax.gl import _programs, render_gl
+    from hairjax.gl import render_gl
 
     scene = _scenes("none")[0]
-    original = _programs.shader_source
-
-    def shifted(name):
-        text = original(name)
-        if name == "ribbon_pulled.vert":
-            old = "int segment = first_segment + gl_VertexID / 6;"
-            assert old in text
-            text = text.replace(old, "int segment = first_segment + gl_VertexID / 6 + 1;")
-        return text
-
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(_programs, "shader_source", shifted)
-        _programs.clear_cache()
-        try:
-            wrong = render_gl(scene, ribbons="vertex-pulling").image
-        finally:
-            patch.undo()
-            _programs.clear_cache()
+    old = "int segment = first_segment + gl_VertexID / 6;"
+    shifted = old.replace("/ 6;", "/ 6 + 1;")
+    wrong = gl_with_edited_shader(scene, "ribbon_pulled.vert", old, shifted, ribbons="vertex-pulling").image
     assert np.abs(wrong - render_gl(scene, ribbons="geometry-shader").image).max() > 1e-2
 
 
