@@ -1,6 +1,7 @@
-"""Ω by opacity shadow maps (docs/model.md §7; kim-2003 §4, Routine 2): the hair drawn
-from the light slice after slice into additive buffers, each point's Ω read between the
-maps that bound its slice."""
+"""Ω by opacity shadow maps (docs/model.md §7, §11; kim-2003 §4, Routine 2): the hair drawn
+from the light slice after slice into additive maps, four a pass (kim-2003 §4.1: one map
+per colour channel), each point's Ω read between the maps that bound its slice, the
+points of a pass's slices in one dispatch."""
 
 from __future__ import annotations
 
@@ -24,8 +25,11 @@ __all__ = ["opacity_maps"]
 def opacity_maps(
     ctx, progs, scene: Scene, strands: Strands, frame: LightFrame, points: Points, drawing: PassDrawing
 ) -> np.ndarray:
-    """kim-2003 Routine 2: B_current accumulates slice after slice (GL_ONE, GL_ONE), the
-    points of slice i are evaluated between B_prev = Ω(D_i) and B_current = Ω(D_{i+1})."""
+    """kim-2003 Routine 2, MAPS_PER_PASS maps a pass (§4.1's packing into the colour
+    channels): each pass's maps start at the pass before's last, Ω(D_b₀), its slices are
+    drawn additively (GL_ONE, GL_ONE) slice after slice into every map behind them, then
+    the points of slice i are evaluated between Ω(D_i) and Ω(D_{i+1}). Each map sums the
+    same alphas in the same order as one accumulation buffer does: the same Ω, bit for bit."""
     import moderngl
 
     shadows = scene.shadows
@@ -38,15 +42,15 @@ def opacity_maps(
     id_buf = ctx.buffer(
         slices.points.astype("u4").tobytes() if slices.points.size else b"\0" * 4
     )  # none seen
+    plane_buf = ctx.buffer(slices.planes.astype("i4").tobytes() if slices.planes.size else b"\0" * 4)
     omega_buf = ctx.buffer(np.zeros(points.count, "f4").tobytes())
     maps = _MapBuffers.make(ctx, r)
-    comp = progs["omega_maps"]
+    comp, seed = progs["omega_maps"], progs["light_seed"]
+    seed_vao = ctx.vertex_array(seed, [])
     screen = strands.screen_buffer(frame)
     ribbons = Ribbons(ctx, progs, "light_slice", strands, ibo, len(draws.segments), drawing.expansion, screen)
     try:
-        maps.fbo.use()
         ctx.viewport = (0, 0, r, r)
-        maps.fbo.clear(0.0, 0.0, 0.0, 0.0)
         ctx.disable(moderngl.DEPTH_TEST)
         ctx.enable(moderngl.BLEND)
         ctx.blend_func = moderngl.ONE, moderngl.ONE
@@ -66,7 +70,8 @@ def opacity_maps(
         points.buffer.bind_to_storage_buffer(0)
         id_buf.bind_to_storage_buffer(1)
         omega_buf.bind_to_storage_buffer(2)
-        _slice_passes(ctx, ribbons, comp, maps, draws, slices, n)
+        plane_buf.bind_to_storage_buffer(3)
+        _slice_passes(ctx, ribbons, (comp, seed_vao), maps, draws, slices, n)
         # The compute passes' Ω stores, before the read below. Nothing between the passes
         # reads them, and GL orders a pass's texture reads before the next pass's
         # writes to the maps: no barrier per pass.
@@ -75,9 +80,7 @@ def opacity_maps(
         return np.frombuffer(omega_buf.read(), dtype="f4").copy()
     finally:
         ctx.disable(moderngl.BLEND)
-        release(
-            ctx, ribbons, screen, ibo, id_buf, omega_buf, maps.fbo, maps.prev_fbo, maps.current, maps.previous
-        )
+        release(ctx, ribbons, seed_vao, screen, ibo, id_buf, plane_buf, omega_buf, *maps.fbos, *maps.targets)
 
 
 class _SliceDraws(NamedTuple):
@@ -123,6 +126,7 @@ class _PointSlices(NamedTuple):
     slice i's are `points[starts[i]:starts[i + 1]]`."""
 
     points: np.ndarray
+    planes: np.ndarray
     starts: np.ndarray
 
 
@@ -130,55 +134,62 @@ def _points_by_slice(frame: LightFrame, n: int) -> _PointSlices:
     plane, _ = point_planes(frame, n)
     seen = np.flatnonzero(frame.seen)
     by_plane = seen[_stable_order(plane[seen], n - 1)]
-    return _PointSlices(by_plane, np.searchsorted(plane[by_plane], np.arange(n + 1)))
+    planes = plane[by_plane]
+    return _PointSlices(by_plane, planes, np.searchsorted(planes, np.arange(n + 1)))
+
+
+MAPS_PER_PASS = 4  # kim-2003 §4.1: one map per colour channel of an RGBA target
 
 
 class _MapBuffers(NamedTuple):
-    """kim-2003 Routine 2's two buffers: B_current, drawn into additively, and B_prev, its
-    copy before the slice; `r × r` float texels, read texel by texel (nearest)."""
+    """Two RGBA `r × r` float targets of MAPS_PER_PASS maps each, read texel by texel
+    (nearest): pass p draws into `targets[p % 2]` while the other holds the pass before's
+    maps (its alpha, Ω of the pass's first plane); and their framebuffers."""
 
-    current: Any
-    previous: Any
-    fbo: Any
-    prev_fbo: Any
+    targets: list[Any]
+    fbos: list[Any]
 
     @classmethod
     def make(cls, ctx, r: int) -> _MapBuffers:
         import moderngl
 
-        current = ctx.texture((r, r), 1, dtype="f4")
-        previous = ctx.texture((r, r), 1, dtype="f4")
-        for tex in (current, previous):
+        targets = [ctx.texture((r, r), 4, dtype="f4") for _ in range(2)]
+        for tex in targets:
             tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-        fbo = ctx.framebuffer(color_attachments=[current])
-        prev_fbo = ctx.framebuffer(color_attachments=[previous])
-        return cls(current, previous, fbo, prev_fbo)
+        fbos = [ctx.framebuffer(color_attachments=[t]) for t in targets]
+        fbos[1].clear(0.0, 0.0, 0.0, 0.0)  # the first pass's "pass before": Ω(D_0) = 0
+        return cls(targets, fbos)
 
 
 def _slice_passes(
-    ctx, ribbons: Ribbons, comp, maps: _MapBuffers, draws: _SliceDraws, slices: _PointSlices, n: int
+    ctx, ribbons: Ribbons, evaluate, maps: _MapBuffers, draws: _SliceDraws, slices: _PointSlices, n: int
 ):
-    """For each slice i: B_prev = Ω(D_i), slice i's segments drawn into B_current, which
-    then holds Ω(D_{i+1}); and Ω of slice i's points, between the two."""
+    """Per pass of MAPS_PER_PASS slices b₀ … b₁ − 1: its maps start at Ω(D_b₀) (the pass
+    before's last), each slice's segments are drawn into them in turn, and then Ω of the
+    pass's points, each between the maps around its slice."""
+    import moderngl
 
-    drawn_since_copy = True
-    for i in range(n):
-        if drawn_since_copy:  # B_prev = Ω(D_i); unchanged if slice i − 1 drew nothing
-            ctx.copy_framebuffer(maps.prev_fbo, maps.fbo)
-            drawn_since_copy = False
-        maps.fbo.use()
-        ribbons.set_uniforms(slice=i)
-        if draws.starts is not None:  # clip_slices
-            count = int(draws.starts[i + 1] - draws.starts[i])
-            if count:
-                ribbons.draw(int(draws.starts[i]), count)
-                drawn_since_copy = True
-        elif len(draws.segments):
-            ribbons.draw()
-            drawn_since_copy = True
-        count = int(slices.starts[i + 1] - slices.starts[i])
+    comp, seed_vao = evaluate
+    for p, b0 in enumerate(range(0, n, MAPS_PER_PASS)):
+        b1 = min(n, b0 + MAPS_PER_PASS)
+        cur, before = p % 2, (p + 1) % 2
+        maps.fbos[cur].use()
+        maps.fbos[cur].clear(0.0, 0.0, 0.0, 0.0)
+        if p:  # 0 + Ω(D_b₀) = Ω(D_b₀) in every channel
+            maps.targets[before].use(0)
+            seed_vao.render(moderngl.TRIANGLES, vertices=3)
+        ribbons.set_uniforms(first_boundary=b0 + 1)
+        for i in range(b0, b1):
+            ribbons.set_uniforms(slice=i)
+            if draws.starts is not None:  # clip_slices
+                count = int(draws.starts[i + 1] - draws.starts[i])
+                if count:
+                    ribbons.draw(int(draws.starts[i]), count)
+            elif len(draws.segments):
+                ribbons.draw()
+        first, count = int(slices.starts[b0]), int(slices.starts[b1] - slices.starts[b0])
         if count:
-            maps.previous.use(0)
-            maps.current.use(1)
-            set_uniforms(comp, first=int(slices.starts[i]), count=count, plane=i)
+            maps.targets[before].use(0)
+            maps.targets[cur].use(1)
+            set_uniforms(comp, first=first, count=count, first_slice=b0)
             comp.run(group_x=workgroups(count))

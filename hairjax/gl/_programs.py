@@ -73,6 +73,7 @@ _RIBBON_PROGRAMS = {
 _POINT_OUTPUTS = ("VertexOut.screen", "VertexOut.color", "VertexOut.alpha", "VertexOut.width")
 _PROGRAMS = {
     **_RIBBON_PROGRAMS,
+    "light_seed": dict(vertex_shader="fullscreen.vert", fragment_shader="light_seed.frag"),
     "occluder_sphere": dict(vertex_shader="fullscreen.vert", fragment_shader="occluder_sphere.frag"),
     "occluder_mesh": dict(vertex_shader="occluder_mesh.vert", fragment_shader="occluder_mesh.frag"),
     "occluder_color": dict(vertex_shader="fullscreen.vert", fragment_shader="occluder_color.frag"),

@@ -34,6 +34,7 @@ from helpers import (
     MAX_BAND,
     PIXEL_TOL,
     TAU_TOL,
+    gl_with_edited_shader,
     render_gl_with_edited_shader,
     shadow_band,
     small_furball_scene,
@@ -236,4 +237,28 @@ def test_the_map_passes_wait_once_not_once_a_pass(gl, method):
     render_gl(scene)  # programs built, strands uploaded
     with counted_gl_work() as work:
         render_gl(scene)
-    assert work.dispatches >= 2 and work.barriers == 1  # 8 slices; the deep maps: 2 groups
+    assert work.dispatches == 2 and work.barriers == 1  # 8 maps, 4 a pass; 5 deep boundaries, 4 a pass
+
+
+@pytest.mark.parametrize("maps", [1, 3, 5, 8, 13])
+def test_opacity_maps_four_a_pass_match_jax(gl, maps):
+    """GL draws four opacity maps a pass, one per colour channel (kim-2003 §4.1), each pass
+    starting from the one before's last map: with any number of maps, whole passes or
+    not, its Ω gives τ within TAU_TOL of JAX's but where a light-side boundary explains it.
+    Seeding each pass from the first map before instead of the last moves Ω: the check
+    sees it."""
+    from hairjax.gl import render_gl
+
+    scene = small_furball_scene(strands=60, size=40, shadows="opacity-maps", maps=maps, resolution=32)
+    omega = np.asarray(hj.geometry_stage(scene).omega)
+    kappa = float(scene.params.kappa)
+
+    def unexplained(gl_omega):
+        dtau = np.abs(np.exp(-kappa * gl_omega.astype(np.float64)) - np.exp(-kappa * omega))
+        return np.flatnonzero((dtau > TAU_TOL) & ~shadow_band(scene))
+
+    assert unexplained(render_gl(scene).omega).size == 0
+    if maps > 4:
+        old = "texelFetch(lower_map, ivec2(gl_FragCoord.xy), 0).a"
+        wrong = gl_with_edited_shader(scene, "light_seed.frag", old, old.replace(").a", ").r"))
+        assert unexplained(wrong.omega).size > 10

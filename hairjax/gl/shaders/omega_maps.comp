@@ -9,25 +9,26 @@ layout(std430, binding = 0) readonly buffer Positions { float positions[]; };
 layout(std430, binding = 1) readonly buffer Ids { uint ids[]; };
 layout(std430, binding = 2) buffer Omega { float omega[]; };
 
-uniform sampler2D prev_map;
-uniform sampler2D cur_map;
+uniform sampler2D prev_map;   // the previous pass's maps: its alpha is Ω(D_first_slice)
+uniform sampler2D cur_map;    // this pass's: channel c is Ω(D_first_slice + c + 1)
+uniform int first_slice;
 uniform View light;
 uniform int first;
 uniform int count;
-uniform int plane;
+layout(std430, binding = 3) readonly buffer Planes { int planes[]; };
 uniform float zmin;
 uniform float span;
 uniform int maps;
 uniform int resolution;
 
-float box(sampler2D map, ivec2 texel) {
-    float sum = 0.0;
+vec4 box(sampler2D map, ivec2 texel) {
+    vec4 sum = vec4(0.0);
     for (int dy = -SHADOW_FILTER_RADIUS; dy <= SHADOW_FILTER_RADIUS; ++dy) {
         for (int dx = -SHADOW_FILTER_RADIUS; dx <= SHADOW_FILTER_RADIUS; ++dx) {
             ivec2 q = texel + ivec2(dx, dy);
             // Texels outside the map count 0.
             if (all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(resolution))))
-                sum += texelFetch(map, ivec2(q.x, resolution - 1 - q.y), 0).r;
+                sum += texelFetch(map, ivec2(q.x, resolution - 1 - q.y), 0);
         }
     }
     float side = float(2 * SHADOW_FILTER_RADIUS + 1);
@@ -46,6 +47,10 @@ void main() {
         return;
     }
     // The clamp fires by rounding: z is recomputed here in float32, the plane came from NumPy.
+    int plane = planes[first + i];
     float f = clamp((q.z - zmin) * float(maps) / span - float(plane), 0.0, 1.0);
-    omega[id] = (1.0 - f) * box(prev_map, texel) + f * box(cur_map, texel);
+    int c = plane - first_slice;  // the point's upper map's channel in this pass
+    vec4 upper = box(cur_map, texel);
+    float lower = c == 0 ? box(prev_map, texel).a : upper[c - 1];
+    omega[id] = (1.0 - f) * lower + f * upper[c];
 }
