@@ -5,9 +5,9 @@ the camera's draw order (`visibility_order`), the light's frame (`light_frame`),
 point's plane (`point_planes`) and the tangents. Everything per pixel or per texel runs in
 shaders, one module per pass: the occluder's surface and shadow (`_occluder`, §13), Ω by
 opacity maps (`_opacity_maps`, kim-2003 Routine 2: additive slices, four maps a pass in
-the colour channels, Ω per pass of points) or exactly from per-texel fragment lists (`_exact_opacity`), and the
-camera pass (`_camera_pass`: ribbons and coverage, shading at points, the far-to-near
-"over" blending); `_shading` holds what depends on the shading model, `_buffers` the
+the colour channels, Ω per pass of points) or exactly from per-texel fragment lists
+(`_exact_opacity`), and the camera pass (`_camera_pass`: ribbons and coverage, shading at
+points, the far-to-near "over" blending); `_shading` holds what depends on the shading model, `_buffers` the
 strands on the GPU, `_patches` the hair-patch passes (§18).
 """
 
