@@ -13,7 +13,7 @@ weighed nor shaded.
   core, at once. The first piece starts at T = 1 everywhere and its cut is exact. Each
   later piece starts at T = 1 too and cuts by its own fragments alone: that T is at least
   the pixel's true one, so it only leaves out fragments the exact cut leaves out. A pass
-  over the later pieces in draw order (`_carry_on`) then carries the true T on and cuts
+  over the later pieces in draw order (`carry_on`) then carries the true T on and cuts
   what is left.
 - *The device* (`seen_on_device`) cannot run one loop in draw order. It walks the
   candidates in draw order, SEEN_CHUNK at a time, and drops a fragment when its pixel's

@@ -161,24 +161,31 @@ def _summed_slices(lf: LightFragments, opacity: np.ndarray, maps: int, resolutio
     promotes it, rounded once; α times it rounded; then added), so the sums equal JAX's
     segment sum bit for bit, without the per-fragment gathers and cells."""
     dtype = np.dtype(jnp.result_type(float))
-    frame = lf.frame
     seg_alpha = np.asarray(opacity).astype(dtype)[lf.segment_strand]
     factor = np.empty(0) if lf.segment_factor is None else np.asarray(lf.segment_factor, np.float64)
     slices = np.zeros((maps + 1) * resolution * resolution, dtype)
+    sums = _sums_loop(dtype.name)
     for piece in lf.pieces:
         depth = piece.depths
-        f = depth.dtype.type  # slice_coordinate's arithmetic, in the depths' precision
-        _sums_loop(dtype.name)(
+        cells = _cell_params(lf.frame, depth.dtype, maps, resolution)
+        sums(
             depth,
             piece.pixel,
             piece.coverage.astype(dtype, copy=False),
             piece.segment,
             seg_alpha,
             factor,
-            (f(frame.zmin), f(maps), f(frame.span), np.int32(resolution**2)),
+            cells,
             slices,
         )
     return slices
+
+
+def _cell_params(frame: LightFrame, depth_dtype, maps: int, resolution: int) -> tuple:
+    """`cell_of`'s (zmin, maps, span, texels), the first three in the depths' precision:
+    slice_coordinate's arithmetic, as the JAX path's."""
+    f = np.dtype(depth_dtype).type
+    return f(frame.zmin), f(maps), f(frame.span), np.int32(resolution**2)
 
 
 def _frag_cells(lf: LightFragments, maps: int, resolution: int):
@@ -192,9 +199,8 @@ def _frag_cells(lf: LightFragments, maps: int, resolution: int):
     if isinstance(depth, jax.Array):
         j = jnp.clip(jnp.floor(frame.slice_coordinate(depth, maps)), 0, maps).astype(np.int32)
         return j * np.int32(resolution**2) + pixel
-    f = depth.dtype.type  # slice_coordinate's arithmetic, in the depths' precision
     cell = np.empty(depth.shape, np.int32)
-    _cells_loop()(depth, pixel, f(frame.zmin), f(maps), f(frame.span), np.int32(resolution**2), cell)
+    _cells_loop()(depth, pixel, _cell_params(frame, depth.dtype, maps, resolution), cell)
     return cell
 
 
@@ -219,7 +225,8 @@ def _cells_loop():
 
     @compile_loop(error_model="numpy")
     @no_type_check
-    def cells(depth, pixel, zmin, maps, span, texels, out):
+    def cells(depth, pixel, frame, out):
+        zmin, maps, span, texels = frame
         for k in range(depth.size):
             out[k] = cell_of(depth[k], pixel[k], zmin, maps, span, texels)
 
